@@ -1,0 +1,25 @@
+// Stage 4a: the pairwise-consistency graph over correspondences, in CSR form.
+#pragma once
+
+#include "cloud.hpp"
+#include "run_context.hpp"
+
+namespace kissm {
+namespace detail {
+
+// Undirected graph in compressed sparse rows: the neighbours of v are adj[offsets[v] .. offsets[v+1]),
+// in ascending order, without self loops.
+struct CsrGraph {
+    std::vector<std::uint64_t> offsets;
+    std::vector<std::uint32_t> adj;
+    std::size_t num_vertices() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+    std::uint64_t num_edges() const { return adj.size() / 2; }
+};
+
+// Vertex k is the correspondence (a[k], b[k]); an edge joins k and l when the distances agree:
+// | |b_k - b_l| - |a_k - a_l| | <= noise_bound (rigid motions preserve distances).
+CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b, float noise_bound,
+                            RunContext &ctx);
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,39 @@
+// The one exception type the core throws. The C boundary (src/capi) maps each kind to a status code;
+// nothing below src/capi knows about C status numbers.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace kissm {
+namespace detail {
+
+enum class ErrorKind {
+    InvalidArgument,
+    NullArgument,
+    EmptyInput,
+    TooFewPoints,
+    NonFinite,
+    VoxelRange,
+    StructSize,
+    Cancelled,
+    FeaturesMismatch,
+    Io,
+    Parse,
+    UnsupportedFormat,
+    Internal,
+};
+
+class Failure : public std::runtime_error {
+public:
+    Failure(ErrorKind kind, const std::string &message) : std::runtime_error(message), kind_(kind) {}
+    ErrorKind kind() const noexcept { return kind_; }
+
+private:
+    ErrorKind kind_;
+};
+
+[[noreturn]] inline void fail(ErrorKind kind, const std::string &message) { throw Failure(kind, message); }
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,122 @@
+#include "fpfh.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace kissm {
+namespace detail {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+
+int bin_of(float value, float lo, float hi) {
+    const float t = (value - lo) / (hi - lo) * static_cast<float>(kBinsPerFeature);
+    if (!(t > 0.0f)) return 0; // also NaN: never reached for valid pairs, but never out of range either
+    const int b = static_cast<int>(t);
+    return b < kBinsPerFeature ? b : kBinsPerFeature - 1;
+}
+
+} // namespace
+
+bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]) {
+    Vec3f d = p2 - p1;
+    const float len = d.norm();
+    if (!(len > 0.0f)) return false;
+    d /= len;
+    // u is the normal of the point whose normal is closer to the line; d points from it to the other.
+    const float c1 = n1.dot(d), c2 = n2.dot(d);
+    Vec3f u = n1, nb = n2;
+    float f3 = c1;
+    if (std::fabs(c1) < std::fabs(c2)) {
+        u = n2;
+        nb = n1;
+        d = -d;
+        f3 = -c2;
+    }
+    Vec3f v = d.cross(u);
+    const float vlen = v.norm();
+    if (!(vlen > 0.0f)) return false;
+    v /= vlen;
+    const Vec3f w = u.cross(v);
+    const float f1 = std::atan2(w.dot(nb), u.dot(nb));
+    const float f2 = v.dot(nb);
+    bins[0] = bin_of(f1, -kPi, kPi);
+    bins[1] = bin_of(f2, -1.0f, 1.0f);
+    bins[2] = bin_of(f3, -1.0f, 1.0f);
+    return true;
+}
+
+Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
+                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power,
+                         RunContext &ctx) {
+    const std::size_t n = points.size();
+    constexpr int D = kDescriptorDim;
+
+    // SPFH is needed for every point that has a normal and neighbours a keypoint; computing it for all
+    // points with a normal keeps the loop simple and costs little (almost all of them qualify).
+    std::vector<float> spfh(n * D, 0.0f);
+    ctx.parallel_for(n, 1024, [&](std::size_t b, std::size_t e) {
+        int bins[3];
+        for (std::size_t i = b; i < e; ++i) {
+            if (!normals.valid[i]) continue;
+            float *h = &spfh[i * D];
+            int pairs = 0;
+            for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
+                const std::uint32_t j = nb.index[k];
+                if (j == i || !normals.valid[j]) continue;
+                if (!pair_feature_bins(points[i], normals.normal[i], points[j], normals.normal[j], bins)) continue;
+                h[bins[0]] += 1.0f;
+                h[kBinsPerFeature + bins[1]] += 1.0f;
+                h[2 * kBinsPerFeature + bins[2]] += 1.0f;
+                ++pairs;
+            }
+            if (pairs > 0) {
+                const float scale = 100.0f / static_cast<float>(pairs);
+                for (int c = 0; c < D; ++c) h[c] *= scale;
+            }
+        }
+    });
+
+    Descriptors out;
+    out.keypoint = std::move(keypoints);
+    const std::size_t m = out.keypoint.size();
+    out.values.assign(m * D, 0.0f);
+    ctx.parallel_for(m, 512, [&](std::size_t b, std::size_t e) {
+        double acc[D];
+        for (std::size_t q = b; q < e; ++q) {
+            const std::uint32_t i = out.keypoint[q];
+            std::fill(acc, acc + D, 0.0);
+            double weight_sum = 0.0;
+            for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
+                const std::uint32_t j = nb.index[k];
+                if (j == i || !normals.valid[j]) continue;
+                const double d2 = static_cast<double>(nb.dist2[k]);
+                const double v2 = static_cast<double>(voxel_size) * static_cast<double>(voxel_size);
+                const double w = weight_power == 2 ? v2 / d2 : std::sqrt(v2 / d2);
+                const float *h = &spfh[static_cast<std::size_t>(j) * D];
+                for (int c = 0; c < D; ++c) acc[c] += w * static_cast<double>(h[c]);
+                weight_sum += 1.0;
+            }
+            const float *own = &spfh[static_cast<std::size_t>(i) * D];
+            const double inv_count = weight_sum > 0.0 ? 1.0 / weight_sum : 0.0;
+            float *dst = &out.values[q * D];
+            for (int block = 0; block < 3; ++block) {
+                double v[kBinsPerFeature], sum = 0.0;
+                for (int c = 0; c < kBinsPerFeature; ++c) {
+                    const int idx = block * kBinsPerFeature + c;
+                    v[c] = static_cast<double>(own[idx]) + acc[idx] * inv_count;
+                    sum += v[c];
+                }
+                const double scale = sum > 0.0 ? 100.0 / sum : 0.0;
+                for (int c = 0; c < kBinsPerFeature; ++c) dst[block * kBinsPerFeature + c] = static_cast<float>(v[c] * scale);
+            }
+        }
+    });
+    return out;
+}
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,27 @@
+// Stage 2c: FPFH descriptors (33 bins) of the keypoints.
+#pragma once
+
+#include "cloud.hpp"
+#include "run_context.hpp"
+
+namespace kissm {
+namespace detail {
+
+constexpr int kBinsPerFeature = 11;
+
+// Bins (0..10) of the three Darboux-frame angle features of a pair of oriented points; false when the pair
+// has no defined frame (coincident points, or a normal parallel to the connecting line). The source point
+// of the frame is the one whose normal makes the smaller angle with the connecting line, so the result
+// does not depend on the order of the two points.
+bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]);
+
+// SPFH of every point with a normal (neighbours without a normal are skipped), then FPFH of each keypoint:
+// its SPFH plus the mean of its neighbours' SPFH weighted by (voxel_size / distance)^weight_power, each 11-bin block
+// rescaled to sum to 100. Distances are normalised by the voxel size so that descriptors do not depend on
+// the unit of the coordinates.
+Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
+                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power,
+                         RunContext &ctx);
+
+} // namespace detail
+} // namespace kissm

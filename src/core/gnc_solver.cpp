@@ -1,0 +1,229 @@
+#include "gnc_solver.hpp"
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace kissm {
+namespace detail {
+
+Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
+                                  const std::vector<double> &w) {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (std::size_t k = 0; k < a.size(); ++k)
+        if (w[k] > 0.0) H.noalias() += w[k] * a[k] * b[k].transpose();
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+    Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+    if ((V * U.transpose()).determinant() < 0.0) S(2, 2) = -1.0; // a reflection is not a rotation
+    return V * S * U.transpose();
+}
+
+bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
+                      const SolverParams &params, Eigen::Matrix3d &rotation, std::vector<double> &weights,
+                      int &iterations) {
+    const std::size_t n = a.size();
+    weights.assign(n, 1.0);
+    iterations = 0;
+    if (n < 2) return false;
+    const double c2 = std::max(bound * bound, 1e-12);
+    std::vector<double> r2(n);
+    auto residuals = [&](const Eigen::Matrix3d &R) {
+        for (std::size_t k = 0; k < n; ++k) r2[k] = (b[k] - R * a[k]).squaredNorm();
+    };
+
+    rotation = weighted_rotation(a, b, weights);
+    residuals(rotation);
+    const double max_r2 = *std::max_element(r2.begin(), r2.end());
+    if (max_r2 > c2) {
+        // mu starts where the surrogate is convex over all residuals and grows until it is the TLS loss.
+        double mu = 1.0 / (2.0 * max_r2 / c2 - 1.0);
+        double prev_cost = std::numeric_limits<double>::infinity();
+        for (int it = 0; it < params.max_iterations; ++it) {
+            iterations = it + 1;
+            const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2;
+            double cost = 0.0;
+            for (std::size_t k = 0; k < n; ++k) {
+                if (r2[k] >= hi)
+                    weights[k] = 0.0;
+                else if (r2[k] <= lo)
+                    weights[k] = 1.0;
+                else
+                    weights[k] = std::sqrt(c2 * mu * (mu + 1.0) / r2[k]) - mu;
+                cost += weights[k] * r2[k];
+            }
+            rotation = weighted_rotation(a, b, weights);
+            residuals(rotation);
+            if (std::fabs(cost - prev_cost) < 1e-12 * std::max(1.0, cost)) break;
+            prev_cost = cost;
+            bool binary = true;
+            for (double w : weights)
+                if (w != 0.0 && w != 1.0) {
+                    binary = false;
+                    break;
+                }
+            if (binary && it > 0) break;
+            mu *= params.gnc_factor;
+        }
+    }
+    std::size_t inliers = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        weights[k] = r2[k] <= c2 ? 1.0 : 0.0;
+        inliers += weights[k] > 0.0;
+    }
+    return inliers >= 2;
+}
+
+double scalar_tls(std::vector<double> values, double bound) {
+    const std::size_t n = values.size();
+    if (n == 0) return 0.0;
+    // The optimum is the mean of some consensus set {x_k : |x_k - x| <= bound}; sweeping the 2n interval
+    // endpoints visits every such set once.
+    struct Event {
+        double at;
+        int enter; // +1 entering, -1 leaving
+        double value;
+    };
+    std::vector<Event> events;
+    events.reserve(2 * n);
+    for (double v : values) {
+        events.push_back({v - bound, +1, v});
+        events.push_back({v + bound, -1, v});
+    }
+    std::sort(events.begin(), events.end(), [](const Event &x, const Event &y) {
+        if (x.at != y.at) return x.at < y.at;
+        if (x.enter != y.enter) return x.enter > y.enter; // closed intervals: enter before leave
+        return x.value < y.value;
+    });
+    const double outlier_cost = bound * bound;
+    double sum = 0.0, sum2 = 0.0, best_cost = std::numeric_limits<double>::infinity();
+    double best = values[0];
+    std::size_t count = 0;
+    for (const Event &e : events) {
+        if (e.enter > 0) {
+            sum += e.value, sum2 += e.value * e.value, ++count;
+            const double mean = sum / static_cast<double>(count);
+            const double cost = std::max(0.0, sum2 - sum * mean) + static_cast<double>(n - count) * outlier_cost;
+            if (cost < best_cost) best_cost = cost, best = mean;
+        } else {
+            sum -= e.value, sum2 -= e.value * e.value, --count;
+            if (count == 0) sum = sum2 = 0.0; // drop accumulated rounding
+        }
+    }
+    return best;
+}
+
+namespace {
+
+// Pairs (k, (k + s) mod n) for a fixed set of strides; all pairs when that is no more than `max_pairs`.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> tim_pairs(std::size_t n, std::size_t max_pairs) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    if (n < 2) return pairs;
+    if (n * (n - 1) / 2 <= max_pairs) {
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t j = i + 1; j < n; ++j) pairs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
+        return pairs;
+    }
+    const std::size_t strides = std::max<std::size_t>(1, max_pairs / n);
+    for (std::size_t s = 0; s < strides; ++s) {
+        // Strides spread over (0, n/2]: short and long baselines alike.
+        const std::size_t step = 1 + (s * (n / 2 - 1)) / strides;
+        for (std::size_t i = 0; i < n; ++i)
+            pairs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>((i + step) % n));
+    }
+    return pairs;
+}
+
+} // namespace
+
+SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
+                        const SolverParams &params) {
+    SolverOutput out;
+    const std::size_t n = a.size();
+    out.rotation_inlier.assign(n, 0);
+    out.inlier.assign(n, 0);
+    if (n < 3) return out;
+    const double beta = params.noise_bound;
+
+    // Rotation from differences of correspondences: translation cancels, each end adds up to beta of noise.
+    const auto pairs = tim_pairs(n, params.max_tims);
+    std::vector<Eigen::Vector3d> ta(pairs.size()), tb(pairs.size());
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        ta[k] = a[pairs[k].second] - a[pairs[k].first];
+        tb[k] = b[pairs[k].second] - b[pairs[k].first];
+    }
+    Eigen::Matrix3d R;
+    std::vector<double> w;
+    if (!gnc_tls_rotation(ta, tb, 2.0 * beta, params, R, w, out.iterations)) return out;
+
+    // A correspondence is a rotation inlier when at least half of its measurements are.
+    std::vector<std::uint32_t> good(n, 0), total(n, 0);
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        ++total[pairs[k].first], ++total[pairs[k].second];
+        if (w[k] > 0.0) ++good[pairs[k].first], ++good[pairs[k].second];
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        out.rotation_inlier[k] = total[k] > 0 && 2 * good[k] >= total[k];
+        out.num_rotation_inliers += out.rotation_inlier[k];
+    }
+
+    // Translation: per-axis TLS over the rotation inliers, then an L2 consensus mean.
+    std::vector<Eigen::Vector3d> t_k;
+    for (std::size_t k = 0; k < n; ++k)
+        if (out.rotation_inlier[k] || out.num_rotation_inliers < 3) t_k.push_back(b[k] - R * a[k]);
+    Eigen::Vector3d t;
+    for (int axis = 0; axis < 3; ++axis) {
+        std::vector<double> vals(t_k.size());
+        for (std::size_t k = 0; k < t_k.size(); ++k) vals[k] = t_k[k][axis];
+        t[axis] = scalar_tls(std::move(vals), beta);
+    }
+    for (int it = 0; it < 10; ++it) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        std::size_t count = 0;
+        for (const auto &v : t_k)
+            if ((v - t).norm() <= beta) sum += v, ++count;
+        if (count == 0) break;
+        const Eigen::Vector3d next = sum / static_cast<double>(count);
+        if (next == t) break;
+        t = next;
+    }
+
+    auto count_inliers = [&](const Eigen::Matrix3d &Rc, const Eigen::Vector3d &tc, std::vector<std::uint8_t> &mask) {
+        std::size_t c = 0;
+        for (std::size_t k = 0; k < n; ++k) {
+            mask[k] = (Rc * a[k] + tc - b[k]).norm() <= beta;
+            c += mask[k];
+        }
+        return c;
+    };
+    out.num_inliers = count_inliers(R, t, out.inlier);
+
+    // Polish: least squares (centred Kabsch) on the inliers; kept only if it keeps at least as many.
+    if (out.num_inliers >= 3) {
+        Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+        for (std::size_t k = 0; k < n; ++k)
+            if (out.inlier[k]) ca += a[k], cb += b[k];
+        ca /= static_cast<double>(out.num_inliers);
+        cb /= static_cast<double>(out.num_inliers);
+        std::vector<Eigen::Vector3d> da, db;
+        std::vector<double> ones;
+        for (std::size_t k = 0; k < n; ++k)
+            if (out.inlier[k]) da.push_back(a[k] - ca), db.push_back(b[k] - cb), ones.push_back(1.0);
+        const Eigen::Matrix3d R2 = weighted_rotation(da, db, ones);
+        const Eigen::Vector3d t2 = cb - R2 * ca;
+        std::vector<std::uint8_t> mask2(n, 0);
+        const std::size_t c2 = count_inliers(R2, t2, mask2);
+        if (c2 >= out.num_inliers) {
+            R = R2, t = t2, out.inlier.swap(mask2), out.num_inliers = c2;
+        }
+    }
+    out.rotation = R;
+    out.translation = t;
+    out.solved = true;
+    return out;
+}
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,17 @@
+// Stage 4b: maximum k-core of the compatibility graph (Batagelj-Zaversnik peeling, O(V + E)).
+#pragma once
+
+#include "compat_graph.hpp"
+
+namespace kissm {
+namespace detail {
+
+// Core number of every vertex.
+std::vector<std::uint32_t> core_numbers(const CsrGraph &g);
+
+// Vertices whose core number is the maximum, ascending; `max_core` receives that maximum (0 for an
+// empty graph, in which case no vertex is returned).
+std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core);
+
+} // namespace detail
+} // namespace kissm

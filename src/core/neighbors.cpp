@@ -1,0 +1,116 @@
+#include "neighbors.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace kissm {
+namespace detail {
+
+namespace {
+
+struct CellEntry {
+    std::uint64_t key;
+    std::uint32_t index;
+};
+
+// Cell coordinates are offset by one so that the -1 neighbour of cell 0 is still a valid unsigned key.
+constexpr std::uint64_t kBits = 21;
+constexpr std::uint64_t kMask = (std::uint64_t(1) << kBits) - 1;
+
+std::uint64_t pack(std::uint64_t x, std::uint64_t y, std::uint64_t z) { return (x << (2 * kBits)) | (y << kBits) | z; }
+
+} // namespace
+
+Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, RunContext &ctx) {
+    Neighborhoods nb;
+    const std::size_t n = points.size();
+    nb.offsets.assign(n + 1, 0);
+    if (n == 0) return nb;
+
+    Vec3f lo = points[0];
+    for (const auto &p : points) lo = lo.cwiseMin(p);
+    const float inv = 1.0f / radius;
+    // The voxel stage bounds the extent to 2^21 voxels per axis, hence < 2^19 cells of 5 voxels: 21 bits fit.
+    auto cell_of = [&](const Vec3f &p, std::uint64_t c[3]) {
+        for (int a = 0; a < 3; ++a) {
+            const float f = std::floor((p[a] - lo[a]) * inv);
+            const std::uint64_t ci = f <= 0.0f ? 0 : static_cast<std::uint64_t>(f);
+            c[a] = std::min<std::uint64_t>(ci + 1, kMask - 1);
+        }
+    };
+
+    std::vector<CellEntry> entries(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        std::uint64_t c[3];
+        cell_of(points[i], c);
+        entries[i] = {pack(c[0], c[1], c[2]), static_cast<std::uint32_t>(i)};
+    }
+    std::sort(entries.begin(), entries.end(), [](const CellEntry &a, const CellEntry &b) {
+        return a.key != b.key ? a.key < b.key : a.index < b.index;
+    });
+    // Unique cells with their ranges in `entries`.
+    std::vector<std::uint64_t> cell_keys;
+    std::vector<std::uint32_t> cell_start;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (i == 0 || entries[i].key != entries[i - 1].key) {
+            cell_keys.push_back(entries[i].key);
+            cell_start.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+    cell_start.push_back(static_cast<std::uint32_t>(n));
+    std::vector<Vec3f> sorted_pts(n);
+    for (std::size_t i = 0; i < n; ++i) sorted_pts[i] = points[entries[i].index];
+
+    const float r2 = radius * radius;
+    constexpr std::size_t kChunk = 1024;
+    const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::vector<std::uint32_t>> chunk_index(num_chunks);
+    std::vector<std::vector<float>> chunk_dist(num_chunks);
+    std::vector<std::uint32_t> counts(n, 0);
+
+    ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
+        auto &idx = chunk_index[b / kChunk];
+        auto &dst = chunk_dist[b / kChunk];
+        for (std::size_t i = b; i < e; ++i) {
+            const Vec3f &q = points[i];
+            std::uint64_t c[3];
+            cell_of(q, c);
+            const std::size_t before = idx.size();
+            for (std::uint64_t dx = c[0] - 1; dx <= c[0] + 1; ++dx) {
+                for (std::uint64_t dy = c[1] - 1; dy <= c[1] + 1; ++dy) {
+                    // z is the fastest-varying part of the key: the three z cells are one contiguous run.
+                    const std::uint64_t first = pack(dx, dy, c[2] - 1), last = pack(dx, dy, c[2] + 1);
+                    auto it = std::lower_bound(cell_keys.begin(), cell_keys.end(), first);
+                    for (; it != cell_keys.end() && *it <= last; ++it) {
+                        const std::size_t cell = static_cast<std::size_t>(it - cell_keys.begin());
+                        for (std::uint32_t s = cell_start[cell]; s < cell_start[cell + 1]; ++s) {
+                            const float d2 = (sorted_pts[s] - q).squaredNorm();
+                            if (d2 < r2) {
+                                idx.push_back(entries[s].index);
+                                dst.push_back(d2);
+                            }
+                        }
+                    }
+                }
+            }
+            counts[i] = static_cast<std::uint32_t>(idx.size() - before);
+        }
+    });
+
+    for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + counts[i];
+    nb.index.resize(nb.offsets[n]);
+    nb.dist2.resize(nb.offsets[n]);
+    ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) {
+            const std::size_t start = nb.offsets[c * kChunk];
+            std::copy(chunk_index[c].begin(), chunk_index[c].end(), nb.index.begin() + static_cast<std::ptrdiff_t>(start));
+            std::copy(chunk_dist[c].begin(), chunk_dist[c].end(), nb.dist2.begin() + static_cast<std::ptrdiff_t>(start));
+            std::vector<std::uint32_t>().swap(chunk_index[c]);
+            std::vector<float>().swap(chunk_dist[c]);
+        }
+    });
+    return nb;
+}
+
+} // namespace detail
+} // namespace kissm

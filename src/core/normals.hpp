@@ -1,0 +1,32 @@
+// Stage 2b: normals and linearity from the neighbours within the normal radius (a subset of the one
+// radius search), then the keypoint filter of Faster-PFH.
+#pragma once
+
+#include "cloud.hpp"
+#include "run_context.hpp"
+
+namespace kissm {
+namespace detail {
+
+struct NormalParams {
+    float normal_radius;
+    int min_neighbors;    // tau_num
+    double max_linearity; // tau_lin
+    Vec3f viewpoint;      // in the cloud's local frame
+};
+
+// A point gets a normal when it has at least tau_num neighbours within the FPFH radius and within the normal
+// radius (itself included) and its linearity (l1 - l2) / l1 is at most tau_lin. Normals face the viewpoint.
+Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                         RunContext &ctx);
+
+// Keypoints: points with a normal and at least tau_num neighbours (itself included) that have a normal.
+// Ascending indices.
+std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Normals &normals, int min_neighbors);
+
+// Smallest-eigenvalue eigenvector of a symmetric 3x3 covariance and the eigenvalues in descending order
+// (closed form; no iterative or dynamic-size solver). Exposed for tests.
+void symmetric_eigen3(const Eigen::Matrix3d &cov, Eigen::Vector3d &eigenvalues_desc, Eigen::Vector3d &smallest_vec);
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,41 @@
+// Plain C++ mirror of kissm_config, as the pipeline sees it (already validated at the boundary).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+
+namespace kissm {
+namespace detail {
+
+enum class NonFinitePolicy { Reject, Drop };
+enum class ViewpointMode { Fixed, CloudCenter };
+
+struct Params {
+    int num_threads = 0; // 0 = hardware concurrency
+    double voxel_size = 0.3;
+    double normal_radius_gain = 3.5;
+    double fpfh_radius_gain = 5.0;
+    double max_linearity = 0.99;
+    double ratio_test = 0.9;
+    double prune_noise_bound_gain = 1.0;
+    double solver_noise_bound_gain = 0.75;
+    double noise_bound_max = 0.0; // 0 = no cap
+    std::array<double, 3> viewpoint{{0.0, 0.0, 0.0}};
+    int min_normal_neighbors = 3;
+    int max_correspondences = 5000;
+    int min_inliers = 10;
+    NonFinitePolicy nonfinite = NonFinitePolicy::Reject;
+    ViewpointMode viewpoint_mode = ViewpointMode::Fixed;
+
+    double normal_radius() const { return normal_radius_gain * voxel_size; }
+    double fpfh_radius() const { return fpfh_radius_gain * voxel_size; }
+    double prune_noise_bound() const { return capped(prune_noise_bound_gain * voxel_size); }
+    double solver_noise_bound() const { return capped(solver_noise_bound_gain * voxel_size); }
+
+private:
+    double capped(double b) const { return (noise_bound_max > 0.0 && b > noise_bound_max) ? noise_bound_max : b; }
+};
+
+} // namespace detail
+} // namespace kissm

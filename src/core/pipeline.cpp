@@ -1,0 +1,196 @@
+#include "pipeline.hpp"
+
+#include <chrono>
+#include <sstream>
+
+#include "compat_graph.hpp"
+#include "failure.hpp"
+#include "fpfh.hpp"
+#include "gnc_solver.hpp"
+#include "input.hpp"
+#include "kcore.hpp"
+#include "matching.hpp"
+#include "neighbors.hpp"
+#include "normals.hpp"
+#include "voxelize.hpp"
+
+namespace kissm {
+namespace detail {
+
+namespace {
+
+// Stage progress codes (equal to KISSM_STAGE_*).
+constexpr int kStageVoxelize = 1, kStageFeatures = 2, kStageMatching = 3, kStagePruning = 4, kStageSolver = 5;
+
+// Descriptor weighting exponent: FPFH neighbours weighted by (v / d)^kFpfhWeightPower (see docs).
+constexpr int kFpfhWeightPower = 1;
+
+class Stopwatch {
+public:
+    Stopwatch() : last_(std::chrono::steady_clock::now()) {}
+    // Milliseconds since the previous lap (or construction). Consecutive laps tile the time line, so the
+    // stage times add up to the total exactly as measured.
+    double lap() {
+        const auto now = std::chrono::steady_clock::now();
+        const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(now - last_).count();
+        last_ = now;
+        return static_cast<double>(ns) * 1e-6;
+    }
+
+private:
+    std::chrono::steady_clock::time_point last_;
+};
+
+} // namespace
+
+bool same_descriptor_settings(const Params &a, const Params &b) {
+    return a.voxel_size == b.voxel_size && a.normal_radius_gain == b.normal_radius_gain &&
+           a.fpfh_radius_gain == b.fpfh_radius_gain && a.max_linearity == b.max_linearity &&
+           a.min_normal_neighbors == b.min_normal_neighbors && a.nonfinite == b.nonfinite &&
+           a.viewpoint_mode == b.viewpoint_mode &&
+           (a.viewpoint_mode == ViewpointMode::CloudCenter || a.viewpoint == b.viewpoint);
+}
+
+CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
+    CloudFeatures f;
+    f.params = params;
+    Stopwatch clock;
+    ctx.checkpoint(kStageVoxelize, 0.0);
+    InputCloud input = gather_points(view, params.nonfinite, name);
+    f.num_points = input.num_given;
+    f.num_nonfinite = input.num_nonfinite;
+    if (input.points.empty())
+        fail(ErrorKind::EmptyInput, name + " has no finite points (" + std::to_string(input.num_given) + " given)");
+    if (input.points.size() < 4)
+        fail(ErrorKind::TooFewPoints, name + " has " + std::to_string(input.points.size()) +
+                                          " finite points; at least 4 are needed");
+    f.voxels = voxelize(input, params.voxel_size, name, ctx);
+    input = InputCloud(); // release the copy early: peak memory is the caller's cloud plus voxels
+    f.time_voxelize_ms = clock.lap();
+
+    ctx.checkpoint(kStageFeatures, 0.0);
+    const auto &pts = f.voxels.points;
+    if (pts.size() > static_cast<std::size_t>(params.min_normal_neighbors)) {
+        const Neighborhoods nb = radius_neighbors(pts, static_cast<float>(params.fpfh_radius()), ctx);
+        ctx.checkpoint(kStageFeatures, 0.4);
+        NormalParams np;
+        np.normal_radius = static_cast<float>(params.normal_radius());
+        np.min_neighbors = params.min_normal_neighbors;
+        np.max_linearity = params.max_linearity;
+        const Vec3d vp = params.viewpoint_mode == ViewpointMode::CloudCenter
+                             ? Vec3d(Vec3d::Zero()) // the local origin is the bounding-box centre
+                             : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
+        np.viewpoint = vp.cast<float>();
+        const Normals normals = estimate_normals(pts, nb, np, ctx);
+        ctx.checkpoint(kStageFeatures, 0.6);
+        std::vector<std::uint32_t> keypoints = select_keypoints(nb, normals, params.min_normal_neighbors);
+        f.descriptors = compute_fpfh(pts, nb, normals, std::move(keypoints), static_cast<float>(params.voxel_size),
+                                     kFpfhWeightPower, ctx);
+    }
+    f.time_features_ms = clock.lap();
+    if (ctx.logs(LogLevel::Info)) {
+        std::ostringstream msg;
+        msg << name << ": " << f.num_points << " points, " << f.voxels.points.size() << " voxels, "
+            << f.descriptors.keypoint.size() << " keypoints";
+        ctx.log(LogLevel::Info, msg.str());
+    }
+    return f;
+}
+
+Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
+                                RunContext &ctx) {
+    Registration r;
+    r.num_source_points = source.num_points, r.num_target_points = target.num_points;
+    r.num_source_nonfinite = source.num_nonfinite, r.num_target_nonfinite = target.num_nonfinite;
+    r.num_source_voxels = source.voxels.points.size(), r.num_target_voxels = target.voxels.points.size();
+    r.num_source_keypoints = source.descriptors.keypoint.size();
+    r.num_target_keypoints = target.descriptors.keypoint.size();
+    r.noise_bound = params.solver_noise_bound();
+    const std::uint64_t min_count = static_cast<std::uint64_t>(params.min_normal_neighbors) + 1;
+    if (r.num_source_voxels < min_count || r.num_target_voxels < min_count) {
+        r.reason = Reason::TooFewVoxels;
+        return r;
+    }
+    if (r.num_source_keypoints < 3 || r.num_target_keypoints < 3) {
+        r.reason = Reason::TooFewFeatures;
+        return r;
+    }
+
+    Stopwatch clock;
+    ctx.checkpoint(kStageMatching, 0.0);
+    MatchParams mp{params.ratio_test, params.max_correspondences};
+    const std::vector<Correspondence> matches = match_descriptors(source.descriptors, target.descriptors, mp, ctx);
+    r.num_initial_correspondences = matches.size();
+    r.time_matching_ms = clock.lap();
+    if (matches.size() < 3) {
+        r.reason = Reason::TooFewCorrespondences;
+        return r;
+    }
+
+    ctx.checkpoint(kStagePruning, 0.0);
+    std::vector<Vec3f> a(matches.size()), b(matches.size());
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+        a[k] = source.voxels.points[source.descriptors.keypoint[matches[k].source]];
+        b[k] = target.voxels.points[target.descriptors.keypoint[matches[k].target]];
+    }
+    std::vector<std::uint32_t> core;
+    {
+        const CsrGraph graph = build_compat_graph(a, b, static_cast<float>(params.prune_noise_bound()), ctx);
+        std::uint32_t k = 0;
+        core = max_kcore(graph, k);
+        r.max_core_number = k;
+    }
+    r.num_pruned_correspondences = core.size();
+    r.time_pruning_ms = clock.lap();
+    if (core.size() < 3) {
+        r.reason = Reason::TooFewCorrespondences;
+        return r;
+    }
+
+    ctx.checkpoint(kStageSolver, 0.0);
+    std::vector<Eigen::Vector3d> pa(core.size()), pb(core.size());
+    for (std::size_t k = 0; k < core.size(); ++k) {
+        pa[k] = a[core[k]].cast<double>();
+        pb[k] = b[core[k]].cast<double>();
+    }
+    SolverParams sp;
+    sp.noise_bound = r.noise_bound;
+    const SolverOutput sol = solve_pose(pa, pb, sp);
+    r.num_rotation_inliers = sol.num_rotation_inliers;
+    r.num_final_inliers = sol.num_inliers;
+    r.inlier_ratio = static_cast<double>(sol.num_inliers) / static_cast<double>(r.num_initial_correspondences);
+    if (!sol.solved) {
+        r.reason = Reason::SolverFailed;
+        r.time_solver_ms = clock.lap();
+        return r;
+    }
+    // Back to the callers' frames: p_t = R (p_s - o_s) + t_local + o_t.
+    r.rotation = sol.rotation;
+    r.translation = sol.translation + target.voxels.origin - sol.rotation * source.voxels.origin;
+    r.solved = true;
+
+    std::vector<Eigen::Vector3d> inlier_points;
+    double sq = 0.0;
+    for (std::size_t k = 0; k < pa.size(); ++k) {
+        if (!sol.inlier[k]) continue;
+        inlier_points.push_back(pa[k]);
+        sq += (sol.rotation * pa[k] + sol.translation - pb[k]).squaredNorm();
+    }
+    if (!inlier_points.empty()) r.residual_rms = std::sqrt(sq / static_cast<double>(inlier_points.size()));
+    const Validity v = check_validity(inlier_points, static_cast<std::size_t>(params.min_inliers), r.noise_bound,
+                                      r.rotation, r.translation);
+    r.reason = v.reason;
+    r.inlier_extent = v.extent;
+    r.time_solver_ms = clock.lap();
+    if (ctx.logs(LogLevel::Info)) {
+        std::ostringstream msg;
+        msg << "matches " << r.num_initial_correspondences << ", max core " << r.num_pruned_correspondences << " (k="
+            << r.max_core_number << "), rotation inliers " << r.num_rotation_inliers << ", final inliers "
+            << r.num_final_inliers;
+        ctx.log(LogLevel::Info, msg.str());
+    }
+    return r;
+}
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,55 @@
+// The whole registration: stages wired together, with counts and per-stage times.
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+#include <string>
+
+#include "cloud.hpp"
+#include "params.hpp"
+#include "run_context.hpp"
+#include "validity.hpp"
+
+namespace kissm {
+namespace detail {
+
+// A cloud described once: voxels (local frame) and keypoint descriptors. Immutable after construction.
+struct CloudFeatures {
+    Params params; // the config it was computed under (descriptor-relevant fields are compared on use)
+    std::uint64_t num_points = 0;
+    std::uint64_t num_nonfinite = 0;
+    VoxelCloud voxels;
+    Descriptors descriptors;
+    double time_voxelize_ms = 0.0;
+    double time_features_ms = 0.0;
+};
+
+struct Registration {
+    bool solved = false;
+    Reason reason = Reason::None;
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    Eigen::Vector3d translation = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    std::uint64_t num_source_points = 0, num_target_points = 0;
+    std::uint64_t num_source_nonfinite = 0, num_target_nonfinite = 0;
+    std::uint64_t num_source_voxels = 0, num_target_voxels = 0;
+    std::uint64_t num_source_keypoints = 0, num_target_keypoints = 0;
+    std::uint64_t num_initial_correspondences = 0, num_pruned_correspondences = 0;
+    std::uint64_t num_rotation_inliers = 0, num_final_inliers = 0, max_core_number = 0;
+    double inlier_ratio = 0.0;
+    double residual_rms = std::numeric_limits<double>::quiet_NaN();
+    double noise_bound = 0.0;
+    Eigen::Vector3d inlier_extent = Eigen::Vector3d::Zero();
+    double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0;
+};
+
+// Throws Failure for unacceptable input (empty, too few points, non-finite under Reject, voxel range).
+CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx);
+
+// True when features computed under `a` can be matched under `b` (same descriptor-relevant settings).
+bool same_descriptor_settings(const Params &a, const Params &b);
+
+Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
+                                RunContext &ctx);
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,162 @@
+#include "run_context.hpp"
+
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "failure.hpp"
+
+namespace kissm {
+namespace detail {
+
+// A minimal pool: workers wait for a job, grab chunk indices from an atomic counter until none are left.
+// Which thread runs which chunk varies; what each chunk computes does not.
+class ThreadPool {
+public:
+    explicit ThreadPool(int workers) {
+        threads_.reserve(static_cast<std::size_t>(workers));
+        try {
+            for (int i = 0; i < workers; ++i) threads_.emplace_back([this] { worker_loop(); });
+        } catch (...) {
+            shutdown();
+            throw;
+        }
+    }
+    ~ThreadPool() { shutdown(); }
+
+    // Runs job(chunk_index) for every chunk in [0, num_chunks) on the workers and the calling thread.
+    void run(std::size_t num_chunks, const std::function<void(std::size_t)> &job) {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            job_ = &job;
+            num_chunks_ = num_chunks;
+            next_.store(0);
+            active_ = static_cast<int>(threads_.size());
+            ++generation_;
+        }
+        cv_.notify_all();
+        drain(job, num_chunks);
+        std::unique_lock<std::mutex> lock(mutex_);
+        done_cv_.wait(lock, [this] { return active_ == 0; });
+        job_ = nullptr;
+    }
+
+private:
+    void drain(const std::function<void(std::size_t)> &job, std::size_t num_chunks) {
+        for (;;) {
+            std::size_t c = next_.fetch_add(1);
+            if (c >= num_chunks) break;
+            job(c);
+        }
+    }
+
+    void worker_loop() {
+        std::uint64_t seen = 0;
+        for (;;) {
+            const std::function<void(std::size_t)> *job = nullptr;
+            std::size_t n = 0;
+            {
+                std::unique_lock<std::mutex> lock(mutex_);
+                cv_.wait(lock, [&] { return stop_ || generation_ != seen; });
+                if (stop_) return;
+                seen = generation_;
+                job = job_;
+                n = num_chunks_;
+            }
+            drain(*job, n);
+            {
+                std::lock_guard<std::mutex> lock(mutex_);
+                if (--active_ == 0) done_cv_.notify_all();
+            }
+        }
+    }
+
+    void shutdown() {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+        }
+        cv_.notify_all();
+        for (auto &t : threads_)
+            if (t.joinable()) t.join();
+        threads_.clear();
+    }
+
+    std::vector<std::thread> threads_;
+    std::mutex mutex_;
+    std::condition_variable cv_, done_cv_;
+    const std::function<void(std::size_t)> *job_ = nullptr;
+    std::size_t num_chunks_ = 0;
+    std::atomic<std::size_t> next_{0};
+    int active_ = 0;
+    std::uint64_t generation_ = 0;
+    bool stop_ = false;
+};
+
+RunContext::RunContext(int num_threads, const std::atomic<int> *cancel_flag, Hooks hooks)
+    : threads_(num_threads), cancel_flag_(cancel_flag), hooks_(std::move(hooks)) {
+    if (threads_ <= 0) {
+        unsigned hw = std::thread::hardware_concurrency();
+        threads_ = hw == 0 ? 1 : static_cast<int>(hw);
+    }
+    if (threads_ > 1) {
+        try {
+            pool_ = new ThreadPool(threads_ - 1);
+        } catch (const std::system_error &) {
+            // Could not start threads (resource limits): run serially; results are identical anyway.
+            pool_ = nullptr;
+            threads_ = 1;
+        }
+    }
+}
+
+RunContext::~RunContext() { delete pool_; }
+
+bool RunContext::cancelled() const { return cancel_flag_ && cancel_flag_->load(std::memory_order_relaxed) != 0; }
+
+void RunContext::checkpoint(int stage, double fraction) {
+    if (hooks_.progress && hooks_.progress(stage, fraction)) fail(ErrorKind::Cancelled, "cancelled by the progress callback");
+    if (cancelled()) fail(ErrorKind::Cancelled, "cancelled by kissm_cancel()");
+}
+
+void RunContext::log(LogLevel level, const std::string &message) const {
+    if (logs(level)) hooks_.log(level, message);
+}
+
+void RunContext::parallel_for(std::size_t n, std::size_t chunk,
+                              const std::function<void(std::size_t, std::size_t)> &body) {
+    if (n == 0) return;
+    if (chunk == 0) chunk = 1;
+    const std::size_t num_chunks = (n + chunk - 1) / chunk;
+    std::exception_ptr first_error;
+    std::mutex error_mutex;
+    std::atomic<bool> stop{false};
+    auto job = [&](std::size_t c) {
+        if (stop.load(std::memory_order_relaxed)) return;
+        if (cancelled()) {
+            stop.store(true);
+            return;
+        }
+        const std::size_t begin = c * chunk;
+        const std::size_t end = begin + chunk < n ? begin + chunk : n;
+        try {
+            body(begin, end);
+        } catch (...) {
+            std::lock_guard<std::mutex> lock(error_mutex);
+            if (!first_error) first_error = std::current_exception();
+            stop.store(true);
+        }
+    };
+    if (pool_ == nullptr || num_chunks == 1) {
+        for (std::size_t c = 0; c < num_chunks; ++c) job(c);
+    } else {
+        pool_->run(num_chunks, job);
+    }
+    if (first_error) std::rethrow_exception(first_error);
+    if (cancelled()) fail(ErrorKind::Cancelled, "cancelled by kissm_cancel()");
+}
+
+} // namespace detail
+} // namespace kissm

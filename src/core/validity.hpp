@@ -1,0 +1,24 @@
+// Stage 5b: whether a solved pose can be trusted.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace kissm {
+namespace detail {
+
+enum class Reason { None = 0, TooFewVoxels, TooFewFeatures, TooFewCorrespondences, SolverFailed, TooFewInliers, Degenerate };
+
+struct Validity {
+    Reason reason = Reason::None;
+    Eigen::Vector3d extent = Eigen::Vector3d::Zero(); // sqrt of the inliers' covariance eigenvalues, descending
+};
+
+// Valid when there are at least min_inliers inliers and they span a volume: a collinear or planar inlier set
+// (second or third extent below the noise bound) pins the pose down only up to a rotation or reflection
+// that the data cannot see.
+Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::size_t min_inliers, double noise_bound,
+                        const Eigen::Matrix3d &rotation, const Eigen::Vector3d &translation);
+
+} // namespace detail
+} // namespace kissm

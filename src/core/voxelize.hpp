@@ -1,0 +1,23 @@
+// Stage 1: one centroid per occupied voxel.
+#pragma once
+
+#include <string>
+
+#include "cloud.hpp"
+#include "run_context.hpp"
+
+namespace kissm {
+namespace detail {
+
+// At most this many voxels per axis: keys then pack into 63 bits, and single-precision local coordinates
+// stay well below the voxel size (half the extent carries at most v/16 of rounding).
+constexpr std::uint64_t kMaxVoxelsPerAxis = std::uint64_t(1) << 21;
+
+// The grid is anchored at the cloud's bounding-box minimum; the local origin is the bounding-box centre.
+// Output order is by voxel key (x-major), independent of input order and thread count; within a voxel the
+// points are summed in (x, y, z) order, so a permutation of the input gives a bitwise identical output.
+// Throws Failure(VoxelRange) when the extent needs more than kMaxVoxelsPerAxis voxels on an axis.
+VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx);
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,18 @@
+# The registration core: one pipeline stage per file (see docs/architecture.md).
+set(KISSM_CORE_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/core/run_context.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/input.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/voxelize.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/neighbors.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/normals.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/fpfh.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/matching.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/compat_graph.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/kcore.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/gnc_solver.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/validity.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
+)
+set(KISSM_CAPI_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/capi/kissm_capi.cpp
+)
