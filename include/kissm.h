@@ -145,7 +145,7 @@ typedef struct kissm_config {
 
     int32_t min_normal_neighbors; /* tau_num: neighbours needed for a normal and for a descriptor; >= 3; 3 */
     int32_t max_correspondences; /* cap on mutual matches kept (best ratio first); >= 3; 5000 */
-    int32_t min_inliers;         /* valid needs at least this many final inliers; >= 3; 10 */
+    int32_t min_inliers;         /* valid needs at least this many final inliers; >= 3; 15 */
     int32_t nonfinite_policy;    /* KISSM_NONFINITE_*; KISSM_NONFINITE_REJECT */
     int32_t viewpoint_mode;      /* KISSM_VIEWPOINT_*; KISSM_VIEWPOINT_FIXED */
     int32_t log_level;           /* most verbose level passed to log_fn; KISSM_LOG_WARN */

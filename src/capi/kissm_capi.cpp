@@ -124,7 +124,7 @@ void fill_defaults(kissm_config &c) {
     c.viewpoint[0] = c.viewpoint[1] = c.viewpoint[2] = 0.0;
     c.min_normal_neighbors = 3;
     c.max_correspondences = 5000;
-    c.min_inliers = 10;
+    c.min_inliers = 15;
     c.nonfinite_policy = KISSM_NONFINITE_REJECT;
     c.viewpoint_mode = KISSM_VIEWPOINT_FIXED;
     c.log_level = KISSM_LOG_WARN;

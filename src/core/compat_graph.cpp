@@ -1,6 +1,8 @@
 #include "compat_graph.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace kissm {
 namespace detail {
@@ -68,6 +70,33 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
         std::vector<std::uint32_t>().swap(chunk);
     }
     return g;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const CsrGraph &g,
+                                                                          const std::vector<std::uint32_t> &vertices,
+                                                                          std::size_t max_pairs) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+    const std::size_t m = vertices.size();
+    if (m < 2) return out;
+    const std::size_t per_vertex = std::max<std::size_t>(1, max_pairs / m);
+    std::vector<std::uint32_t> position(g.num_vertices(), UINT32_MAX);
+    for (std::size_t k = 0; k < m; ++k) position[vertices[k]] = static_cast<std::uint32_t>(k);
+    std::vector<std::uint32_t> inside;
+    for (std::size_t k = 0; k < m; ++k) {
+        const std::uint32_t v = vertices[k];
+        inside.clear();
+        for (std::uint64_t e = g.offsets[v]; e < g.offsets[v + 1]; ++e)
+            if (position[g.adj[e]] != UINT32_MAX) inside.push_back(position[g.adj[e]]);
+        const std::size_t take = std::min(per_vertex, inside.size());
+        for (std::size_t s = 0; s < take; ++s) {
+            const std::uint32_t l = inside[s * inside.size() / take];
+            const std::uint32_t kk = static_cast<std::uint32_t>(k);
+            out.emplace_back(std::min(kk, l), std::max(kk, l));
+        }
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
 }
 
 } // namespace detail

@@ -1,6 +1,8 @@
 // Stage 4a: the pairwise-consistency graph over correspondences, in CSR form.
 #pragma once
 
+#include <utility>
+
 #include "cloud.hpp"
 #include "run_context.hpp"
 
@@ -20,6 +22,13 @@ struct CsrGraph {
 // | |b_k - b_l| - |a_k - a_l| | <= noise_bound (rigid motions preserve distances).
 CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b, float noise_bound,
                             RunContext &ctx);
+
+// Edges of the subgraph induced by `vertices` (ascending), renumbered to positions in `vertices`, at most
+// about `max_pairs` of them: each vertex contributes up to max_pairs / |vertices| edges spread evenly over
+// its sorted neighbour list. Sorted and unique.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const CsrGraph &g,
+                                                                          const std::vector<std::uint32_t> &vertices,
+                                                                          std::size_t max_pairs);
 
 } // namespace detail
 } // namespace kissm

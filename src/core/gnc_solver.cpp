@@ -115,11 +115,44 @@ double scalar_tls(std::vector<double> values, double bound) {
     return best;
 }
 
-namespace {
+std::size_t count_inliers(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
+                          const Eigen::Matrix3d &R, const Eigen::Vector3d &t, std::vector<std::uint8_t> &mask) {
+    mask.assign(a.size(), 0);
+    std::size_t c = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        mask[k] = (R * a[k] + t - b[k]).norm() <= bound;
+        c += mask[k];
+    }
+    return c;
+}
 
-// Pairs (k, (k + s) mod n) for a fixed set of strides; all pairs when that is no more than `max_pairs`.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> tim_pairs(std::size_t n, std::size_t max_pairs) {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+std::size_t polish_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
+                        Eigen::Matrix3d &R, Eigen::Vector3d &t, std::vector<std::uint8_t> &inlier) {
+    std::size_t count = count_inliers(a, b, bound, R, t, inlier);
+    for (int round = 0; round < 5 && count >= 3; ++round) {
+        Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+        for (std::size_t k = 0; k < a.size(); ++k)
+            if (inlier[k]) ca += a[k], cb += b[k];
+        ca /= static_cast<double>(count);
+        cb /= static_cast<double>(count);
+        std::vector<Eigen::Vector3d> da, db;
+        std::vector<double> ones;
+        for (std::size_t k = 0; k < a.size(); ++k)
+            if (inlier[k]) da.push_back(a[k] - ca), db.push_back(b[k] - cb), ones.push_back(1.0);
+        const Eigen::Matrix3d R2 = weighted_rotation(da, db, ones);
+        const Eigen::Vector3d t2 = cb - R2 * ca;
+        std::vector<std::uint8_t> mask2;
+        const std::size_t count2 = count_inliers(a, b, bound, R2, t2, mask2);
+        if (count2 < count) break;
+        const bool same_set = mask2 == inlier;
+        R = R2, t = t2, inlier.swap(mask2), count = count2;
+        if (same_set) break;
+    }
+    return count;
+}
+
+std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs) {
+    std::vector<IndexPair> pairs;
     if (n < 2) return pairs;
     if (n * (n - 1) / 2 <= max_pairs) {
         for (std::size_t i = 0; i < n; ++i)
@@ -136,10 +169,8 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> tim_pairs(std::size_t n, st
     return pairs;
 }
 
-} // namespace
-
 SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
-                        const SolverParams &params) {
+                        std::vector<IndexPair> pairs, const SolverParams &params) {
     SolverOutput out;
     const std::size_t n = a.size();
     out.rotation_inlier.assign(n, 0);
@@ -148,7 +179,7 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
     const double beta = params.noise_bound;
 
     // Rotation from differences of correspondences: translation cancels, each end adds up to beta of noise.
-    const auto pairs = tim_pairs(n, params.max_tims);
+    if (pairs.empty()) pairs = strided_pairs(n, params.max_tims);
     std::vector<Eigen::Vector3d> ta(pairs.size()), tb(pairs.size());
     for (std::size_t k = 0; k < pairs.size(); ++k) {
         ta[k] = a[pairs[k].second] - a[pairs[k].first];
@@ -190,35 +221,7 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
         t = next;
     }
 
-    auto count_inliers = [&](const Eigen::Matrix3d &Rc, const Eigen::Vector3d &tc, std::vector<std::uint8_t> &mask) {
-        std::size_t c = 0;
-        for (std::size_t k = 0; k < n; ++k) {
-            mask[k] = (Rc * a[k] + tc - b[k]).norm() <= beta;
-            c += mask[k];
-        }
-        return c;
-    };
-    out.num_inliers = count_inliers(R, t, out.inlier);
-
-    // Polish: least squares (centred Kabsch) on the inliers; kept only if it keeps at least as many.
-    if (out.num_inliers >= 3) {
-        Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
-        for (std::size_t k = 0; k < n; ++k)
-            if (out.inlier[k]) ca += a[k], cb += b[k];
-        ca /= static_cast<double>(out.num_inliers);
-        cb /= static_cast<double>(out.num_inliers);
-        std::vector<Eigen::Vector3d> da, db;
-        std::vector<double> ones;
-        for (std::size_t k = 0; k < n; ++k)
-            if (out.inlier[k]) da.push_back(a[k] - ca), db.push_back(b[k] - cb), ones.push_back(1.0);
-        const Eigen::Matrix3d R2 = weighted_rotation(da, db, ones);
-        const Eigen::Vector3d t2 = cb - R2 * ca;
-        std::vector<std::uint8_t> mask2(n, 0);
-        const std::size_t c2 = count_inliers(R2, t2, mask2);
-        if (c2 >= out.num_inliers) {
-            R = R2, t = t2, out.inlier.swap(mask2), out.num_inliers = c2;
-        }
-    }
+    out.num_inliers = polish_pose(a, b, beta, R, t, out.inlier);
     out.rotation = R;
     out.translation = t;
     out.solved = true;

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace kissm {
@@ -39,11 +41,26 @@ bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<E
 // Globally optimal 1-D truncated least squares: argmin_x sum_k min((x_k - x)^2, bound^2).
 double scalar_tls(std::vector<double> values, double bound);
 
-// a, b: the correspondences (source, target) in any fixed order; the result depends only on that order's
-// content, never on threads. Translation-invariant measurements pair each correspondence with partners at
-// fixed strides in the given order (all pairs when few).
+// Correspondences with |R a + t - b| <= bound.
+std::size_t count_inliers(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
+                          const Eigen::Matrix3d &R, const Eigen::Vector3d &t, std::vector<std::uint8_t> &mask);
+
+// Least-squares refinement (centred Kabsch) on the inliers, repeated while the inlier set grows or stays
+// and changes; a step that would lose inliers is not taken. Returns the inlier count; `inlier` the mask.
+std::size_t polish_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
+                        Eigen::Matrix3d &R, Eigen::Vector3d &t, std::vector<std::uint8_t> &inlier);
+
+using IndexPair = std::pair<std::uint32_t, std::uint32_t>;
+
+// Pairs (k, (k + s) mod n) for a fixed set of strides; all pairs when that is no more than `max_pairs`.
+std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs);
+
+// a, b: the correspondences (source, target). `pairs` are the translation-invariant measurements
+// (a_l - a_k, b_l - b_k) the rotation solver uses: compatible pairs from the pruning graph are mostly
+// inlier-inlier, so GNC sees far fewer outliers than the correspondences have. Empty = strided_pairs().
+// The result depends only on the inputs' content, never on threads.
 SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
-                        const SolverParams &params);
+                        std::vector<IndexPair> pairs, const SolverParams &params);
 
 } // namespace detail
 } // namespace kissm

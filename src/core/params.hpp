@@ -24,7 +24,7 @@ struct Params {
     std::array<double, 3> viewpoint{{0.0, 0.0, 0.0}};
     int min_normal_neighbors = 3;
     int max_correspondences = 5000;
-    int min_inliers = 10;
+    int min_inliers = 15;
     NonFinitePolicy nonfinite = NonFinitePolicy::Reject;
     ViewpointMode viewpoint_mode = ViewpointMode::Fixed;
 

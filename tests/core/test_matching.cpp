@@ -1,0 +1,84 @@
+#include <algorithm>
+#include <cstring>
+
+#include "core/matching.hpp"
+#include "harness.h"
+#include "test_rng.hpp"
+
+using namespace kissm::detail;
+
+static Descriptors random_descriptors(TestRng &rng, std::size_t n) {
+    Descriptors d;
+    for (std::size_t i = 0; i < n; ++i) {
+        d.keypoint.push_back(static_cast<std::uint32_t>(i));
+        for (int c = 0; c < kDescriptorDim; ++c) d.values.push_back(static_cast<float>(rng.uniform(0, 30)));
+    }
+    return d;
+}
+
+static void test_mutual_matches_found_and_threads_agree() {
+    TestRng rng(14);
+    const Descriptors src = random_descriptors(rng, 2000);
+    // Target: the first 1000 source descriptors (slightly perturbed, in reverse order) plus 1500 others.
+    Descriptors tgt;
+    for (std::size_t i = 0; i < 1000; ++i) {
+        const std::size_t s = 999 - i;
+        tgt.keypoint.push_back(static_cast<std::uint32_t>(i));
+        for (int c = 0; c < kDescriptorDim; ++c)
+            tgt.values.push_back(src.values[s * kDescriptorDim + c] + static_cast<float>(rng.uniform(-0.2, 0.2)));
+    }
+    const Descriptors extra = random_descriptors(rng, 1500);
+    for (std::size_t i = 0; i < 1500; ++i) {
+        tgt.keypoint.push_back(static_cast<std::uint32_t>(1000 + i));
+        tgt.values.insert(tgt.values.end(), extra.values.begin() + static_cast<std::ptrdiff_t>(i * kDescriptorDim),
+                          extra.values.begin() + static_cast<std::ptrdiff_t>((i + 1) * kDescriptorDim));
+    }
+    RunContext one(1, nullptr, Hooks()), four(4, nullptr, Hooks());
+    const MatchParams mp{0.9, 5000};
+    const auto m1 = match_descriptors(src, tgt, mp, one);
+    const auto m4 = match_descriptors(src, tgt, mp, four);
+    REQUIRE(m1.size() == m4.size());
+    CHECK(std::memcmp(m1.data(), m4.data(), m1.size() * sizeof(Correspondence)) == 0);
+    std::size_t right = 0;
+    for (const auto &c : m1) right += c.source < 1000 && c.target == 999 - c.source;
+    CHECK_MSG(right >= 990, "%zu correct of %zu", right, m1.size());
+    std::size_t wrong_among_planted = 0;
+    for (const auto &c : m1) wrong_among_planted += c.source < 1000 && c.target != 999 - c.source;
+    CHECK_EQ_INT(wrong_among_planted, 0);
+    for (std::size_t i = 1; i < m1.size(); ++i) CHECK(m1[i - 1].source < m1[i].source);
+
+    // The cap keeps the most distinctive matches.
+    const auto capped = match_descriptors(src, tgt, MatchParams{0.9, 100}, four);
+    CHECK_EQ_INT(capped.size(), 100);
+    float worst_kept = 0.0f;
+    for (const auto &c : capped) worst_kept = std::max(worst_kept, c.score);
+    std::size_t better_dropped = 0;
+    for (const auto &c : m1) {
+        bool kept = false;
+        for (const auto &k : capped) kept = kept || (k.source == c.source && k.target == c.target);
+        if (!kept && c.score < worst_kept) ++better_dropped;
+    }
+    CHECK_EQ_INT(better_dropped, 0);
+}
+
+static void test_identical_candidates_are_ambiguous() {
+    // Two identical target descriptors: the ratio test must reject the match rather than pick one.
+    Descriptors src, tgt;
+    src.keypoint = {0};
+    src.values.assign(kDescriptorDim, 1.0f);
+    tgt.keypoint = {0, 1, 2};
+    tgt.values.assign(3 * kDescriptorDim, 1.0f);
+    for (int c = 0; c < kDescriptorDim; ++c) tgt.values[2 * kDescriptorDim + c] = 50.0f;
+    RunContext ctx(1, nullptr, Hooks());
+    CHECK(match_descriptors(src, tgt, MatchParams{0.9, 10}, ctx).empty());
+    // Without the ratio test the lower index wins the tie, deterministically.
+    const auto m = match_descriptors(src, tgt, MatchParams{1.0, 10}, ctx);
+    REQUIRE(m.size() == 1);
+    CHECK_EQ_INT(m[0].target, 0);
+}
+
+int main() {
+    RUN_TEST(test_mutual_matches_found_and_threads_agree);
+    RUN_TEST(test_identical_candidates_are_ambiguous);
+    return TEST_SUMMARY();
+}

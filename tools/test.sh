@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Every test: set up, build, then the C/C++ suite (CTest). Tests that need ../shared/data skip with a
+# message when it is absent (point KISSM_DATA_DIR elsewhere to use another copy).
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+bash "$here/tools/setup.sh"
+data_dir=${KISSM_DATA_DIR:-$here/../shared/data}
+bash "$here/tools/build.sh" -DKISSM_DATA_DIR="$data_dir"
+build=${KISSM_BUILD_DIR:-$here/build}
+
+echo "== C/C++ tests (CTest) =="
+ctest --test-dir "$build" --output-on-failure --parallel 2 --timeout 900
