@@ -1,0 +1,20 @@
+// One parser per file format, each over a whole file already in memory. `path` is used for messages only.
+// All return packed x y z doubles and throw Failure(Parse) for malformed or truncated content.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace kissm {
+namespace detail {
+
+std::vector<double> parse_ply(const std::string &path, std::string_view bytes);
+std::vector<double> parse_pcd(const std::string &path, std::string_view bytes);
+std::vector<double> parse_kitti_bin(const std::string &path, std::string_view bytes); // float32 x y z i
+std::vector<double> parse_bin_xyz(const std::string &path, std::string_view bytes);   // float32 x y z
+std::vector<double> parse_npy(const std::string &path, std::string_view bytes);
+std::vector<double> parse_xyz_text(const std::string &path, std::string_view bytes);
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,44 @@
+// Headerless little-endian float32 records: KITTI velodyne scans (x y z intensity) and bare x y z triples.
+#include "io/binary_scalar.hpp"
+#include "io/file_bytes.hpp"
+#include "io/format_readers.hpp"
+
+#include <string>
+#include <vector>
+
+namespace kissm {
+namespace detail {
+
+namespace {
+
+std::vector<double> read_float_records(const std::string &path, std::string_view bytes, std::size_t floats,
+                                       const char *layout) {
+    const std::size_t record = 4 * floats;
+    // With no header, the size is the only integrity check there is.
+    if (bytes.size() % record != 0)
+        fail_parse(path, "size " + std::to_string(bytes.size()) + " bytes is not a multiple of " +
+                             std::to_string(record) + " (" + layout + " records): truncated or not this format");
+    const std::size_t n = bytes.size() / record;
+    const bool swap = !host_is_little_endian();
+    std::vector<double> xyz(n * 3);
+    const char *r = bytes.data();
+    for (std::size_t i = 0; i < n; ++i, r += record) {
+        xyz[3 * i + 0] = load_scalar(r, Scalar::F32, swap);
+        xyz[3 * i + 1] = load_scalar(r + 4, Scalar::F32, swap);
+        xyz[3 * i + 2] = load_scalar(r + 8, Scalar::F32, swap);
+    }
+    return xyz;
+}
+
+} // namespace
+
+std::vector<double> parse_kitti_bin(const std::string &path, std::string_view bytes) {
+    return read_float_records(path, bytes, 4, "float32 x y z intensity");
+}
+
+std::vector<double> parse_bin_xyz(const std::string &path, std::string_view bytes) {
+    return read_float_records(path, bytes, 3, "float32 x y z");
+}
+
+} // namespace detail
+} // namespace kissm

@@ -1,0 +1,23 @@
+// Point file readers. Every reader bounds-checks every byte it reads and throws Failure(Io | Parse |
+// UnsupportedFormat) with a message naming the file and the problem; none allocates more than the file
+// could justify (counts in headers are checked against the file size before allocating).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace kissm {
+namespace detail {
+
+// Values equal the KISSM_FORMAT_* constants of kissm.h.
+enum class FileFormat { Auto = 0, Ply = 1, Pcd = 2, KittiBin = 3, Npy = 4, Xyz = 5, BinXyz = 6 };
+
+// Reads the file's points as packed x y z doubles (3 * N values). Non-finite values are returned as-is.
+// Auto chooses by extension (any case): .ply, .pcd, .bin (KittiBin), .npy, .xyz / .txt / .pts / .asc (Xyz);
+// for any other extension by content (a "ply" line, a PCD header, the \x93NUMPY magic); else it throws
+// Failure(UnsupportedFormat). Missing or unreadable files throw Failure(Io); empty, malformed or truncated
+// ones Failure(Parse). A well-formed file with no points gives an empty vector.
+std::vector<double> read_points_file(const std::string &path, FileFormat format);
+
+} // namespace detail
+} // namespace kissm
