@@ -67,7 +67,7 @@ KISSM_API uint32_t kissm_abi_version(void);
 #define KISSM_ERR_TOO_FEW_POINTS -4    /* a cloud has fewer than KISSM_MIN_POINTS points */
 #define KISSM_ERR_NONFINITE -5         /* a NaN or infinite coordinate under KISSM_NONFINITE_REJECT */
 #define KISSM_ERR_VOXEL_RANGE -6       /* the voxel size is too small for the cloud's extent */
-#define KISSM_ERR_STRUCT_SIZE -7       /* struct_size is unknown, too small, or has a non-zero unknown tail */
+#define KISSM_ERR_STRUCT_SIZE -7       /* struct_size too small, above 65536, or with a non-zero unknown tail */
 #define KISSM_ERR_OUT_OF_MEMORY -8     /* an allocation failed; nothing was changed */
 #define KISSM_ERR_CANCELLED -9         /* kissm_cancel() or the progress callback stopped the call */
 #define KISSM_ERR_FEATURES_MISMATCH -10 /* features computed under a different configuration */
@@ -89,7 +89,7 @@ KISSM_API const char *kissm_last_error_message(void);
 /* Reasons for valid = 0 (a well-formed input that gives no trustworthy pose is not an error)       */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_REASON_NONE 0                 /* valid = 1 */
+#define KISSM_REASON_NONE 0                 /* valid = 1, or the call failed (see its status) */
 #define KISSM_REASON_TOO_FEW_VOXELS 1       /* a cloud has too few occupied voxels to describe */
 #define KISSM_REASON_TOO_FEW_FEATURES 2     /* a cloud has too few points with a reliable descriptor */
 #define KISSM_REASON_TOO_FEW_CORRESPONDENCES 3 /* matching or pruning left too few correspondences */
@@ -126,29 +126,31 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 
 /* Called on the calling thread only, never concurrently; must not call back into the same matcher. */
 typedef void (*kissm_log_fn)(void *user_data, int32_t level, const char *message);
-/* Called on the calling thread at stage boundaries and within long stages; return non-zero to cancel. */
+/* Called on the calling thread at stage boundaries and within long stages; return non-zero to cancel.
+ * Stages never go back within a call and fractions never decrease within a stage; the last call of a
+ * registration that ran to the end is (KISSM_STAGE_SOLVER, 1.0). */
 typedef int32_t (*kissm_progress_fn)(void *user_data, int32_t stage, double fraction);
 
 typedef struct kissm_config {
     uint32_t struct_size;        /* sizeof(kissm_config) as the caller knows it; set by kissm_config_init */
-    int32_t num_threads;         /* worker threads; 0 = all hardware threads. Results do not depend on it. */
+    int32_t num_threads;         /* worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. */
 
     double voxel_size;           /* metres (or the cloud's unit); > 0. Every length below scales with it. 0.3 */
-    double normal_radius_gain;   /* normal radius = gain * voxel_size; 3.5 (paper) */
-    double fpfh_radius_gain;     /* FPFH radius = gain * voxel_size; >= normal gain; 5.0 */
+    double normal_radius_gain;   /* normal radius = gain * voxel_size; in (0, fpfh_radius_gain]; 3.5 (paper) */
+    double fpfh_radius_gain;     /* FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain; 5.0 */
     double max_linearity;        /* tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]; 0.99 */
     double ratio_test;           /* Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off; 0.9 */
-    double prune_noise_bound_gain; /* graph edge when length mismatch <= gain * voxel_size; 1.0 */
-    double solver_noise_bound_gain; /* solver inlier bound = gain * voxel_size; 0.75 */
-    double noise_bound_max;      /* cap on both noise bounds in metres; 0 = no cap; 0 */
-    double viewpoint[3];         /* for KISSM_VIEWPOINT_FIXED: the sensor position; (0, 0, 0) */
+    double prune_noise_bound_gain; /* graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]; 1.0 */
+    double solver_noise_bound_gain; /* solver inlier bound = gain * voxel_size; in (0, 1e6]; 0.75 */
+    double noise_bound_max;      /* cap on both noise bounds in metres, finite; 0 = no cap; 0 */
+    double viewpoint[3];         /* for KISSM_VIEWPOINT_FIXED: the sensor position, finite; (0, 0, 0) */
 
-    int32_t min_normal_neighbors; /* tau_num: neighbours needed for a normal and for a descriptor; >= 3; 3 */
-    int32_t max_correspondences; /* cap on mutual matches kept (best ratio first); >= 3; 5000 */
-    int32_t min_inliers;         /* valid needs at least this many final inliers; >= 3; 15 */
+    int32_t min_normal_neighbors; /* tau_num: neighbours needed for a normal and a descriptor; 3..100000; 3 */
+    int32_t max_correspondences; /* cap on mutual matches kept (best ratio first); 3..100000; 5000 */
+    int32_t min_inliers;         /* valid needs at least this many final inliers; 3..100000; 15 */
     int32_t nonfinite_policy;    /* KISSM_NONFINITE_*; KISSM_NONFINITE_REJECT */
     int32_t viewpoint_mode;      /* KISSM_VIEWPOINT_*; KISSM_VIEWPOINT_FIXED */
-    int32_t log_level;           /* most verbose level passed to log_fn; KISSM_LOG_WARN */
+    int32_t log_level;           /* most verbose level passed to log_fn, 0 (none)..4; KISSM_LOG_WARN */
 
     kissm_log_fn log_fn;         /* NULL = silent */
     void *log_user_data;
@@ -174,7 +176,7 @@ KISSM_API int32_t kissm_config_validate(const kissm_config *config);
 
 typedef struct kissm_points {
     const void *data;      /* first point's x; y and z follow contiguously. Read during the call only. */
-    uint64_t count;        /* number of points */
+    uint64_t count;        /* number of points, at most 4294967295 */
     uint64_t stride_bytes; /* bytes from one point to the next; 0 = packed (3 scalars) */
     int32_t scalar_type;   /* KISSM_SCALAR_FLOAT32 or KISSM_SCALAR_FLOAT64 */
     int32_t reserved;      /* must be 0 */

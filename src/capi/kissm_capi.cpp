@@ -99,7 +99,14 @@ bool tail_is_zero(const void *p, std::size_t known, std::size_t given) {
     return true;
 }
 
+// An uninitialised struct_size is a common C mistake; a size no kissm struct will ever reach is refused
+// before any byte beyond the known layout is read or written.
+constexpr uint32_t kMaxStructSize = 65536;
+
 void check_struct_size(const void *p, uint32_t given, std::size_t known, const char *what) {
+    if (given > kMaxStructSize)
+        arg_fail(ErrorKind::StructSize, std::string(what) + "->struct_size is " + std::to_string(given) +
+                                            ", larger than any kissm struct (was it initialised? set it to sizeof(" + what + "))");
     if (given < known)
         arg_fail(ErrorKind::StructSize, std::string(what) + "->struct_size is " + std::to_string(given) + "; this kissm needs at least " +
                                             std::to_string(known) + " (set it to sizeof(" + what + "))");
@@ -252,6 +259,9 @@ kissm::detail::PointsView points_view(const kissm_points *p, const char *name) {
 
 void check_result(kissm_result *r) {
     if (r == nullptr) arg_fail(ErrorKind::NullArgument, "result is NULL");
+    if (r->struct_size > kMaxStructSize)
+        arg_fail(ErrorKind::StructSize, "result->struct_size is " + std::to_string(r->struct_size) +
+                                            ", larger than any kissm struct (was it initialised? set it to sizeof(kissm_result))");
     if (r->struct_size < sizeof(kissm_result))
         arg_fail(ErrorKind::StructSize, "result->struct_size is " + std::to_string(r->struct_size) +
                                             "; this kissm needs at least " + std::to_string(sizeof(kissm_result)) +
@@ -379,9 +389,10 @@ const char *kissm_last_error_message(void) { return t_last_error.c_str(); }
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size) {
     return guarded("kissm_config_init", [&] {
         if (config == nullptr) arg_fail(ErrorKind::NullArgument, "config is NULL");
-        if (struct_size < sizeof(kissm_config))
+        if (struct_size < sizeof(kissm_config) || struct_size > kMaxStructSize)
             arg_fail(ErrorKind::StructSize, "struct_size is " + std::to_string(struct_size) + "; this kissm needs at least " +
-                                                std::to_string(sizeof(kissm_config)));
+                                                std::to_string(sizeof(kissm_config)) + " (and at most " +
+                                                std::to_string(kMaxStructSize) + ")");
         kissm_config c;
         fill_defaults(c);
         std::memset(static_cast<void *>(config), 0, struct_size); // a newer caller's unknown tail: zero = default
@@ -418,6 +429,9 @@ int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *out_config)
         if (matcher == nullptr) arg_fail(ErrorKind::NullArgument, "matcher is NULL");
         if (out_config == nullptr) arg_fail(ErrorKind::NullArgument, "out_config is NULL");
         const uint32_t size = out_config->struct_size;
+        if (size > kMaxStructSize)
+            arg_fail(ErrorKind::StructSize, "out_config->struct_size is " + std::to_string(size) +
+                                                ", larger than any kissm struct (was it initialised?)");
         if (size < sizeof(kissm_config))
             arg_fail(ErrorKind::StructSize, "out_config->struct_size is " + std::to_string(size) + "; this kissm needs at least " +
                                                 std::to_string(sizeof(kissm_config)));
@@ -440,11 +454,10 @@ int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source, const
         const kissm::detail::PointsView tv = points_view(target, "target");
         m->cancel_requested.store(0);
         kissm::detail::RunContext ctx(m->params.num_threads, &m->cancel_requested, hooks_of(m->config));
-        const kissm::detail::CloudFeatures sf = kissm::detail::describe_cloud(sv, m->params, "source", ctx);
-        const kissm::detail::CloudFeatures tf = kissm::detail::describe_cloud(tv, m->params, "target", ctx);
-        kissm::detail::Registration g = kissm::detail::register_described(sf, tf, m->params, ctx);
-        g.time_voxelize_ms = sf.time_voxelize_ms + tf.time_voxelize_ms;
-        g.time_features_ms = sf.time_features_ms + tf.time_features_ms;
+        const auto clouds = kissm::detail::describe_pair(sv, tv, m->params, ctx);
+        kissm::detail::Registration g = kissm::detail::register_described(clouds.first, clouds.second, m->params, ctx);
+        g.time_voxelize_ms = clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
+        g.time_features_ms = clouds.first.time_features_ms + clouds.second.time_features_ms;
         fill_result(g, result);
         return ok();
     });

@@ -84,34 +84,36 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
     out.keypoint = std::move(keypoints);
     const std::size_t m = out.keypoint.size();
     out.values.assign(m * D, 0.0f);
+    const float v2 = voxel_size * voxel_size;
     ctx.parallel_for(m, 512, [&](std::size_t b, std::size_t e) {
-        double acc[D];
+        // Single precision: at most a few hundred terms of size <= 100 with weights <= 1, summed in a fixed
+        // order; the loop over the 33 bins vectorises.
+        float acc[D];
         for (std::size_t q = b; q < e; ++q) {
             const std::uint32_t i = out.keypoint[q];
-            std::fill(acc, acc + D, 0.0);
-            double weight_sum = 0.0;
+            std::fill(acc, acc + D, 0.0f);
+            int count = 0;
             for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
                 const std::uint32_t j = nb.index[k];
                 if (j == i || !normals.valid[j]) continue;
-                const double d2 = static_cast<double>(nb.dist2[k]);
-                const double v2 = static_cast<double>(voxel_size) * static_cast<double>(voxel_size);
-                const double w = weight_power == 2 ? v2 / d2 : std::sqrt(v2 / d2);
+                const float w2 = v2 / nb.dist2[k];
+                const float w = weight_power == 2 ? w2 : std::sqrt(w2);
                 const float *h = &spfh[static_cast<std::size_t>(j) * D];
-                for (int c = 0; c < D; ++c) acc[c] += w * static_cast<double>(h[c]);
-                weight_sum += 1.0;
+                for (int c = 0; c < D; ++c) acc[c] += w * h[c];
+                ++count;
             }
             const float *own = &spfh[static_cast<std::size_t>(i) * D];
-            const double inv_count = weight_sum > 0.0 ? 1.0 / weight_sum : 0.0;
+            const float inv_count = count > 0 ? 1.0f / static_cast<float>(count) : 0.0f;
             float *dst = &out.values[q * D];
             for (int block = 0; block < 3; ++block) {
-                double v[kBinsPerFeature], sum = 0.0;
+                float v[kBinsPerFeature], sum = 0.0f;
                 for (int c = 0; c < kBinsPerFeature; ++c) {
                     const int idx = block * kBinsPerFeature + c;
-                    v[c] = static_cast<double>(own[idx]) + acc[idx] * inv_count;
+                    v[c] = own[idx] + acc[idx] * inv_count;
                     sum += v[c];
                 }
-                const double scale = sum > 0.0 ? 100.0 / sum : 0.0;
-                for (int c = 0; c < kBinsPerFeature; ++c) dst[block * kBinsPerFeature + c] = static_cast<float>(v[c] * scale);
+                const float scale = sum > 0.0f ? 100.0f / sum : 0.0f;
+                for (int c = 0; c < kBinsPerFeature; ++c) dst[block * kBinsPerFeature + c] = v[c] * scale;
             }
         }
     });

@@ -52,11 +52,13 @@ bool same_descriptor_settings(const Params &a, const Params &b) {
            (a.viewpoint_mode == ViewpointMode::CloudCenter || a.viewpoint == b.viewpoint);
 }
 
-CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
-    CloudFeatures f;
+namespace {
+
+void voxelize_cloud(const PointsView &view, const Params &params, const std::string &name, double progress,
+                    CloudFeatures &f, RunContext &ctx) {
     f.params = params;
     Stopwatch clock;
-    ctx.checkpoint(kStageVoxelize, 0.0);
+    ctx.checkpoint(kStageVoxelize, progress);
     InputCloud input = gather_points(view, params.nonfinite, name);
     f.num_points = input.num_given;
     f.num_nonfinite = input.num_nonfinite;
@@ -66,14 +68,18 @@ CloudFeatures describe_cloud(const PointsView &view, const Params &params, const
         fail(ErrorKind::TooFewPoints, name + " has " + std::to_string(input.points.size()) +
                                           " finite points; at least 4 are needed");
     f.voxels = voxelize(input, params.voxel_size, name, ctx);
-    input = InputCloud(); // release the copy early: peak memory is the caller's cloud plus voxels
     f.time_voxelize_ms = clock.lap();
+}
 
-    ctx.checkpoint(kStageFeatures, 0.0);
+void describe_voxels(const Params &params, const std::string &name, double progress_from, double progress_to,
+                     CloudFeatures &f, RunContext &ctx) {
+    Stopwatch clock;
+    auto progress = [&](double part) { ctx.checkpoint(kStageFeatures, progress_from + part * (progress_to - progress_from)); };
+    progress(0.0);
     const auto &pts = f.voxels.points;
     if (pts.size() > static_cast<std::size_t>(params.min_normal_neighbors)) {
         const Neighborhoods nb = radius_neighbors(pts, static_cast<float>(params.fpfh_radius()), ctx);
-        ctx.checkpoint(kStageFeatures, 0.4);
+        progress(0.4);
         NormalParams np;
         np.normal_radius = static_cast<float>(params.normal_radius());
         np.min_neighbors = params.min_normal_neighbors;
@@ -83,7 +89,7 @@ CloudFeatures describe_cloud(const PointsView &view, const Params &params, const
                              : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
         np.viewpoint = vp.cast<float>();
         const Normals normals = estimate_normals(pts, nb, np, ctx);
-        ctx.checkpoint(kStageFeatures, 0.6);
+        progress(0.6);
         std::vector<std::uint32_t> keypoints = select_keypoints(nb, normals, params.min_normal_neighbors);
         f.descriptors = compute_fpfh(pts, nb, normals, std::move(keypoints), static_cast<float>(params.voxel_size),
                                      kFpfhWeightPower, ctx);
@@ -95,7 +101,26 @@ CloudFeatures describe_cloud(const PointsView &view, const Params &params, const
             << f.descriptors.keypoint.size() << " keypoints";
         ctx.log(LogLevel::Info, msg.str());
     }
+}
+
+} // namespace
+
+CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
+    CloudFeatures f;
+    voxelize_cloud(view, params, name, 0.0, f, ctx);
+    describe_voxels(params, name, 0.0, 1.0, f, ctx);
     return f;
+}
+
+std::pair<CloudFeatures, CloudFeatures> describe_pair(const PointsView &source, const PointsView &target,
+                                                      const Params &params, RunContext &ctx) {
+    // Both clouds pass each stage before either enters the next, so progress never goes back.
+    std::pair<CloudFeatures, CloudFeatures> p;
+    voxelize_cloud(source, params, "source", 0.0, p.first, ctx);
+    voxelize_cloud(target, params, "target", 0.5, p.second, ctx);
+    describe_voxels(params, "source", 0.0, 0.5, p.first, ctx);
+    describe_voxels(params, "target", 0.5, 1.0, p.second, ctx);
+    return p;
 }
 
 Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
@@ -197,6 +222,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
             << r.num_final_inliers;
         ctx.log(LogLevel::Info, msg.str());
     }
+    ctx.checkpoint(kStageSolver, 1.0);
     return r;
 }
 

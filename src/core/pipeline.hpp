@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "cloud.hpp"
 #include "params.hpp"
@@ -44,6 +45,10 @@ struct Registration {
 
 // Throws Failure for unacceptable input (empty, too few points, non-finite under Reject, voxel range).
 CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx);
+
+// Both clouds of a registration: voxelised one after the other, then described (progress stays monotone).
+std::pair<CloudFeatures, CloudFeatures> describe_pair(const PointsView &source, const PointsView &target,
+                                                      const Params &params, RunContext &ctx);
 
 // True when features computed under `a` can be matched under `b` (same descriptor-relevant settings).
 bool same_descriptor_settings(const Params &a, const Params &b);

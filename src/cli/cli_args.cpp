@@ -1,0 +1,136 @@
+#include "cli_args.hpp"
+
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <utility>
+
+#include <kissm.h>
+
+namespace kissm_cli {
+
+ArgCursor::ArgCursor(std::string command, std::vector<std::string> args)
+    : command_(std::move(command)), args_(std::move(args)) {}
+
+bool ArgCursor::next() {
+    if (index_ >= args_.size()) return false;
+    const std::string &arg = args_[index_++];
+    has_inline_value_ = false;
+    inline_value_.clear();
+    if (!options_done_ && arg == "--") {
+        options_done_ = true;
+        return next();
+    }
+    is_option_ = !options_done_ && arg.size() > 1 && arg[0] == '-';
+    name_ = arg;
+    if (is_option_ && arg.compare(0, 2, "--") == 0) {
+        const size_t eq = arg.find('=');
+        if (eq != std::string::npos) {
+            name_ = arg.substr(0, eq);
+            inline_value_ = arg.substr(eq + 1);
+            has_inline_value_ = true;
+        }
+    }
+    return true;
+}
+
+std::string ArgCursor::value() {
+    std::string v;
+    if (has_inline_value_) {
+        v = inline_value_;
+    } else if (index_ < args_.size()) {
+        v = args_[index_++];
+    }
+    if (v.empty()) throw UsageError(name_ + " needs a value (see 'kissm " + command_ + " --help')");
+    return v;
+}
+
+void ArgCursor::expect_no_value() const {
+    if (has_inline_value_) throw UsageError(name_ + " takes no value");
+}
+
+void ArgCursor::unknown() const {
+    throw UsageError("unknown option '" + name_ + "' for 'kissm " + command_ + "' (see 'kissm " + command_ +
+                     " --help')");
+}
+
+double parse_double(const std::string &option, const std::string &text) {
+    const char *begin = text.c_str();
+    char *end = nullptr;
+    errno = 0;
+    const double v = std::strtod(begin, &end);
+    if (text.empty() || end != begin + text.size() || std::isspace(static_cast<unsigned char>(text[0]))) {
+        throw UsageError(option + " expects a number, got '" + one_line(text) + "'");
+    }
+    if (!std::isfinite(v) || errno == ERANGE) {
+        throw UsageError(option + " expects a finite number, got '" + one_line(text) + "'");
+    }
+    return v;
+}
+
+double parse_positive(const std::string &option, const std::string &text) {
+    const double v = parse_double(option, text);
+    if (!(v > 0.0)) throw UsageError(option + " must be greater than 0, got '" + one_line(text) + "'");
+    return v;
+}
+
+int32_t parse_int32(const std::string &option, const std::string &text, int32_t min_value, int32_t max_value) {
+    const char *begin = text.c_str();
+    char *end = nullptr;
+    errno = 0;
+    const long long v = std::strtoll(begin, &end, 10);
+    if (text.empty() || end != begin + text.size() || std::isspace(static_cast<unsigned char>(text[0]))) {
+        throw UsageError(option + " expects an integer, got '" + one_line(text) + "'");
+    }
+    if (errno == ERANGE || v < min_value || v > max_value) {
+        throw UsageError(option + " must be between " + std::to_string(min_value) + " and " +
+                         std::to_string(max_value) + ", got '" + one_line(text) + "'");
+    }
+    return static_cast<int32_t>(v);
+}
+
+uint64_t parse_uint64(const std::string &option, const std::string &text) {
+    const char *begin = text.c_str();
+    char *end = nullptr;
+    errno = 0;
+    const unsigned long long v = std::strtoull(begin, &end, 0);
+    if (text.empty() || end != begin + text.size() || text[0] == '-' || text[0] == '+' ||
+        std::isspace(static_cast<unsigned char>(text[0]))) {
+        throw UsageError(option + " expects a non-negative integer, got '" + one_line(text) + "'");
+    }
+    if (errno == ERANGE) throw UsageError(option + " is out of range: '" + one_line(text) + "'");
+    return static_cast<uint64_t>(v);
+}
+
+int32_t parse_format(const std::string &option, const std::string &text) {
+    struct Name {
+        const char *name;
+        int32_t format;
+    };
+    static const Name kNames[] = {
+        {"auto", KISSM_FORMAT_AUTO},     {"ply", KISSM_FORMAT_PLY},
+        {"pcd", KISSM_FORMAT_PCD},       {"kitti_bin", KISSM_FORMAT_KITTI_BIN},
+        {"kitti", KISSM_FORMAT_KITTI_BIN}, {"kitti_bin_xyzi_f32", KISSM_FORMAT_KITTI_BIN},
+        {"bin_xyz", KISSM_FORMAT_BIN_XYZ}, {"bin_xyz_f32", KISSM_FORMAT_BIN_XYZ},
+        {"npy", KISSM_FORMAT_NPY},       {"npy_xyz", KISSM_FORMAT_NPY},
+        {"xyz", KISSM_FORMAT_XYZ},       {"txt", KISSM_FORMAT_XYZ},
+    };
+    for (const Name &n : kNames) {
+        if (text == n.name) return n.format;
+    }
+    throw UsageError(option + ": unknown format '" + one_line(text) + "' (expected " + format_names() + ")");
+}
+
+const char *format_names() { return "auto, ply, pcd, kitti_bin, bin_xyz, npy or xyz"; }
+
+std::string one_line(const std::string &text) {
+    std::string out = text;
+    for (char &c : out) {
+        if (c == '\n' || c == '\r') c = ' ';
+    }
+    while (!out.empty() && out.back() == ' ') out.pop_back();
+    return out;
+}
+
+} // namespace kissm_cli

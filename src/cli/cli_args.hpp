@@ -1,0 +1,62 @@
+// Command-line parsing helpers shared by the kissm commands. Every problem with the command line or the
+// inputs is reported by throwing UsageError; main() prints it as one "kissm: ..." line and exits with 2.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace kissm_cli {
+
+// Exit status of the tool.
+constexpr int kExitOk = 0;      // success (a valid, trustworthy pose)
+constexpr int kExitInvalid = 1; // ran, but the result is not valid (or the demo missed its accuracy bound)
+constexpr int kExitUsage = 2;   // usage or input error
+
+class UsageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+// Walks over a command's arguments. Options are "--name value", "--name=value" or flags; "--" ends the
+// options; everything else is positional.
+class ArgCursor {
+public:
+    ArgCursor(std::string command, std::vector<std::string> args);
+
+    // Advances to the next argument; false at the end.
+    bool next();
+    bool is_option() const { return is_option_; }
+    // The option's name ("--voxel", without any "=value") or the positional argument.
+    const std::string &current() const { return name_; }
+    // The current option's value: its "=value" part or the next argument.
+    std::string value();
+    // For flags: rejects "--flag=value".
+    void expect_no_value() const;
+    [[noreturn]] void unknown() const;
+
+private:
+    std::string command_;
+    std::vector<std::string> args_;
+    size_t index_ = 0;
+    bool options_done_ = false;
+    bool is_option_ = false;
+    bool has_inline_value_ = false;
+    std::string name_;
+    std::string inline_value_;
+};
+
+double parse_double(const std::string &option, const std::string &text);   // finite
+double parse_positive(const std::string &option, const std::string &text); // finite and > 0
+int32_t parse_int32(const std::string &option, const std::string &text, int32_t min_value, int32_t max_value);
+uint64_t parse_uint64(const std::string &option, const std::string &text);
+// A point file format name (auto, ply, pcd, kitti_bin, bin_xyz, npy, xyz, and the names used by the test
+// data's pair.txt files) to its KISSM_FORMAT_* value.
+int32_t parse_format(const std::string &option, const std::string &text);
+const char *format_names();
+
+// The text with line breaks replaced by spaces, so that an error message stays on one line.
+std::string one_line(const std::string &text);
+
+} // namespace kissm_cli

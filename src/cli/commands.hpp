@@ -1,0 +1,33 @@
+// The kissm commands, and owning wrappers for the library's handles. The tool uses only the public C API
+// of kissm.h.
+#pragma once
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <kissm.h>
+
+namespace kissm_cli {
+
+struct CloudDeleter {
+    void operator()(kissm_cloud *cloud) const { kissm_cloud_destroy(cloud); }
+};
+struct MatcherDeleter {
+    void operator()(kissm_matcher *matcher) const { kissm_destroy(matcher); }
+};
+using CloudPtr = std::unique_ptr<kissm_cloud, CloudDeleter>;
+using MatcherPtr = std::unique_ptr<kissm_matcher, MatcherDeleter>;
+
+// Each returns the process exit status (see cli_args.hpp) or throws UsageError.
+int run_register(const std::vector<std::string> &args);
+int run_demo(const std::vector<std::string> &args);
+
+void print_register_help(std::FILE *out);
+void print_demo_help(std::FILE *out);
+
+// A log callback printing the library's messages to stderr (for --verbose).
+void log_to_stderr(void *user_data, int32_t level, const char *message);
+
+} // namespace kissm_cli

@@ -1,0 +1,88 @@
+// kissm: the command-line front end of the kissm library.
+//
+//   kissm register SOURCE TARGET --voxel V [options]   global registration of two point files
+//   kissm demo [--out DIR] [--threads N] [--seed S]     synthetic LiDAR scene, registered end to end
+//
+// Exit status: 0 success, 1 the registration ran but gave no trustworthy pose, 2 usage or input error
+// (with one "kissm: ..." line on stderr).
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <kissm.h>
+
+#include "cli_args.hpp"
+#include "commands.hpp"
+
+namespace kissm_cli {
+namespace {
+
+void print_usage(std::FILE *out) {
+    std::fprintf(out,
+                 "kissm %s: fast, deterministic global 3D point cloud registration\n"
+                 "\n"
+                 "usage:\n"
+                 "  kissm register SOURCE TARGET --voxel V [options]\n"
+                 "      Find the rigid transform that maps SOURCE into TARGET's frame, with no initial guess.\n"
+                 "      Reads PLY, PCD, KITTI .bin, raw float32 xyz .bin, .npy and xyz text files.\n"
+                 "  kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--json]\n"
+                 "      Simulate two LiDAR scans of a synthetic street, register them, report the error against\n"
+                 "      the ground truth and write PLY files and a top-view picture into DIR.\n"
+                 "  kissm help [COMMAND]      this text, or a command's options (same as COMMAND --help)\n"
+                 "  kissm --version           print the version\n"
+                 "\n"
+                 "Exit status: 0 success, 1 registration ran but the pose is not valid, 2 usage or input error.\n",
+                 kissm_version_string());
+}
+
+int run(const std::vector<std::string> &args) {
+    if (args.empty()) throw UsageError("missing command (try 'kissm --help')");
+    const std::string &command = args[0];
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    if (command == "-h" || command == "--help" || command == "help") {
+        if (rest.empty() || (command != "help")) {
+            print_usage(stdout);
+            return kExitOk;
+        }
+        if (rest[0] == "register") {
+            print_register_help(stdout);
+        } else if (rest[0] == "demo") {
+            print_demo_help(stdout);
+        } else {
+            throw UsageError("no help for unknown command '" + one_line(rest[0]) + "' (try 'kissm --help')");
+        }
+        return kExitOk;
+    }
+    if (command == "--version" || command == "-V" || command == "version") {
+        std::printf("kissm %s\n", kissm_version_string());
+        return kExitOk;
+    }
+    if (command == "register") return run_register(rest);
+    if (command == "demo") return run_demo(rest);
+    if (!command.empty() && command[0] == '-') {
+        throw UsageError("unknown option '" + one_line(command) + "' (try 'kissm --help')");
+    }
+    throw UsageError("unknown command '" + one_line(command) + "' (try 'kissm --help')");
+}
+
+} // namespace
+} // namespace kissm_cli
+
+int main(int argc, char **argv) {
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    try {
+        return kissm_cli::run(args);
+    } catch (const kissm_cli::UsageError &e) {
+        std::fflush(stdout);
+        std::fprintf(stderr, "kissm: %s\n", kissm_cli::one_line(e.what()).c_str());
+    } catch (const std::bad_alloc &) {
+        std::fflush(stdout);
+        std::fprintf(stderr, "kissm: out of memory\n");
+    } catch (const std::exception &e) {
+        std::fflush(stdout);
+        std::fprintf(stderr, "kissm: %s\n", kissm_cli::one_line(e.what()).c_str());
+    }
+    return kissm_cli::kExitUsage;
+}

@@ -1,0 +1,133 @@
+#include "report.hpp"
+
+#include <cctype>
+#include <cerrno>
+#include <cinttypes>
+#include <cstdint>
+#include <cmath>
+#include <cstring>
+
+#include "cli_args.hpp"
+
+namespace kissm_cli {
+
+void print_matrix(std::FILE *out, const double T[16], const char *indent) {
+    for (int r = 0; r < 4; ++r) {
+        std::fprintf(out, "%s[ %12.6f %12.6f %12.6f %12.6f ]\n", indent, T[4 * r], T[4 * r + 1], T[4 * r + 2],
+                     T[4 * r + 3]);
+    }
+}
+
+namespace {
+
+void row2(std::FILE *out, const char *label, uint64_t a, uint64_t b) {
+    std::fprintf(out, "  %-22s%11" PRIu64 " %11" PRIu64 "\n", label, a, b);
+}
+
+void row1(std::FILE *out, const char *label, uint64_t a) {
+    std::fprintf(out, "  %-22s%11" PRIu64 "\n", label, a);
+}
+
+} // namespace
+
+void print_result_summary(std::FILE *out, const kissm_result &r) {
+    std::fprintf(out, "valid: %s", r.valid ? "yes" : "no");
+    if (!r.valid) std::fprintf(out, " (reason: %s)", kissm_reason_string(r.reason));
+    std::fprintf(out, "\n");
+    std::fprintf(out, "counts                       source      target\n");
+    row2(out, "points", r.num_source_points, r.num_target_points);
+    if (r.num_source_nonfinite || r.num_target_nonfinite) {
+        row2(out, "non-finite (dropped)", r.num_source_nonfinite, r.num_target_nonfinite);
+    }
+    row2(out, "voxels", r.num_source_voxels, r.num_target_voxels);
+    row2(out, "keypoints", r.num_source_keypoints, r.num_target_keypoints);
+    row1(out, "initial matches", r.num_initial_correspondences);
+    char label[64];
+    std::snprintf(label, sizeof label, "pruned (max %" PRIu64 "-core)", r.max_core_number);
+    row1(out, label, r.num_pruned_correspondences);
+    row1(out, "rotation inliers", r.num_rotation_inliers);
+    row1(out, "final inliers", r.num_final_inliers);
+    std::fprintf(out, "inlier ratio: %.4f\n", r.inlier_ratio);
+    if (std::isfinite(r.residual_rms)) {
+        std::fprintf(out, "residual rms: %.4g (noise bound %.4g)\n", r.residual_rms, r.noise_bound);
+    } else {
+        std::fprintf(out, "residual rms: - (noise bound %.4g)\n", r.noise_bound);
+    }
+    std::fprintf(out,
+                 "time (ms): voxelize %.1f, features %.1f, matching %.1f, pruning %.1f, solver %.1f, total %.1f\n",
+                 r.time_voxelize_ms, r.time_features_ms, r.time_matching_ms, r.time_pruning_ms, r.time_solver_ms,
+                 r.time_total_ms);
+}
+
+void add_result_json(JsonWriter &json, const kissm_result &r) {
+    json.field("valid", r.valid != 0);
+    json.field("reason", kissm_reason_string(r.reason));
+    json.field("reason_code", r.reason);
+    json.field_matrix("transform", r.transform, 4, 4);
+    json.field_matrix("rotation", r.rotation, 3, 3);
+    json.field_vector("translation", r.translation, 3);
+    json.field("final_inliers", r.num_final_inliers);
+    json.key("counts");
+    json.begin_object();
+    json.field("source_points", r.num_source_points);
+    json.field("target_points", r.num_target_points);
+    json.field("source_nonfinite", r.num_source_nonfinite);
+    json.field("target_nonfinite", r.num_target_nonfinite);
+    json.field("source_voxels", r.num_source_voxels);
+    json.field("target_voxels", r.num_target_voxels);
+    json.field("source_keypoints", r.num_source_keypoints);
+    json.field("target_keypoints", r.num_target_keypoints);
+    json.field("initial_correspondences", r.num_initial_correspondences);
+    json.field("pruned_correspondences", r.num_pruned_correspondences);
+    json.field("max_core_number", r.max_core_number);
+    json.field("rotation_inliers", r.num_rotation_inliers);
+    json.field("final_inliers", r.num_final_inliers);
+    json.end_object();
+    json.field("inlier_ratio", r.inlier_ratio);
+    json.field("residual_rms", r.residual_rms);
+    json.field("noise_bound", r.noise_bound);
+    json.field_vector("inlier_extent", r.inlier_extent, 3);
+    json.key("time_ms");
+    json.begin_object();
+    json.field("voxelize", r.time_voxelize_ms);
+    json.field("features", r.time_features_ms);
+    json.field("matching", r.time_matching_ms);
+    json.field("pruning", r.time_pruning_ms);
+    json.field("solver", r.time_solver_ms);
+    json.field("total", r.time_total_ms);
+    json.end_object();
+}
+
+bool write_transform_file(const std::string &path, const double T[16], std::string *error) {
+    std::FILE *f = std::fopen(path.c_str(), "w");
+    if (!f) {
+        *error = "cannot create '" + path + "': " + std::strerror(errno);
+        return false;
+    }
+    bool ok = true;
+    for (int r = 0; r < 4 && ok; ++r) {
+        ok = std::fprintf(f, "%.17g %.17g %.17g %.17g\n", T[4 * r], T[4 * r + 1], T[4 * r + 2], T[4 * r + 3]) > 0;
+    }
+    const int saved_errno = errno;
+    if (std::fclose(f) != 0 || !ok) {
+        *error = "cannot write '" + path + "': " + std::strerror(ok ? errno : saved_errno);
+        return false;
+    }
+    return true;
+}
+
+std::string library_error(int32_t status, const std::string &path) {
+    const char *message = kissm_last_error_message();
+    std::string text = (message && *message) ? message : kissm_status_string(status);
+    // The tool already says which call and which file failed: drop a leading "kissm_function: " and
+    // "path: " from the library's message.
+    if (text.compare(0, 6, "kissm_") == 0) {
+        size_t i = 6;
+        while (i < text.size() && (std::isalnum(static_cast<unsigned char>(text[i])) || text[i] == '_')) ++i;
+        if (text.compare(i, 2, ": ") == 0) text.erase(0, i + 2);
+    }
+    if (!path.empty() && text.compare(0, path.size() + 2, path + ": ") == 0) text.erase(0, path.size() + 2);
+    return one_line(text);
+}
+
+} // namespace kissm_cli

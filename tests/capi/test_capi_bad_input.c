@@ -1,0 +1,836 @@
+/* Every way a caller can misuse the C API: exact status, a message naming the argument, outputs left alone
+ * (a registration result is fully overwritten instead), and a handle that stays usable afterwards. Also
+ * degenerate but well-formed inputs, which succeed with valid = 0 and a reason. C99. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "harness.h"
+#include "kissm.h"
+#include "scenes.h"
+
+#define GOOD_VOXEL 0.6
+
+/* A small, fast, registrable pair shared by every test. */
+static scn_pair g_pair;
+static kissm_matcher *g_m = NULL; /* default config, voxel GOOD_VOXEL */
+
+/* A sentinel that no allocation returns: outputs must keep it when a call fails. */
+#define SENTINEL_MATCHER ((kissm_matcher *)(uintptr_t)0x1234)
+#define SENTINEL_FEATURES ((kissm_features *)(uintptr_t)0x5678)
+
+static int msg_has(const char *word) {
+    const char *msg = kissm_last_error_message();
+    if (msg != NULL && strstr(msg, word) != NULL) return 1;
+    fprintf(stderr, "  message \"%s\" does not name \"%s\"\n", msg ? msg : "(null)", word);
+    return 0;
+}
+
+/* The matcher registers the good pair successfully (a failure before left it usable). */
+static void check_usable(kissm_matcher *m, const char *after) {
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    kissm_result r;
+    scn_result_poison(&r);
+    CHECK_MSG(kissm_register(m, &s, &t, &r) == KISSM_OK, "after %s: %s", after, kissm_last_error_message());
+    CHECK_MSG(r.valid == 1 && scn_rotation_error_deg(r.rotation, g_pair.truth.R) < 3.0, "after %s", after);
+    CHECK(strcmp(kissm_last_error_message(), "") == 0);
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* NULL pointers                                                                                    */
+/* ---------------------------------------------------------------------------------------------- */
+
+static void test_null_pointers(void) {
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    kissm_features *fs = NULL, *ft = NULL, *out_f;
+    kissm_matcher *out_m;
+    kissm_config c = scn_config(GOOD_VOXEL);
+    kissm_result r;
+
+    CHECK_EQ_INT(kissm_config_init(NULL, (uint32_t)sizeof(kissm_config)), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_config_validate(NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("config"));
+    CHECK_EQ_INT(kissm_create(&c, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("out_matcher"));
+    CHECK_EQ_INT(kissm_get_config(NULL, &c), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("matcher"));
+    CHECK_EQ_INT(kissm_get_config(g_m, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("out_config"));
+
+    /* kissm_register: the result is overwritten whenever it is usable. */
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register(NULL, &s, &t, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("matcher"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register(g_m, NULL, &t, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("source"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register(g_m, &s, NULL, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("target"));
+    CHECK(scn_result_is_reset(&r));
+    CHECK_EQ_INT(kissm_register(g_m, &s, &t, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("result"));
+    CHECK_EQ_INT(kissm_register(NULL, NULL, NULL, NULL), KISSM_ERR_NULL_ARGUMENT);
+    check_usable(g_m, "kissm_register NULLs");
+
+    /* kissm_features_compute: *out untouched. */
+    out_f = SENTINEL_FEATURES;
+    CHECK_EQ_INT(kissm_features_compute(NULL, &s, &out_f), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("matcher"));
+    CHECK(out_f == SENTINEL_FEATURES);
+    CHECK_EQ_INT(kissm_features_compute(g_m, NULL, &out_f), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("cloud"));
+    CHECK(out_f == SENTINEL_FEATURES);
+    CHECK_EQ_INT(kissm_features_compute(g_m, &s, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("out_features"));
+
+    /* kissm_register_features */
+    REQUIRE(kissm_features_compute(g_m, &s, &fs) == KISSM_OK);
+    REQUIRE(kissm_features_compute(g_m, &t, &ft) == KISSM_OK);
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register_features(NULL, fs, ft, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("matcher"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register_features(g_m, NULL, ft, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("source"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register_features(g_m, fs, NULL, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("target"));
+    CHECK(scn_result_is_reset(&r));
+    CHECK_EQ_INT(kissm_register_features(g_m, fs, ft, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("result"));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register_features(g_m, fs, ft, &r), KISSM_OK);
+    CHECK(r.valid == 1);
+    kissm_features_destroy(fs);
+    kissm_features_destroy(ft);
+
+    /* Files */
+    {
+        kissm_cloud *cloud = (kissm_cloud *)(uintptr_t)0x9abc;
+        kissm_points view;
+        CHECK_EQ_INT(kissm_read_points(NULL, KISSM_FORMAT_AUTO, &cloud), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(msg_has("path"));
+        CHECK(cloud == (kissm_cloud *)(uintptr_t)0x9abc);
+        CHECK_EQ_INT(kissm_read_points("/nonexistent/x.xyz", KISSM_FORMAT_AUTO, NULL), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(msg_has("out_cloud"));
+        memset(&view, 0x11, sizeof(view));
+        CHECK_EQ_INT(kissm_cloud_points(NULL, &view), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(msg_has("cloud"));
+    }
+    out_m = SENTINEL_MATCHER;
+    CHECK_EQ_INT(kissm_create(NULL, &out_m), KISSM_OK); /* NULL config is not an error: defaults */
+    CHECK(out_m != SENTINEL_MATCHER && out_m != NULL);
+    if (out_m != SENTINEL_MATCHER) kissm_destroy(out_m);
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Malformed kissm_points                                                                           */
+/* ---------------------------------------------------------------------------------------------- */
+
+#define DATA_GOOD 0
+#define DATA_NULL 1
+
+typedef struct points_case {
+    const char *name;
+    int data;
+    uint64_t count;
+    uint64_t stride_bytes;
+    int32_t scalar_type;
+    int32_t reserved;
+    int32_t status;
+    const char *word; /* the message names this (besides "source"/"target"/"cloud") */
+} points_case;
+
+static const points_case k_points_cases[] = {
+    {"count 0", DATA_GOOD, 0, 0, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_EMPTY_INPUT, "count"},
+    {"count 0, data NULL", DATA_NULL, 0, 0, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_EMPTY_INPUT, "count"},
+    {"1 point", DATA_GOOD, 1, 0, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_TOO_FEW_POINTS, "1"},
+    {"2 points", DATA_GOOD, 2, 0, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_TOO_FEW_POINTS, "2"},
+    {"3 points", DATA_GOOD, 3, 0, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_TOO_FEW_POINTS, "3"},
+    {"3 points f32", DATA_GOOD, 3, 0, KISSM_SCALAR_FLOAT32, 0, KISSM_ERR_TOO_FEW_POINTS, "3"},
+    {"data NULL", DATA_NULL, 100, 0, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_NULL_ARGUMENT, "data"},
+    {"data NULL f32", DATA_NULL, 4, 0, KISSM_SCALAR_FLOAT32, 0, KISSM_ERR_NULL_ARGUMENT, "data"},
+    {"scalar_type 0", DATA_GOOD, 100, 0, 0, 0, KISSM_ERR_INVALID_ARGUMENT, "scalar_type"},
+    {"scalar_type 3", DATA_GOOD, 100, 0, 3, 0, KISSM_ERR_INVALID_ARGUMENT, "scalar_type"},
+    {"scalar_type -1", DATA_GOOD, 100, 0, -1, 0, KISSM_ERR_INVALID_ARGUMENT, "scalar_type"},
+    {"reserved 1", DATA_GOOD, 100, 0, KISSM_SCALAR_FLOAT64, 1, KISSM_ERR_INVALID_ARGUMENT, "reserved"},
+    {"reserved -1", DATA_GOOD, 100, 0, KISSM_SCALAR_FLOAT64, -1, KISSM_ERR_INVALID_ARGUMENT, "reserved"},
+    {"stride 8 f64", DATA_GOOD, 100, 8, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_INVALID_ARGUMENT, "stride_bytes"},
+    {"stride 16 f64", DATA_GOOD, 100, 16, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_INVALID_ARGUMENT, "stride_bytes"},
+    {"stride 23 f64", DATA_GOOD, 100, 23, KISSM_SCALAR_FLOAT64, 0, KISSM_ERR_INVALID_ARGUMENT, "stride_bytes"},
+    {"stride 1 f32", DATA_GOOD, 100, 1, KISSM_SCALAR_FLOAT32, 0, KISSM_ERR_INVALID_ARGUMENT, "stride_bytes"},
+    {"stride 11 f32", DATA_GOOD, 100, 11, KISSM_SCALAR_FLOAT32, 0, KISSM_ERR_INVALID_ARGUMENT, "stride_bytes"},
+};
+
+static kissm_points make_case_points(const points_case *pc, const double *xyz64, const float *xyz32) {
+    kissm_points p;
+    memset(&p, 0, sizeof(p));
+    p.data = pc->data == DATA_NULL ? NULL : (pc->scalar_type == KISSM_SCALAR_FLOAT32 ? (const void *)xyz32 : (const void *)xyz64);
+    p.count = pc->count;
+    p.stride_bytes = pc->stride_bytes;
+    p.scalar_type = pc->scalar_type;
+    p.reserved = pc->reserved;
+    return p;
+}
+
+static void test_bad_points(void) {
+    const kissm_points good_s = scn_points(&g_pair.source), good_t = scn_points(&g_pair.target);
+    float *src32 = scn_cloud_to_float(&g_pair.source);
+    size_t i;
+    for (i = 0; i < sizeof(k_points_cases) / sizeof(k_points_cases[0]); ++i) {
+        const points_case *pc = &k_points_cases[i];
+        const kissm_points bad = make_case_points(pc, g_pair.source.xyz, src32);
+        kissm_result r;
+        kissm_features *f = SENTINEL_FEATURES;
+        int32_t st;
+
+        /* as the source */
+        scn_result_poison(&r);
+        st = kissm_register(g_m, &bad, &good_t, &r);
+        CHECK_MSG(st == pc->status, "%s as source: %d (%s)", pc->name, (int)st, kissm_last_error_message());
+        CHECK_MSG(msg_has("source") && msg_has(pc->word), "%s as source", pc->name);
+        CHECK_MSG(scn_result_is_reset(&r), "%s as source", pc->name);
+        /* as the target */
+        scn_result_poison(&r);
+        st = kissm_register(g_m, &good_s, &bad, &r);
+        CHECK_MSG(st == pc->status, "%s as target: %d (%s)", pc->name, (int)st, kissm_last_error_message());
+        CHECK_MSG(msg_has("target") && msg_has(pc->word), "%s as target", pc->name);
+        CHECK_MSG(scn_result_is_reset(&r), "%s as target", pc->name);
+        /* to kissm_features_compute */
+        st = kissm_features_compute(g_m, &bad, &f);
+        CHECK_MSG(st == pc->status, "%s to features_compute: %d (%s)", pc->name, (int)st, kissm_last_error_message());
+        CHECK_MSG(msg_has(pc->word), "%s to features_compute", pc->name);
+        CHECK(f == SENTINEL_FEATURES);
+        check_usable(g_m, pc->name);
+    }
+    free(src32);
+}
+
+/* Strides that are fine: exactly 3 scalars, and a padded point (a float32 xyz + intensity). */
+static void test_valid_strides(void) {
+    const size_t n = g_pair.source.count;
+    float *xyzi = (float *)malloc(n * 4 * sizeof(float));
+    kissm_points s, t = scn_points(&g_pair.target), packed = scn_points(&g_pair.source);
+    kissm_result a, b;
+    size_t i;
+    REQUIRE(xyzi != NULL);
+    for (i = 0; i < n; ++i) {
+        xyzi[4 * i + 0] = (float)g_pair.source.xyz[3 * i + 0];
+        xyzi[4 * i + 1] = (float)g_pair.source.xyz[3 * i + 1];
+        xyzi[4 * i + 2] = (float)g_pair.source.xyz[3 * i + 2];
+        xyzi[4 * i + 3] = NAN; /* an intensity the library must never read as a coordinate */
+    }
+    s = scn_points_f32(xyzi, n);
+    s.stride_bytes = 16;
+    scn_result_poison(&a);
+    CHECK_EQ_INT(kissm_register(g_m, &s, &t, &a), KISSM_OK);
+    CHECK_EQ_INT(a.valid, 1);
+    CHECK_EQ_INT(a.num_source_nonfinite, 0);
+    packed.stride_bytes = 24; /* explicit packed float64 stride equals stride 0 */
+    scn_result_poison(&a);
+    scn_result_poison(&b);
+    CHECK_EQ_INT(kissm_register(g_m, &packed, &t, &a), KISSM_OK);
+    packed.stride_bytes = 0;
+    CHECK_EQ_INT(kissm_register(g_m, &packed, &t, &b), KISSM_OK);
+    CHECK(scn_result_equal(&a, &b));
+    free(xyzi);
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Non-finite coordinates                                                                           */
+/* ---------------------------------------------------------------------------------------------- */
+
+static void test_nonfinite(void) {
+    const double bad_values[3] = {NAN, INFINITY, -INFINITY};
+    const char *bad_names[3] = {"NaN", "+Inf", "-Inf"};
+    const size_t n = g_pair.source.count;
+    const size_t where[3] = {0, n / 2, n - 1};
+    kissm_config drop_cfg = scn_config(GOOD_VOXEL);
+    kissm_matcher *drop = NULL;
+    kissm_points good_t = scn_points(&g_pair.target);
+    kissm_result r, ref;
+    scn_cloud cloud, removed;
+    int v, w;
+
+    drop_cfg.nonfinite_policy = KISSM_NONFINITE_DROP;
+    REQUIRE(kissm_create(&drop_cfg, &drop) == KISSM_OK);
+    scn_cloud_init(&cloud);
+    scn_cloud_init(&removed);
+
+    for (v = 0; v < 3; ++v) {
+        for (w = 0; w < 3; ++w) {
+            const int axis = w; /* first point: x, middle: y, last: z */
+            kissm_points s;
+            float *f32;
+            kissm_features *f = SENTINEL_FEATURES;
+            scn_cloud_copy(&cloud, &g_pair.source);
+            cloud.xyz[3 * where[w] + (size_t)axis] = bad_values[v];
+            s = scn_points(&cloud);
+
+            /* REJECT (the default): NONFINITE, as source, as target, as float32, to features_compute */
+            scn_result_poison(&r);
+            CHECK_MSG(kissm_register(g_m, &s, &good_t, &r) == KISSM_ERR_NONFINITE, "%s at %lu", bad_names[v],
+                      (unsigned long)where[w]);
+            CHECK(msg_has("source"));
+            CHECK(scn_result_is_reset(&r));
+            scn_result_poison(&r);
+            CHECK_EQ_INT(kissm_register(g_m, &good_t, &s, &r), KISSM_ERR_NONFINITE);
+            CHECK(msg_has("target"));
+            CHECK(scn_result_is_reset(&r));
+            f32 = scn_cloud_to_float(&cloud);
+            {
+                const kissm_points s32 = scn_points_f32(f32, cloud.count);
+                scn_result_poison(&r);
+                CHECK_EQ_INT(kissm_register(g_m, &s32, &good_t, &r), KISSM_ERR_NONFINITE);
+                CHECK(scn_result_is_reset(&r));
+            }
+            CHECK_EQ_INT(kissm_features_compute(g_m, &s, &f), KISSM_ERR_NONFINITE);
+            CHECK(f == SENTINEL_FEATURES);
+
+            /* DROP: succeeds, counts the point, and equals the call without that point. */
+            scn_result_poison(&r);
+            CHECK_EQ_INT(kissm_register(drop, &s, &good_t, &r), KISSM_OK);
+            CHECK_EQ_INT(r.num_source_points, n);
+            CHECK_EQ_INT(r.num_source_nonfinite, 1);
+            CHECK_EQ_INT(r.num_target_nonfinite, 0);
+            CHECK_EQ_INT(r.valid, 1);
+            scn_cloud_copy(&removed, &g_pair.source);
+            memmove(removed.xyz + 3 * where[w], removed.xyz + 3 * (where[w] + 1), 3 * (n - where[w] - 1) * sizeof(double));
+            removed.count--;
+            {
+                const kissm_points sr = scn_points(&removed);
+                scn_result_poison(&ref);
+                CHECK_EQ_INT(kissm_register(drop, &sr, &good_t, &ref), KISSM_OK);
+                CHECK_EQ_INT(ref.num_source_points, n - 1);
+                ref.num_source_points = n;
+                ref.num_source_nonfinite = 1;
+                CHECK_MSG(scn_result_equal(&r, &ref), "DROP of %s at %lu differs from removing the point",
+                          bad_names[v], (unsigned long)where[w]);
+            }
+            /* DROP as the target, float32 */
+            {
+                const kissm_points s32 = scn_points_f32(f32, cloud.count);
+                kissm_points gs = scn_points(&g_pair.source);
+                scn_result_poison(&r);
+                CHECK_EQ_INT(kissm_register(drop, &gs, &s32, &r), KISSM_OK);
+                CHECK_EQ_INT(r.num_target_nonfinite, 1);
+                CHECK_EQ_INT(r.num_source_nonfinite, 0);
+                CHECK_EQ_INT(r.num_target_points, n);
+            }
+            free(f32);
+        }
+    }
+    check_usable(g_m, "non-finite (REJECT)");
+
+    /* Several bad points, all in one cloud */
+    {
+        size_t i, k = 0;
+        kissm_points s;
+        scn_cloud_copy(&cloud, &g_pair.source);
+        for (i = 0; i < n; i += 97, ++k) cloud.xyz[3 * i + (i % 3)] = bad_values[i % 3];
+        s = scn_points(&cloud);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(drop, &s, &good_t, &r), KISSM_OK);
+        CHECK_EQ_INT(r.num_source_nonfinite, k);
+        CHECK_EQ_INT(r.valid, 1);
+    }
+
+    /* DROP leaving nothing: EMPTY_INPUT; leaving 3 points: TOO_FEW_POINTS. */
+    {
+        size_t i;
+        kissm_points s;
+        kissm_features *f = SENTINEL_FEATURES;
+        scn_cloud_copy(&cloud, &g_pair.source);
+        for (i = 0; i < 3 * n; ++i) cloud.xyz[i] = (i % 2) ? NAN : INFINITY;
+        s = scn_points(&cloud);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(drop, &s, &good_t, &r), KISSM_ERR_EMPTY_INPUT);
+        CHECK(msg_has("source"));
+        CHECK(scn_result_is_reset(&r));
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(drop, &good_t, &s, &r), KISSM_ERR_EMPTY_INPUT);
+        CHECK(msg_has("target"));
+        CHECK(scn_result_is_reset(&r));
+        CHECK_EQ_INT(kissm_features_compute(drop, &s, &f), KISSM_ERR_EMPTY_INPUT);
+        CHECK(f == SENTINEL_FEATURES);
+        for (i = 0; i < 3; ++i) {
+            cloud.xyz[3 * (10 * i) + 0] = (double)i;
+            cloud.xyz[3 * (10 * i) + 1] = 1.0;
+            cloud.xyz[3 * (10 * i) + 2] = 2.0 * (double)i;
+        }
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(drop, &s, &good_t, &r), KISSM_ERR_TOO_FEW_POINTS);
+        CHECK(msg_has("source"));
+        CHECK(scn_result_is_reset(&r));
+        /* A fourth finite point: acceptable input (far too little to register, but not an error). */
+        cloud.xyz[3 * 40 + 0] = 5.0;
+        cloud.xyz[3 * 40 + 1] = 5.0;
+        cloud.xyz[3 * 40 + 2] = 5.0;
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(drop, &s, &good_t, &r), KISSM_OK);
+        CHECK_EQ_INT(r.valid, 0);
+        CHECK_MSG(r.reason == KISSM_REASON_TOO_FEW_VOXELS || r.reason == KISSM_REASON_TOO_FEW_FEATURES, "reason %d",
+                  (int)r.reason);
+        CHECK_EQ_INT(r.num_source_voxels, 4);
+        CHECK_EQ_INT(r.num_source_keypoints, 0);
+        CHECK_EQ_INT(r.num_source_nonfinite, n - 4);
+        CHECK_EQ_INT(r.num_source_points, n);
+        CHECK(scn_result_poison_left(&r) == 0);
+    }
+    check_usable(drop, "non-finite (DROP)");
+    check_usable(g_m, "non-finite");
+    scn_cloud_free(&cloud);
+    scn_cloud_free(&removed);
+    kissm_destroy(drop);
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Voxel size                                                                                       */
+/* ---------------------------------------------------------------------------------------------- */
+
+static void test_voxel_size(void) {
+    const double bad[] = {0.0, -0.0, -0.3, -1e-9, NAN, INFINITY, -INFINITY};
+    size_t i;
+    for (i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
+        kissm_config c = scn_config(bad[i]);
+        kissm_matcher *m = SENTINEL_MATCHER;
+        CHECK_MSG(kissm_config_validate(&c) == KISSM_ERR_INVALID_ARGUMENT, "voxel_size %g", bad[i]);
+        CHECK(msg_has("voxel_size"));
+        CHECK_MSG(kissm_create(&c, &m) == KISSM_ERR_INVALID_ARGUMENT, "voxel_size %g", bad[i]);
+        CHECK(msg_has("voxel_size"));
+        CHECK(m == SENTINEL_MATCHER);
+    }
+
+    /* Too small for the extent (a ~24 m cloud): VOXEL_RANGE at registration time. The same matcher then
+     * registers a cloud small enough for that voxel size (1e-9 m voxels on a ~10 micrometre cloud are only
+     * ~1e4 per axis). */
+    {
+        kissm_config c = scn_config(1e-9);
+        kissm_matcher *m = NULL;
+        kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target), p;
+        kissm_features *f = SENTINEL_FEATURES;
+        kissm_result r;
+        scn_cloud tiny;
+        CHECK_EQ_INT(kissm_config_validate(&c), KISSM_OK);
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(m, &s, &t, &r), KISSM_ERR_VOXEL_RANGE);
+        CHECK(msg_has("voxel_size"));
+        CHECK(scn_result_is_reset(&r));
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(m, &s, &s, &r), KISSM_ERR_VOXEL_RANGE);
+        CHECK(msg_has("source"));
+        CHECK(scn_result_is_reset(&r));
+        CHECK_EQ_INT(kissm_features_compute(m, &s, &f), KISSM_ERR_VOXEL_RANGE);
+        CHECK(f == SENTINEL_FEATURES);
+
+        scn_cloud_init(&tiny);
+        scn_cloud_copy(&tiny, &g_pair.source);
+        for (i = 0; i < 3 * tiny.count; ++i) tiny.xyz[i] *= 4e-7;
+        p = scn_points(&tiny);
+        scn_result_poison(&r);
+        CHECK_MSG(kissm_register(m, &p, &p, &r) == KISSM_OK, "%s", kissm_last_error_message());
+        CHECK(scn_result_poison_left(&r) == 0);
+        /* a tiny source against the big target: the target is out of range */
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(m, &p, &t, &r), KISSM_ERR_VOXEL_RANGE);
+        CHECK(msg_has("target"));
+        CHECK(scn_result_is_reset(&r));
+        kissm_destroy(m);
+        scn_cloud_free(&tiny);
+    }
+    /* Far too large: every point in one voxel, a success with valid = 0. */
+    {
+        kissm_config c = scn_config(1e9);
+        kissm_matcher *m = NULL;
+        kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+        kissm_result r;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(m, &s, &t, &r), KISSM_OK);
+        CHECK_EQ_INT(r.valid, 0);
+        CHECK_EQ_INT(r.reason, KISSM_REASON_TOO_FEW_VOXELS);
+        CHECK_EQ_INT(r.num_source_voxels, 1);
+        CHECK_EQ_INT(r.num_target_voxels, 1);
+        CHECK_EQ_INT(r.num_source_points, g_pair.source.count);
+        CHECK(isnan(r.transform[0]) && isnan(r.rotation[0]) && isnan(r.translation[0]));
+        CHECK(scn_result_poison_left(&r) == 0);
+        kissm_destroy(m);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Every config field                                                                               */
+/* ---------------------------------------------------------------------------------------------- */
+
+enum {
+    F_NUM_THREADS,
+    F_NORMAL_GAIN,
+    F_FPFH_GAIN,
+    F_MAX_LINEARITY,
+    F_RATIO_TEST,
+    F_PRUNE_GAIN,
+    F_SOLVER_GAIN,
+    F_NOISE_BOUND_MAX,
+    F_VIEWPOINT0,
+    F_VIEWPOINT1,
+    F_VIEWPOINT2,
+    F_MIN_NORMAL_NEIGHBORS,
+    F_MAX_CORRESPONDENCES,
+    F_MIN_INLIERS,
+    F_NONFINITE_POLICY,
+    F_VIEWPOINT_MODE,
+    F_LOG_LEVEL
+};
+
+typedef struct field_case {
+    int field;
+    double value;
+    const char *word; /* the message must name this */
+} field_case;
+
+static void set_field(kissm_config *c, int field, double v) {
+    switch (field) {
+    case F_NUM_THREADS: c->num_threads = (int32_t)v; break;
+    case F_NORMAL_GAIN: c->normal_radius_gain = v; break;
+    case F_FPFH_GAIN: c->fpfh_radius_gain = v; break;
+    case F_MAX_LINEARITY: c->max_linearity = v; break;
+    case F_RATIO_TEST: c->ratio_test = v; break;
+    case F_PRUNE_GAIN: c->prune_noise_bound_gain = v; break;
+    case F_SOLVER_GAIN: c->solver_noise_bound_gain = v; break;
+    case F_NOISE_BOUND_MAX: c->noise_bound_max = v; break;
+    case F_VIEWPOINT0: c->viewpoint[0] = v; break;
+    case F_VIEWPOINT1: c->viewpoint[1] = v; break;
+    case F_VIEWPOINT2: c->viewpoint[2] = v; break;
+    case F_MIN_NORMAL_NEIGHBORS: c->min_normal_neighbors = (int32_t)v; break;
+    case F_MAX_CORRESPONDENCES: c->max_correspondences = (int32_t)v; break;
+    case F_MIN_INLIERS: c->min_inliers = (int32_t)v; break;
+    case F_NONFINITE_POLICY: c->nonfinite_policy = (int32_t)v; break;
+    case F_VIEWPOINT_MODE: c->viewpoint_mode = (int32_t)v; break;
+    case F_LOG_LEVEL: c->log_level = (int32_t)v; break;
+    default: break;
+    }
+}
+
+static const field_case k_bad_fields[] = {
+    {F_NUM_THREADS, -1, "num_threads"},
+    {F_NUM_THREADS, -1000, "num_threads"},
+    {F_NUM_THREADS, 1000000, "num_threads"},
+    {F_NORMAL_GAIN, 0.0, "normal_radius_gain"},
+    {F_NORMAL_GAIN, -1.0, "normal_radius_gain"},
+    {F_NORMAL_GAIN, NAN, "normal_radius_gain"},
+    {F_NORMAL_GAIN, INFINITY, "radius_gain"},
+    {F_NORMAL_GAIN, 5.5, "radius_gain"}, /* above fpfh_radius_gain (5.0) */
+    {F_FPFH_GAIN, 0.0, "fpfh_radius_gain"},
+    {F_FPFH_GAIN, -5.0, "fpfh_radius_gain"},
+    {F_FPFH_GAIN, NAN, "fpfh_radius_gain"},
+    {F_FPFH_GAIN, INFINITY, "fpfh_radius_gain"},
+    {F_FPFH_GAIN, 3.0, "radius_gain"}, /* below normal_radius_gain (3.5) */
+    {F_MAX_LINEARITY, 0.0, "max_linearity"},
+    {F_MAX_LINEARITY, -0.5, "max_linearity"},
+    {F_MAX_LINEARITY, 1.0001, "max_linearity"},
+    {F_MAX_LINEARITY, NAN, "max_linearity"},
+    {F_RATIO_TEST, 0.0, "ratio_test"},
+    {F_RATIO_TEST, -0.9, "ratio_test"},
+    {F_RATIO_TEST, 1.5, "ratio_test"},
+    {F_RATIO_TEST, NAN, "ratio_test"},
+    {F_PRUNE_GAIN, 0.0, "prune_noise_bound_gain"},
+    {F_PRUNE_GAIN, -1.0, "prune_noise_bound_gain"},
+    {F_PRUNE_GAIN, NAN, "prune_noise_bound_gain"},
+    {F_PRUNE_GAIN, INFINITY, "prune_noise_bound_gain"},
+    {F_SOLVER_GAIN, 0.0, "solver_noise_bound_gain"},
+    {F_SOLVER_GAIN, -0.75, "solver_noise_bound_gain"},
+    {F_SOLVER_GAIN, NAN, "solver_noise_bound_gain"},
+    {F_SOLVER_GAIN, INFINITY, "solver_noise_bound_gain"},
+    {F_NOISE_BOUND_MAX, -0.1, "noise_bound_max"},
+    {F_NOISE_BOUND_MAX, NAN, "noise_bound_max"},
+    {F_NOISE_BOUND_MAX, -INFINITY, "noise_bound_max"},
+    {F_VIEWPOINT0, NAN, "viewpoint"},
+    {F_VIEWPOINT1, INFINITY, "viewpoint"},
+    {F_VIEWPOINT2, -INFINITY, "viewpoint"},
+    {F_MIN_NORMAL_NEIGHBORS, 2, "min_normal_neighbors"},
+    {F_MIN_NORMAL_NEIGHBORS, 0, "min_normal_neighbors"},
+    {F_MIN_NORMAL_NEIGHBORS, -3, "min_normal_neighbors"},
+    {F_MAX_CORRESPONDENCES, 2, "max_correspondences"},
+    {F_MAX_CORRESPONDENCES, 0, "max_correspondences"},
+    {F_MAX_CORRESPONDENCES, -5000, "max_correspondences"},
+    {F_MIN_INLIERS, 2, "min_inliers"},
+    {F_MIN_INLIERS, 0, "min_inliers"},
+    {F_MIN_INLIERS, -10, "min_inliers"},
+    {F_NONFINITE_POLICY, -1, "nonfinite_policy"},
+    {F_NONFINITE_POLICY, 2, "nonfinite_policy"},
+    {F_NONFINITE_POLICY, 99, "nonfinite_policy"},
+    {F_VIEWPOINT_MODE, -1, "viewpoint_mode"},
+    {F_VIEWPOINT_MODE, 2, "viewpoint_mode"},
+    {F_LOG_LEVEL, -1, "log_level"},
+    {F_LOG_LEVEL, 5, "log_level"},
+    {F_LOG_LEVEL, 99, "log_level"},
+};
+
+/* Documented boundary values that must be accepted. */
+static const field_case k_good_fields[] = {
+    {F_NUM_THREADS, 0, ""},         {F_NUM_THREADS, 1, ""},          {F_NUM_THREADS, 64, ""},
+    {F_NORMAL_GAIN, 5.0, ""},       /* equal to fpfh_radius_gain */ {F_FPFH_GAIN, 3.5, ""},
+    {F_FPFH_GAIN, 10.0, ""},        {F_MAX_LINEARITY, 1.0, ""},     {F_MAX_LINEARITY, 1e-6, ""},
+    {F_RATIO_TEST, 1.0, ""},        {F_RATIO_TEST, 1e-6, ""},        {F_PRUNE_GAIN, 1e-3, ""},
+    {F_PRUNE_GAIN, 100.0, ""},      {F_SOLVER_GAIN, 1e-3, ""},      {F_NOISE_BOUND_MAX, 0.0, ""},
+    {F_NOISE_BOUND_MAX, 2.5, ""},   {F_VIEWPOINT0, -1e7, ""},       {F_VIEWPOINT2, 1e7, ""},
+    {F_MIN_NORMAL_NEIGHBORS, 3, ""}, {F_MIN_NORMAL_NEIGHBORS, 50, ""}, {F_MAX_CORRESPONDENCES, 3, ""},
+    {F_MAX_CORRESPONDENCES, 20000, ""}, {F_MIN_INLIERS, 3, ""},     {F_MIN_INLIERS, 1000, ""},
+    {F_NONFINITE_POLICY, KISSM_NONFINITE_REJECT, ""}, {F_NONFINITE_POLICY, KISSM_NONFINITE_DROP, ""},
+    {F_VIEWPOINT_MODE, KISSM_VIEWPOINT_FIXED, ""}, {F_VIEWPOINT_MODE, KISSM_VIEWPOINT_CLOUD_CENTER, ""},
+    {F_LOG_LEVEL, 0, ""},           {F_LOG_LEVEL, KISSM_LOG_ERROR, ""}, {F_LOG_LEVEL, KISSM_LOG_DEBUG, ""},
+};
+
+static void test_config_fields(void) {
+    size_t i;
+    for (i = 0; i < sizeof(k_bad_fields) / sizeof(k_bad_fields[0]); ++i) {
+        const field_case *fc = &k_bad_fields[i];
+        kissm_config c = scn_config(0.3);
+        kissm_matcher *m = SENTINEL_MATCHER;
+        int32_t st;
+        set_field(&c, fc->field, fc->value);
+        st = kissm_config_validate(&c);
+        CHECK_MSG(st == KISSM_ERR_INVALID_ARGUMENT, "validate: %s = %g gave %d", fc->word, fc->value, (int)st);
+        CHECK_MSG(msg_has(fc->word), "validate: %s = %g", fc->word, fc->value);
+        st = kissm_create(&c, &m);
+        CHECK_MSG(st == KISSM_ERR_INVALID_ARGUMENT, "create: %s = %g gave %d", fc->word, fc->value, (int)st);
+        CHECK_MSG(msg_has(fc->word), "create: %s = %g", fc->word, fc->value);
+        CHECK(m == SENTINEL_MATCHER);
+        if (m != SENTINEL_MATCHER && m != NULL) kissm_destroy(m);
+    }
+    for (i = 0; i < sizeof(k_good_fields) / sizeof(k_good_fields[0]); ++i) {
+        const field_case *fc = &k_good_fields[i];
+        kissm_config c = scn_config(0.3);
+        kissm_matcher *m = NULL;
+        set_field(&c, fc->field, fc->value);
+        CHECK_MSG(kissm_config_validate(&c) == KISSM_OK, "field %d = %g: %s", fc->field, fc->value,
+                  kissm_last_error_message());
+        CHECK_MSG(kissm_create(&c, &m) == KISSM_OK, "field %d = %g", fc->field, fc->value);
+        CHECK(m != NULL);
+        kissm_destroy(m);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* struct_size                                                                                      */
+/* ---------------------------------------------------------------------------------------------- */
+
+typedef struct newer_config {
+    kissm_config base;
+    unsigned char future[24];
+} newer_config;
+
+typedef struct newer_result {
+    kissm_result base;
+    double future[3];
+} newer_result;
+
+static void test_struct_sizes(void) {
+    const uint32_t small_sizes[] = {0u, 4u, 8u, (uint32_t)sizeof(kissm_config) - 8u, (uint32_t)sizeof(kissm_config) - 1u};
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    size_t i;
+
+    /* config too small */
+    for (i = 0; i < sizeof(small_sizes) / sizeof(small_sizes[0]); ++i) {
+        kissm_config c = scn_config(GOOD_VOXEL);
+        kissm_matcher *m = SENTINEL_MATCHER;
+        c.struct_size = small_sizes[i];
+        CHECK_EQ_INT(kissm_config_validate(&c), KISSM_ERR_STRUCT_SIZE);
+        CHECK(msg_has("struct_size"));
+        CHECK_EQ_INT(kissm_create(&c, &m), KISSM_ERR_STRUCT_SIZE);
+        CHECK(msg_has("struct_size"));
+        CHECK(m == SENTINEL_MATCHER);
+    }
+    /* config larger with a zero tail: accepted, same behaviour */
+    {
+        newer_config big;
+        kissm_matcher *m = NULL;
+        kissm_config got;
+        REQUIRE(kissm_config_init(&big.base, (uint32_t)sizeof(big)) == KISSM_OK);
+        for (i = 0; i < sizeof(big.future); ++i) CHECK(big.future[i] == 0);
+        big.base.voxel_size = GOOD_VOXEL;
+        CHECK_EQ_INT(kissm_config_validate(&big.base), KISSM_OK);
+        CHECK_EQ_INT(kissm_create(&big.base, &m), KISSM_OK);
+        REQUIRE(m != NULL);
+        got.struct_size = (uint32_t)sizeof(got);
+        CHECK_EQ_INT(kissm_get_config(m, &got), KISSM_OK);
+        CHECK(got.voxel_size == GOOD_VOXEL);
+        CHECK_EQ_INT(got.struct_size, sizeof(got));
+        check_usable(m, "larger config");
+        kissm_destroy(m);
+        /* ... and a non-zero tail (a newer field this kissm would ignore): STRUCT_SIZE */
+        for (i = 0; i < sizeof(big.future); i += sizeof(big.future) - 1) {
+            kissm_matcher *m2 = SENTINEL_MATCHER;
+            memset(big.future, 0, sizeof(big.future));
+            big.future[i] = 1;
+            CHECK_EQ_INT(kissm_config_validate(&big.base), KISSM_ERR_STRUCT_SIZE);
+            CHECK(msg_has("struct_size"));
+            CHECK_EQ_INT(kissm_create(&big.base, &m2), KISSM_ERR_STRUCT_SIZE);
+            CHECK(m2 == SENTINEL_MATCHER);
+        }
+    }
+
+    /* result too small: STRUCT_SIZE, and nothing written at or beyond the size the caller claims. */
+    {
+        const uint32_t rsizes[] = {0u, 4u, 16u, (uint32_t)sizeof(kissm_result) - 8u};
+        kissm_features *fs = NULL, *ft = NULL;
+        REQUIRE(kissm_features_compute(g_m, &s, &fs) == KISSM_OK);
+        REQUIRE(kissm_features_compute(g_m, &t, &ft) == KISSM_OK);
+        for (i = 0; i < sizeof(rsizes) / sizeof(rsizes[0]); ++i) {
+            int pass;
+            for (pass = 0; pass < 2; ++pass) {
+                unsigned char before[sizeof(kissm_result)];
+                kissm_result r;
+                int32_t st;
+                memset(&r, 0x5A, sizeof(r));
+                r.struct_size = rsizes[i];
+                memcpy(before, &r, sizeof(r));
+                st = pass == 0 ? kissm_register(g_m, &s, &t, &r) : kissm_register_features(g_m, fs, ft, &r);
+                CHECK_MSG(st == KISSM_ERR_STRUCT_SIZE, "result struct_size %u pass %d: %d", (unsigned)rsizes[i], pass,
+                          (int)st);
+                CHECK(msg_has("struct_size"));
+                CHECK_EQ_INT(r.struct_size, rsizes[i]);
+                CHECK(memcmp((unsigned char *)&r + (rsizes[i] < 4 ? 4 : rsizes[i]),
+                             before + (rsizes[i] < 4 ? 4 : rsizes[i]),
+                             sizeof(r) - (rsizes[i] < 4 ? 4 : rsizes[i])) == 0);
+            }
+        }
+        /* result larger (a newer caller): accepted; the unknown tail is overwritten too (zero). */
+        {
+            newer_result big;
+            int pass;
+            for (pass = 0; pass < 2; ++pass) {
+                memset(&big, 0x5A, sizeof(big));
+                big.base.struct_size = (uint32_t)sizeof(big);
+                CHECK_EQ_INT(pass == 0 ? kissm_register(g_m, &s, &t, &big.base)
+                                       : kissm_register_features(g_m, fs, ft, &big.base),
+                             KISSM_OK);
+                CHECK_EQ_INT(big.base.struct_size, sizeof(big));
+                CHECK_EQ_INT(big.base.valid, 1);
+                CHECK(scn_result_poison_left(&big.base) == 0);
+                CHECK(big.future[0] == 0.0 && big.future[1] == 0.0 && big.future[2] == 0.0);
+            }
+            /* a failing call with a larger result: reset including the tail */
+            {
+                kissm_points empty = s;
+                empty.count = 0;
+                memset(&big, 0x5A, sizeof(big));
+                big.base.struct_size = (uint32_t)sizeof(big);
+                CHECK_EQ_INT(kissm_register(g_m, &empty, &t, &big.base), KISSM_ERR_EMPTY_INPUT);
+                CHECK_EQ_INT(big.base.struct_size, sizeof(big));
+                CHECK_EQ_INT(big.base.valid, 0);
+                CHECK(isnan(big.base.transform[3]));
+                CHECK(scn_result_poison_left(&big.base) == 0);
+                CHECK(big.future[0] == 0.0 && big.future[2] == 0.0);
+            }
+        }
+        kissm_features_destroy(fs);
+        kissm_features_destroy(ft);
+    }
+    check_usable(g_m, "struct sizes");
+}
+
+/* ---------------------------------------------------------------------------------------------- */
+/* Degenerate but well-formed input: KISSM_OK, valid = 0, a reason                                 */
+/* ---------------------------------------------------------------------------------------------- */
+
+static void check_invalid_result(const char *what, kissm_matcher *m, const scn_cloud *a, const scn_cloud *b,
+                                 int32_t expected_reason) {
+    kissm_points s = scn_points(a), t = scn_points(b);
+    kissm_result r;
+    int32_t st;
+    scn_result_poison(&r);
+    st = kissm_register(m, &s, &t, &r);
+    CHECK_MSG(st == KISSM_OK, "%s: status %d (%s)", what, (int)st, kissm_last_error_message());
+    CHECK_MSG(r.valid == 0, "%s: valid", what);
+    CHECK_MSG(r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_DEGENERATE, "%s: reason %d", what,
+              (int)r.reason);
+    if (expected_reason >= 0) CHECK_MSG(r.reason == expected_reason, "%s: reason %d", what, (int)r.reason);
+    CHECK_MSG(scn_result_poison_left(&r) == 0, "%s: poison left", what);
+    CHECK_EQ_INT(r.num_source_points, a->count);
+    CHECK_EQ_INT(r.num_target_points, b->count);
+    /* Either no pose at all (NaN) or an estimated one kept for inspection with a proper last row. */
+    if (!isnan(r.transform[0])) {
+        CHECK(r.transform[12] == 0.0 && r.transform[13] == 0.0 && r.transform[14] == 0.0 && r.transform[15] == 1.0);
+    } else {
+        CHECK(isnan(r.rotation[0]) && isnan(r.translation[0]));
+    }
+    if (r.valid != 0 || (expected_reason >= 0 && r.reason != expected_reason)) scn_result_print(what, &r);
+}
+
+static void test_degenerate(void) {
+    kissm_config c = scn_config(0.3);
+    kissm_matcher *m = NULL;
+    scn_cloud a, b;
+    const double axis[3] = {0.3, 1.0, -0.2}, shift[3] = {1.0, -2.0, 0.5};
+    scn_pose pose;
+    scn_cloud_init(&a);
+    scn_cloud_init(&b);
+    scn_pose_axis_angle(&pose, axis, 1.2, shift);
+    REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+
+    /* collinear: a line and a moved, independently sampled copy */
+    scn_make_line(&a, 11, 6000, 0.003);
+    scn_make_line(&b, 12, 6000, 0.003);
+    scn_cloud_apply(&b, &pose);
+    check_invalid_result("collinear", m, &a, &b, -1);
+
+    /* planar */
+    scn_make_plane(&a, 21, 12000, 0.01);
+    scn_make_plane(&b, 22, 12000, 0.01);
+    scn_cloud_apply(&b, &pose);
+    check_invalid_result("planar", m, &a, &b, -1);
+
+    /* all duplicates: one voxel */
+    scn_make_duplicates(&a, 4, 1.0, 2.0, 3.0);
+    scn_make_duplicates(&b, 4, -1.0, 0.5, 7.0);
+    check_invalid_result("4 duplicates", m, &a, &b, KISSM_REASON_TOO_FEW_VOXELS);
+    scn_make_duplicates(&a, 5000, 1.0, 2.0, 3.0);
+    check_invalid_result("5000 duplicates vs 4", m, &a, &b, KISSM_REASON_TOO_FEW_VOXELS);
+    check_invalid_result("duplicates vs a scene", m, &a, &g_pair.target, KISSM_REASON_TOO_FEW_VOXELS);
+    check_invalid_result("a scene vs duplicates", m, &g_pair.source, &a, KISSM_REASON_TOO_FEW_VOXELS);
+
+    /* unrelated clouds far apart: a scene and a random volume 10 km away */
+    {
+        const double far[3] = {1e4, -1e4, 50.0};
+        scn_make_blob(&b, 31, 12000, far, 6.0);
+        check_invalid_result("scene vs far random blob", m, &g_pair.source, &b, -1);
+        check_invalid_result("far random blob vs scene", m, &b, &g_pair.target, -1);
+    }
+    /* a line against a scene */
+    scn_make_line(&a, 41, 6000, 0.003);
+    check_invalid_result("line vs scene", m, &a, &g_pair.target, -1);
+    check_usable(g_m, "degenerate inputs");
+
+    kissm_destroy(m);
+    scn_cloud_free(&a);
+    scn_cloud_free(&b);
+}
+
+int main(void) {
+    scn_make_pair(&g_pair, 7, 6.0, 0.01);
+    {
+        kissm_config c = scn_config(GOOD_VOXEL);
+        if (kissm_create(&c, &g_m) != KISSM_OK) {
+            fprintf(stderr, "cannot create the matcher: %s\n", kissm_last_error_message());
+            return 1;
+        }
+    }
+    RUN_TEST(test_null_pointers);
+    RUN_TEST(test_bad_points);
+    RUN_TEST(test_valid_strides);
+    RUN_TEST(test_nonfinite);
+    RUN_TEST(test_voxel_size);
+    RUN_TEST(test_config_fields);
+    RUN_TEST(test_struct_sizes);
+    RUN_TEST(test_degenerate);
+    kissm_destroy(g_m);
+    scn_pair_free(&g_pair);
+    return TEST_SUMMARY();
+}

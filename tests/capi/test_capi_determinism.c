@@ -1,0 +1,170 @@
+/* Bitwise determinism: thread counts, reused and fresh handles, repeated calls, permuted input. C99. */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "harness.h"
+#include "kissm.h"
+#include "scenes.h"
+
+#define VOXEL 0.5
+
+static scn_pair g_pair;
+static kissm_result g_reference; /* num_threads = 1, fresh handle */
+
+static int run_once(int32_t num_threads, int32_t viewpoint_mode, const kissm_points *s, const kissm_points *t,
+                    kissm_result *r) {
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    int32_t st;
+    c.num_threads = num_threads;
+    c.viewpoint_mode = viewpoint_mode;
+    if (kissm_create(&c, &m) != KISSM_OK) return 0;
+    scn_result_poison(r);
+    st = kissm_register(m, s, t, r);
+    kissm_destroy(m);
+    return st == KISSM_OK;
+}
+
+static void report_difference(const char *what, const kissm_result *a, const kissm_result *b) {
+    if (scn_result_equal(a, b)) return;
+    fprintf(stderr, "  %s differs:\n", what);
+    scn_result_print("reference", a);
+    scn_result_print("other", b);
+}
+
+static void test_thread_counts(void) {
+    const int32_t counts[] = {1, 2, 3, 4, 8, 0};
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    size_t i;
+    REQUIRE(run_once(1, KISSM_VIEWPOINT_FIXED, &s, &t, &g_reference));
+    REQUIRE(g_reference.valid == 1);
+    CHECK(scn_rotation_error_deg(g_reference.rotation, g_pair.truth.R) < 2.0);
+    for (i = 0; i < sizeof(counts) / sizeof(counts[0]); ++i) {
+        kissm_result r;
+        char what[64];
+        CHECK(run_once(counts[i], KISSM_VIEWPOINT_FIXED, &s, &t, &r));
+        sprintf(what, "num_threads %d", (int)counts[i]);
+        CHECK_MSG(scn_result_equal(&g_reference, &r), "%s", what);
+        report_difference(what, &g_reference, &r);
+    }
+    /* the other viewpoint mode, too */
+    {
+        kissm_result a, b;
+        CHECK(run_once(1, KISSM_VIEWPOINT_CLOUD_CENTER, &s, &t, &a));
+        CHECK(run_once(4, KISSM_VIEWPOINT_CLOUD_CENTER, &s, &t, &b));
+        CHECK(a.valid == 1);
+        CHECK(scn_result_equal(&a, &b));
+        report_difference("cloud centre, 1 vs 4 threads", &a, &b);
+    }
+}
+
+static void test_repeated_calls(void) {
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    int32_t threads;
+    for (threads = 0; threads <= 2; threads += 2) {
+        kissm_config c = scn_config(VOXEL);
+        kissm_matcher *m = NULL;
+        int i;
+        c.num_threads = threads;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        for (i = 0; i < 5; ++i) {
+            kissm_result r;
+            scn_result_poison(&r);
+            CHECK_EQ_INT(kissm_register(m, &s, &t, &r), KISSM_OK);
+            CHECK_MSG(scn_result_equal(&g_reference, &r), "reused handle (num_threads %d), run %d", (int)threads, i);
+        }
+        /* another pair in between must not leave anything behind */
+        {
+            kissm_result other, r;
+            scn_result_poison(&other);
+            CHECK_EQ_INT(kissm_register(m, &t, &s, &other), KISSM_OK);
+            scn_result_poison(&r);
+            CHECK_EQ_INT(kissm_register(m, &s, &t, &r), KISSM_OK);
+            CHECK(scn_result_equal(&g_reference, &r));
+        }
+        kissm_destroy(m);
+        for (i = 0; i < 5; ++i) {
+            kissm_result r;
+            CHECK(run_once(threads, KISSM_VIEWPOINT_FIXED, &s, &t, &r));
+            CHECK_MSG(scn_result_equal(&g_reference, &r), "fresh handle (num_threads %d), run %d", (int)threads, i);
+        }
+    }
+}
+
+/* The points in another order: the library sorts points within voxels, so the result is identical. */
+static void test_permutation(void) {
+    scn_cloud s2, t2;
+    kissm_points s, t;
+    kissm_result r;
+    uint64_t seed;
+    scn_cloud_init(&s2);
+    scn_cloud_init(&t2);
+    for (seed = 1; seed <= 3; ++seed) {
+        char what[64];
+        scn_cloud_copy(&s2, &g_pair.source);
+        scn_cloud_copy(&t2, &g_pair.target);
+        scn_cloud_shuffle(&s2, seed);
+        scn_cloud_shuffle(&t2, seed + 100);
+        REQUIRE(memcmp(s2.xyz, g_pair.source.xyz, 3 * sizeof(double) * 16) != 0); /* really shuffled */
+        s = scn_points(&s2);
+        t = scn_points(&t2);
+        CHECK(run_once(seed == 2 ? 0 : 1, KISSM_VIEWPOINT_FIXED, &s, &t, &r));
+        sprintf(what, "permutation %d", (int)seed);
+        CHECK_MSG(scn_result_equal(&g_reference, &r), "%s", what);
+        report_difference(what, &g_reference, &r);
+    }
+    /* reversed order */
+    {
+        size_t i, n = g_pair.source.count;
+        scn_cloud_copy(&s2, &g_pair.source);
+        for (i = 0; i < n / 2; ++i) {
+            double tmp[3];
+            memcpy(tmp, s2.xyz + 3 * i, sizeof(tmp));
+            memcpy(s2.xyz + 3 * i, s2.xyz + 3 * (n - 1 - i), sizeof(tmp));
+            memcpy(s2.xyz + 3 * (n - 1 - i), tmp, sizeof(tmp));
+        }
+        s = scn_points(&s2);
+        t = scn_points(&g_pair.target);
+        CHECK(run_once(2, KISSM_VIEWPOINT_FIXED, &s, &t, &r));
+        CHECK_MSG(scn_result_equal(&g_reference, &r), "reversed source");
+        report_difference("reversed source", &g_reference, &r);
+    }
+    scn_cloud_free(&s2);
+    scn_cloud_free(&t2);
+}
+
+/* Features objects are deterministic too: registering features made with different thread counts. */
+static void test_features_thread_counts(void) {
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    kissm_config c1 = scn_config(VOXEL), c4 = scn_config(VOXEL);
+    kissm_matcher *m1 = NULL, *m4 = NULL;
+    kissm_features *s1 = NULL, *t4 = NULL;
+    kissm_result r;
+    c1.num_threads = 1;
+    c4.num_threads = 4;
+    REQUIRE(kissm_create(&c1, &m1) == KISSM_OK);
+    REQUIRE(kissm_create(&c4, &m4) == KISSM_OK);
+    REQUIRE(kissm_features_compute(m1, &s, &s1) == KISSM_OK);
+    REQUIRE(kissm_features_compute(m4, &t, &t4) == KISSM_OK);
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register_features(m4, s1, t4, &r), KISSM_OK);
+    CHECK(scn_result_equal(&g_reference, &r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_register_features(m1, s1, t4, &r), KISSM_OK);
+    CHECK(scn_result_equal(&g_reference, &r));
+    kissm_features_destroy(s1);
+    kissm_features_destroy(t4);
+    kissm_destroy(m1);
+    kissm_destroy(m4);
+}
+
+int main(void) {
+    scn_make_pair(&g_pair, 5, 15.0, 0.01);
+    RUN_TEST(test_thread_counts);
+    RUN_TEST(test_repeated_calls);
+    RUN_TEST(test_permutation);
+    RUN_TEST(test_features_thread_counts);
+    scn_pair_free(&g_pair);
+    return TEST_SUMMARY();
+}

@@ -1,0 +1,362 @@
+// Unit tests of the command-line tool's own pieces: checksums, the deflate/PNG encoder, the JSON writer,
+// the PLY writer, the argument parsers and the demo scene simulator.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <kissm.h>
+
+#include "cli_args.hpp"
+#include "cli_test_util.hpp"
+#include "demo_scene.hpp"
+#include "harness.h"
+#include "json_writer.hpp"
+#include "ply_writer.hpp"
+#include "png_writer.hpp"
+#include "pose_math.hpp"
+#include "raster.hpp"
+#include "rng.hpp"
+
+using namespace kissm_cli;
+
+namespace {
+
+std::string temp_path(const std::string &name) {
+    return (std::filesystem::temp_directory_path() / ("kissm_cli_units_" + name)).string();
+}
+
+const uint8_t *bytes_of(const char *s) { return reinterpret_cast<const uint8_t *>(s); }
+
+void test_checksums() {
+    CHECK_EQ_INT(crc32(bytes_of("123456789"), 9), 0xCBF43926u); // the standard check value
+    CHECK_EQ_INT(crc32(bytes_of(""), 0), 0u);
+    CHECK_EQ_INT(crc32(bytes_of("IEND"), 4), 0xAE426082u); // every PNG's last CRC
+    const uint32_t split = crc32_update(crc32(bytes_of("1234"), 4), bytes_of("56789"), 5);
+    CHECK_EQ_INT(split, 0xCBF43926u);
+    CHECK_EQ_INT(adler32_update(1u, bytes_of("Wikipedia"), 9), 0x11E60398u);
+    CHECK_EQ_INT(adler32_update(1u, bytes_of(""), 0), 1u);
+    std::vector<uint8_t> big(100000, 0xFF); // long enough to need the modular reduction
+    CHECK_EQ_INT(adler32_update(1u, big.data(), big.size()), cli_test::test_adler32(big));
+}
+
+void check_zlib_roundtrip(const std::vector<uint8_t> &data, const char *what) {
+    const std::vector<uint8_t> z = zlib_compress(data.data(), data.size());
+    try {
+        const std::vector<uint8_t> back = cli_test::zlib_decompress(z);
+        CHECK_MSG(back == data, "%s: round trip differs (%zu vs %zu bytes)", what, back.size(), data.size());
+    } catch (const std::exception &e) {
+        CHECK_MSG(false, "%s: %s", what, e.what());
+    }
+}
+
+void test_deflate() {
+    check_zlib_roundtrip({}, "empty");
+    check_zlib_roundtrip({7}, "one byte");
+    check_zlib_roundtrip({1, 2}, "two bytes");
+    check_zlib_roundtrip(std::vector<uint8_t>(100000, 255), "a long run");
+    std::vector<uint8_t> text;
+    const char *words[] = {"kissm ", "registers ", "point ", "clouds ", "fast ", "and ", "deterministically. "};
+    Rng rng(7);
+    for (int i = 0; i < 20000; ++i) {
+        const char *w = words[rng.uniform_int(0, 6)];
+        text.insert(text.end(), w, w + std::strlen(w));
+    }
+    check_zlib_roundtrip(text, "words");
+    std::vector<uint8_t> noise(70000);
+    for (uint8_t &b : noise) b = static_cast<uint8_t>(rng.next() >> 56);
+    check_zlib_roundtrip(noise, "random bytes");
+    // Repeats at every distance class up to the 32 KiB window, and a repeat just beyond it.
+    std::vector<uint8_t> far(noise.begin(), noise.begin() + 40000);
+    for (size_t d : {1u, 2u, 3u, 5u, 100u, 1000u, 4097u, 20000u, 32768u, 32769u, 39000u}) {
+        for (int k = 0; k < 300; ++k) far.push_back(far[far.size() - d]); // may overlap, as LZ77 copies do
+    }
+    check_zlib_roundtrip(far, "distances");
+    const std::vector<uint8_t> z = zlib_compress(text.data(), text.size());
+    CHECK_MSG(z.size() * 3 < text.size(), "repetitive text compresses poorly: %zu -> %zu", text.size(), z.size());
+}
+
+void test_png() {
+    Image img(37, 23, {255, 255, 255});
+    img.fill_rect(3, 4, 10, 6, {255, 127, 14});
+    img.set(36, 22, {1, 2, 3});
+    img.draw_text(2, 12, "KISSM 0.1", {31, 119, 180}, 1);
+    const std::vector<uint8_t> png = encode_png_rgb(img.width(), img.height(), img.data());
+    try {
+        const cli_test::PngImage back = cli_test::decode_png(std::string(png.begin(), png.end()));
+        CHECK_EQ_INT(back.width, 37);
+        CHECK_EQ_INT(back.height, 23);
+        CHECK(back.rgb == std::vector<uint8_t>(img.data(), img.data() + 37 * 23 * 3));
+    } catch (const std::exception &e) {
+        CHECK_MSG(false, "decode: %s", e.what());
+    }
+    const std::string path = temp_path("test.png");
+    std::string error;
+    CHECK(write_png_rgb(path, img.width(), img.height(), img.data(), &error));
+    CHECK(cli_test::read_file(path) == std::string(png.begin(), png.end()));
+    std::remove(path.c_str());
+    CHECK(!write_png_rgb("/nonexistent_dir_kissm/x.png", 2, 2, img.data(), &error));
+    CHECK(cli_test::contains(error, "x.png"));
+
+    // Text is drawn (and lower case maps to upper case).
+    Image a(40, 10, {255, 255, 255}), b(40, 10, {255, 255, 255});
+    a.draw_text(0, 0, "abc", {0, 0, 0}, 1);
+    b.draw_text(0, 0, "ABC", {0, 0, 0}, 1);
+    CHECK(std::memcmp(a.data(), b.data(), 40 * 10 * 3) == 0);
+    CHECK(a.get(0, 1).r == 0);
+    CHECK_EQ_INT(Image::text_width("ABC", 2), 34);
+}
+
+void test_json_writer() {
+    JsonWriter json;
+    json.begin_object();
+    json.field("text", "quote \" backslash \\ newline \n tab \t bell \x07");
+    json.field("nan", std::nan(""));
+    json.field("inf", -HUGE_VAL);
+    json.field("third", 0.1 + 0.2);
+    json.field("flag", false);
+    json.field("count", uint64_t{18446744073709551615ull});
+    json.field("negative", int64_t{-5});
+    const double m[4] = {1.0, -0.0, 1e-300, 123456789.125};
+    json.field_matrix("m", m, 2, 2);
+    json.key("empty");
+    json.begin_object();
+    json.end_object();
+    json.key("list");
+    json.begin_array();
+    json.value(1.5);
+    json.null();
+    json.end_array();
+    json.end_object();
+    const std::string &s = json.str();
+    std::string error;
+    CHECK_MSG(cli_test::json_valid(s, &error), "%s\n%s", error.c_str(), s.c_str());
+    CHECK(cli_test::contains(s, "\"nan\": null"));
+    CHECK(cli_test::contains(s, "\"inf\": null"));
+    CHECK(cli_test::contains(s, "\\u0007"));
+    CHECK(cli_test::contains(s, "\"m\": [[1, -0], [1e-300, 123456789.125]]"));
+    CHECK(cli_test::contains(s, "\"count\": 18446744073709551615"));
+    CHECK(s.back() == '\n');
+    CHECK(JsonWriter::number(0.3) == "0.3");
+    CHECK(JsonWriter::number(0.1 + 0.2) == "0.30000000000000004");
+
+    // Every double reads back exactly.
+    Rng rng(3);
+    for (int i = 0; i < 20000; ++i) {
+        uint64_t bits = rng.next();
+        double v = 0.0;
+        std::memcpy(&v, &bits, sizeof v);
+        if (!std::isfinite(v)) continue;
+        const std::string text = JsonWriter::number(v);
+        const double back = std::strtod(text.c_str(), nullptr);
+        CHECK_MSG(std::memcmp(&back, &v, sizeof v) == 0, "%s does not read back to %.17g", text.c_str(), v);
+    }
+}
+
+void test_ply_writer() {
+    const std::vector<double> xyz = {1.0, -2.5, 3.25, 1e-7, 1e7, -0.0, 0.1, 0.2, 0.3, -4.0, 5.0, 6.0};
+    const std::string path = temp_path("points.ply");
+    std::string error;
+    REQUIRE(write_ply_xyz(path, xyz.data(), 4, nullptr, {"hello"}, &error));
+    const std::string bytes = cli_test::read_file(path);
+    const std::string header = "ply\nformat binary_little_endian 1.0\ncomment hello\nelement vertex 4\n"
+                               "property double x\nproperty double y\nproperty double z\nend_header\n";
+    REQUIRE(bytes.size() == header.size() + 4 * 24);
+    CHECK(bytes.compare(0, header.size(), header) == 0);
+    for (size_t i = 0; i < xyz.size(); ++i) {
+        uint64_t bits = 0;
+        for (int k = 0; k < 8; ++k) {
+            bits |= static_cast<uint64_t>(static_cast<uint8_t>(bytes[header.size() + 8 * i + static_cast<size_t>(k)])) << (8 * k);
+        }
+        double v = 0.0;
+        std::memcpy(&v, &bits, sizeof v);
+        CHECK_MSG(std::memcmp(&v, &xyz[i], sizeof v) == 0, "value %zu: %.17g vs %.17g", i, v, xyz[i]);
+    }
+
+    // The library reads the file back exactly.
+    kissm_cloud *cloud = nullptr;
+    const int32_t status = kissm_read_points(path.c_str(), KISSM_FORMAT_AUTO, &cloud);
+    CHECK_MSG(status == KISSM_OK, "kissm_read_points: %s", kissm_last_error_message());
+    if (status == KISSM_OK) {
+        CHECK_EQ_INT(kissm_cloud_count(cloud), 4);
+        const double *data = kissm_cloud_data(cloud);
+        CHECK(data != nullptr && std::memcmp(data, xyz.data(), xyz.size() * sizeof(double)) == 0);
+    }
+    kissm_cloud_destroy(cloud);
+
+    // With a transform.
+    const double T[16] = {0, -1, 0, 10, 1, 0, 0, 20, 0, 0, 1, 30, 0, 0, 0, 1};
+    REQUIRE(write_ply_xyz(path, xyz.data(), 1, T, {}, &error));
+    const std::string moved = cli_test::read_file(path);
+    double p[3];
+    std::memcpy(p, moved.data() + moved.size() - 24, 24); // little-endian hosts only; fine for this check
+    const uint16_t probe = 1;
+    if (*reinterpret_cast<const uint8_t *>(&probe) == 1) {
+        CHECK_NEAR(p[0], 10.0 + 2.5, 1e-12);
+        CHECK_NEAR(p[1], 20.0 + 1.0, 1e-12);
+        CHECK_NEAR(p[2], 30.0 + 3.25, 1e-12);
+    }
+    std::remove(path.c_str());
+    CHECK(!write_ply_xyz("/nonexistent_dir_kissm/x.ply", xyz.data(), 1, nullptr, {}, &error));
+}
+
+template <typename F> bool throws_usage(F f) {
+    try {
+        f();
+    } catch (const UsageError &) {
+        return true;
+    }
+    return false;
+}
+
+void test_args() {
+    CHECK(parse_double("--x", "1.5") == 1.5);
+    CHECK(parse_double("--x", "-2e3") == -2000.0);
+    CHECK(parse_positive("--x", "0.3") == 0.3);
+    for (const char *bad : {"", "abc", "1.5x", " 1", "nan", "inf", "-inf", "1e999"}) {
+        CHECK_MSG(throws_usage([&] { parse_double("--x", bad); }), "'%s' accepted", bad);
+    }
+    for (const char *bad : {"0", "-0", "-1"}) CHECK(throws_usage([&] { parse_positive("--x", bad); }));
+    CHECK(parse_int32("--n", "7", 0, 10) == 7);
+    for (const char *bad : {"-1", "11", "1.0", "x", "", "99999999999999999999"}) {
+        CHECK_MSG(throws_usage([&] { parse_int32("--n", bad, 0, 10); }), "'%s' accepted", bad);
+    }
+    CHECK(parse_uint64("--seed", "18446744073709551615") == 18446744073709551615ull);
+    CHECK(parse_uint64("--seed", "0x10") == 16u);
+    for (const char *bad : {"-1", "+1", "x", "", "18446744073709551616"}) {
+        CHECK_MSG(throws_usage([&] { parse_uint64("--seed", bad); }), "'%s' accepted", bad);
+    }
+    CHECK(parse_format("--f", "bin_xyz") == KISSM_FORMAT_BIN_XYZ);
+    CHECK(parse_format("--f", "bin_xyz_f32") == KISSM_FORMAT_BIN_XYZ);
+    CHECK(parse_format("--f", "kitti_bin_xyzi_f32") == KISSM_FORMAT_KITTI_BIN);
+    CHECK(parse_format("--f", "npy_xyz") == KISSM_FORMAT_NPY);
+    CHECK(parse_format("--f", "ply") == KISSM_FORMAT_PLY);
+    CHECK(parse_format("--f", "pcd") == KISSM_FORMAT_PCD);
+    CHECK(parse_format("--f", "xyz") == KISSM_FORMAT_XYZ);
+    CHECK(parse_format("--f", "auto") == KISSM_FORMAT_AUTO);
+    CHECK(throws_usage([] { parse_format("--f", "las"); }));
+    CHECK(one_line("a\nb\r\n") == "a b");
+
+    ArgCursor cur("register", {"a", "--voxel=0.5", "--json", "--threads", "3", "--", "--b"});
+    std::vector<std::string> seen;
+    while (cur.next()) {
+        if (!cur.is_option()) {
+            seen.push_back("pos:" + cur.current());
+        } else if (cur.current() == "--json") {
+            cur.expect_no_value();
+            seen.push_back("json");
+        } else {
+            seen.push_back(cur.current() + "=" + cur.value());
+        }
+    }
+    const std::vector<std::string> expected = {"pos:a", "--voxel=0.5", "json", "--threads=3", "pos:--b"};
+    CHECK(seen == expected);
+}
+
+void test_rng() {
+    Rng a(99), b(99), c(99, 1), d(100), stats(5);
+    bool same = true, differs_stream = false, differs_seed = false;
+    double sum = 0.0, sum_sq = 0.0, lo = 1.0, hi = 0.0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        const uint64_t x = a.next();
+        same = same && x == b.next();
+        differs_stream = differs_stream || x != c.next();
+        differs_seed = differs_seed || x != d.next();
+        const double u = stats.uniform();
+        lo = std::fmin(lo, u);
+        hi = std::fmax(hi, u);
+        const double g = stats.normal();
+        sum += g;
+        sum_sq += g * g;
+    }
+    CHECK(same && differs_stream && differs_seed);
+    CHECK(lo >= 0.0 && hi < 1.0 && lo < 1e-4 && hi > 1.0 - 1e-4);
+    CHECK_NEAR(sum / n, 0.0, 0.01);
+    CHECK_NEAR(sum_sq / n, 1.0, 0.02);
+}
+
+void test_pose_math() {
+    const Pose p = pose_from_ypr(0.3, -0.2, 0.1, 1.0, 2.0, 3.0);
+    double T[16], I[16];
+    pose_to_matrix(pose_compose(p, pose_inverse(p)), I);
+    pose_to_matrix(pose_identity(), T);
+    for (int i = 0; i < 16; ++i) CHECK_NEAR(I[i], T[i], 1e-12);
+    pose_to_matrix(p, T);
+    double yaw = 0, pitch = 0, roll = 0;
+    yaw_pitch_roll_deg(T, &yaw, &pitch, &roll);
+    CHECK_NEAR(yaw, rad_to_deg(0.3), 1e-9);
+    CHECK_NEAR(pitch, rad_to_deg(-0.2), 1e-9);
+    CHECK_NEAR(roll, rad_to_deg(0.1), 1e-9);
+    double Z[16];
+    pose_to_matrix(pose_from_ypr(deg_to_rad(30.0), 0, 0, 0, 0, 0), Z);
+    CHECK_NEAR(rotation_angle_deg(Z), 30.0, 1e-9);
+    double E[16];
+    pose_to_matrix(pose_identity(), E);
+    CHECK_NEAR(rotation_error_deg(E, Z), 30.0, 1e-9);
+    CHECK_NEAR(rotation_error_deg(Z, Z), 0.0, 1e-6);
+    CHECK_NEAR(translation_error(T, Z), std::sqrt(14.0), 1e-12);
+}
+
+void test_demo_scene() {
+    DemoOptions options;
+    options.seed = 1;
+    const DemoData a = generate_demo(options);
+    const DemoData b = generate_demo(options);
+    CHECK(a.source.xyz == b.source.xyz);
+    CHECK(a.target.xyz == b.target.xyz);
+    CHECK(std::memcmp(a.gt_target_from_source, b.gt_target_from_source, sizeof a.gt_target_from_source) == 0);
+
+    for (uint64_t seed : {1ull, 2ull, 3ull, 12345ull}) {
+        options.seed = seed;
+        const DemoData d = generate_demo(options);
+        for (const DemoScan *scan : {&d.source, &d.target}) {
+            const size_t n = scan->xyz.size() / 3;
+            CHECK_MSG(n >= 30000 && n <= 60000, "seed %llu: %zu points", static_cast<unsigned long long>(seed), n);
+            // Sensor frame: every return lies between the minimum and maximum range (plus noise).
+            double rmin = 1e30, rmax = 0.0;
+            for (size_t i = 0; i < n; ++i) {
+                const double *p = &scan->xyz[3 * i];
+                const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+                rmin = std::fmin(rmin, r);
+                rmax = std::fmax(rmax, r);
+            }
+            CHECK(rmin > options.min_range - 0.2 && rmax < options.max_range + 0.2);
+        }
+        const double *T = d.gt_target_from_source;
+        // A rigid transform with the advertised motion: 10-15 m, 120-165 degrees of yaw plus a little tilt.
+        double RtR[9];
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) {
+                RtR[3 * i + j] = T[i] * T[j] + T[4 + i] * T[4 + j] + T[8 + i] * T[8 + j];
+                CHECK_NEAR(RtR[3 * i + j], i == j ? 1.0 : 0.0, 1e-12);
+            }
+        }
+        const double dist = translation_norm(T);
+        const double angle = rotation_angle_deg(T);
+        CHECK_MSG(dist > 9.0 && dist < 16.5, "seed %llu: %g m apart", static_cast<unsigned long long>(seed), dist);
+        CHECK_MSG(angle > 110.0 && angle < 175.0, "seed %llu: %g degrees", static_cast<unsigned long long>(seed), angle);
+        CHECK(d.stats.buildings > 20 && d.stats.cars > 5 && d.stats.poles > 2 && d.stats.clutter > 40);
+    }
+    options.seed = 2;
+    const DemoData other = generate_demo(options);
+    CHECK(other.source.xyz != a.source.xyz);
+}
+
+} // namespace
+
+int main() {
+    RUN_TEST(test_checksums);
+    RUN_TEST(test_deflate);
+    RUN_TEST(test_png);
+    RUN_TEST(test_json_writer);
+    RUN_TEST(test_ply_writer);
+    RUN_TEST(test_args);
+    RUN_TEST(test_rng);
+    RUN_TEST(test_pose_math);
+    RUN_TEST(test_demo_scene);
+    return TEST_SUMMARY();
+}
