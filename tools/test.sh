@@ -10,3 +10,11 @@ build=${KISSM_BUILD_DIR:-$here/build}
 
 echo "== C/C++ tests (CTest) =="
 ctest --test-dir "$build" --output-on-failure --parallel 2 --timeout 900
+
+# Language bindings: each has its own script (set-up included) that runs its suite against this build.
+for suite in bindings/python/run_tests.sh bindings/rust/run_tests.sh; do
+  if [[ -f $here/$suite ]]; then
+    echo "== $suite =="
+    KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir bash "$here/$suite"
+  fi
+done
