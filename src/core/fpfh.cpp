@@ -10,8 +10,6 @@ namespace detail {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979323846f;
-
 int bin_of(float value, float lo, float hi) {
     const float t = (value - lo) / (hi - lo) * static_cast<float>(kBinsPerFeature);
     if (!(t > 0.0f)) return 0; // also NaN: never reached for valid pairs, but never out of range either
@@ -19,32 +17,51 @@ int bin_of(float value, float lo, float hi) {
     return b < kBinsPerFeature ? b : kBinsPerFeature - 1;
 }
 
+// Bin of the angle atan2(y, x) in [-pi, pi] split into 11 equal sectors, without calling atan2 (which was
+// 40% of the pair-feature cost): the sector boundaries -pi + 2 pi k / 11 for k = 1..5 lie in the lower half
+// plane and k = 6..10 in the upper, and within a half plane "angle >= boundary" is the sign of a cross
+// product with the boundary direction.
+struct AngleBins {
+    float c[kBinsPerFeature], s[kBinsPerFeature];
+    AngleBins() {
+        for (int k = 0; k < kBinsPerFeature; ++k) {
+            const double a = -3.14159265358979323846 + 2.0 * 3.14159265358979323846 * k / kBinsPerFeature;
+            c[k] = static_cast<float>(std::cos(a));
+            s[k] = static_cast<float>(std::sin(a));
+        }
+    }
+    int operator()(float y, float x) const {
+        if (y == 0.0f && x == 0.0f) return kBinsPerFeature / 2; // atan2(0, 0) = 0
+        const int first = y >= 0.0f ? 6 : 1;
+        int bin = first - 1;
+        for (int k = first; k < first + 5; ++k) bin += c[k] * y - s[k] * x >= 0.0f;
+        return bin;
+    }
+};
+
+const AngleBins kAngleBins;
+
 } // namespace
 
 bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]) {
     Vec3f d = p2 - p1;
-    const float len = d.norm();
-    if (!(len > 0.0f)) return false;
-    d /= len;
+    const float len2 = d.squaredNorm();
+    if (!(len2 > 0.0f)) return false;
+    d *= 1.0f / std::sqrt(len2);
     // u is the normal of the point whose normal is closer to the line; d points from it to the other.
     const float c1 = n1.dot(d), c2 = n2.dot(d);
-    Vec3f u = n1, nb = n2;
-    float f3 = c1;
-    if (std::fabs(c1) < std::fabs(c2)) {
-        u = n2;
-        nb = n1;
-        d = -d;
-        f3 = -c2;
-    }
+    const bool swap = std::fabs(c1) < std::fabs(c2);
+    const Vec3f &u = swap ? n2 : n1;
+    const Vec3f &nb = swap ? n1 : n2;
+    if (swap) d = -d;
+    const float f3 = swap ? -c2 : c1;
     Vec3f v = d.cross(u);
-    const float vlen = v.norm();
-    if (!(vlen > 0.0f)) return false;
-    v /= vlen;
+    const float vlen2 = v.squaredNorm();
+    if (!(vlen2 > 0.0f)) return false;
+    v *= 1.0f / std::sqrt(vlen2);
     const Vec3f w = u.cross(v);
-    const float f1 = std::atan2(w.dot(nb), u.dot(nb));
-    const float f2 = v.dot(nb);
-    bins[0] = bin_of(f1, -kPi, kPi);
-    bins[1] = bin_of(f2, -1.0f, 1.0f);
+    bins[0] = kAngleBins(w.dot(nb), u.dot(nb));
+    bins[1] = bin_of(v.dot(nb), -1.0f, 1.0f);
     bins[2] = bin_of(f3, -1.0f, 1.0f);
     return true;
 }
