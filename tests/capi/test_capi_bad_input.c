@@ -676,6 +676,31 @@ static void test_struct_sizes(void) {
         }
     }
 
+    /* absurd sizes (an uninitialised field): refused before any byte past the known layout is touched */
+    {
+        const uint32_t huge[] = {65537u, 0x5A5A5A5Au, 0xFFFFFFFFu};
+        for (i = 0; i < sizeof(huge) / sizeof(huge[0]); ++i) {
+            kissm_config c = scn_config(GOOD_VOXEL);
+            kissm_matcher *m = SENTINEL_MATCHER;
+            kissm_result r;
+            unsigned char before[sizeof(kissm_result)];
+            c.struct_size = huge[i];
+            CHECK_EQ_INT(kissm_config_validate(&c), KISSM_ERR_STRUCT_SIZE);
+            CHECK_EQ_INT(kissm_create(&c, &m), KISSM_ERR_STRUCT_SIZE);
+            CHECK(m == SENTINEL_MATCHER);
+            CHECK_EQ_INT(kissm_config_init(&c, huge[i]), KISSM_ERR_STRUCT_SIZE);
+            c.struct_size = huge[i];
+            CHECK_EQ_INT(kissm_get_config(g_m, &c), KISSM_ERR_STRUCT_SIZE);
+            CHECK_EQ_INT(c.struct_size, huge[i]);
+            memset(&r, 0x5A, sizeof(r));
+            r.struct_size = huge[i];
+            memcpy(before, &r, sizeof(r));
+            CHECK_EQ_INT(kissm_register(g_m, &s, &t, &r), KISSM_ERR_STRUCT_SIZE);
+            CHECK(msg_has("struct_size"));
+            CHECK(memcmp(&r, before, sizeof(r)) == 0);
+        }
+    }
+
     /* result too small: STRUCT_SIZE, and nothing written at or beyond the size the caller claims. */
     {
         const uint32_t rsizes[] = {0u, 4u, 16u, (uint32_t)sizeof(kissm_result) - 8u};
