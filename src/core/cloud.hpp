@@ -6,6 +6,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // A borrowed view of the caller's xyz array (float or double, any byte stride).
@@ -62,4 +64,5 @@ struct Correspondence {
 };
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -5,6 +5,8 @@
 #include <cstdint>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b, float noise_bound,
@@ -100,4 +102,5 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const 
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

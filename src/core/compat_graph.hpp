@@ -7,6 +7,8 @@
 #include "run_context.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // Undirected graph in compressed sparse rows: the neighbours of v are adj[offsets[v] .. offsets[v+1]),
@@ -31,4 +33,5 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const 
                                                                           std::size_t max_pairs);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

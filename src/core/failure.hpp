@@ -6,6 +6,8 @@
 #include <string>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 enum class ErrorKind {
@@ -36,4 +38,5 @@ private:
 [[noreturn]] inline void fail(ErrorKind kind, const std::string &message) { throw Failure(kind, message); }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -6,6 +6,8 @@
 #include <cmath>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -138,4 +140,5 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

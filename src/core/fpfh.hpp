@@ -5,6 +5,8 @@
 #include "run_context.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 constexpr int kBinsPerFeature = 11;
@@ -24,4 +26,5 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
                          RunContext &ctx);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -7,6 +7,8 @@
 #include <numeric>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
@@ -229,4 +231,5 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

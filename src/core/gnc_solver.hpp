@@ -8,6 +8,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 struct SolverParams {
@@ -63,4 +65,5 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
                         std::vector<IndexPair> pairs, const SolverParams &params);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -6,6 +6,8 @@
 #include "failure.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -49,4 +51,5 @@ InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const s
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

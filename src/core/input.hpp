@@ -7,10 +7,13 @@
 #include "params.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // `name` ("source", "target", "cloud") is used in error messages.
 InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const std::string &name);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

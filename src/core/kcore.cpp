@@ -3,6 +3,8 @@
 #include <algorithm>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 std::vector<std::uint32_t> core_numbers(const CsrGraph &g) {
@@ -61,4 +63,5 @@ std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core)
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -4,6 +4,8 @@
 #include "compat_graph.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // Core number of every vertex.
@@ -14,4 +16,5 @@ std::vector<std::uint32_t> core_numbers(const CsrGraph &g);
 std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

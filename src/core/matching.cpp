@@ -9,6 +9,8 @@
 #include <nanoflann.hpp>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -217,4 +219,5 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -5,6 +5,8 @@
 #include "run_context.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 struct MatchParams {
@@ -20,4 +22,5 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
                                               const MatchParams &params, RunContext &ctx);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

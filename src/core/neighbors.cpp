@@ -4,6 +4,8 @@
 #include <cmath>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -113,4 +115,5 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

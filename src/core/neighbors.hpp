@@ -6,6 +6,8 @@
 #include "run_context.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // Neighbours strictly closer than `radius`, the point itself included. Uses a uniform grid of cell size
@@ -14,4 +16,5 @@ namespace detail {
 Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, RunContext &ctx);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 void symmetric_eigen3(const Eigen::Matrix3d &cov, Eigen::Vector3d &eigenvalues_desc, Eigen::Vector3d &smallest_vec) {
@@ -76,4 +78,5 @@ std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Norma
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -6,6 +6,8 @@
 #include "run_context.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 struct NormalParams {
@@ -29,4 +31,5 @@ std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Norma
 void symmetric_eigen3(const Eigen::Matrix3d &cov, Eigen::Vector3d &eigenvalues_desc, Eigen::Vector3d &smallest_vec);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

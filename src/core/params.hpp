@@ -6,6 +6,8 @@
 #include <functional>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 enum class NonFinitePolicy { Reject, Drop };
@@ -38,4 +40,5 @@ private:
 };
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -15,6 +15,8 @@
 #include "voxelize.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -227,4 +229,5 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

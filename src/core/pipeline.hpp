@@ -12,6 +12,8 @@
 #include "validity.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // A cloud described once: voxels (local frame) and keypoint descriptors. Immutable after construction.
@@ -57,4 +59,5 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
                                 RunContext &ctx);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -9,6 +9,8 @@
 #include "failure.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // A minimal pool: workers wait for a job, grab chunk indices from an atomic counter until none are left.
@@ -159,4 +161,5 @@ void RunContext::parallel_for(std::size_t n, std::size_t chunk,
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

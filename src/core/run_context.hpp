@@ -12,6 +12,8 @@
 #include <string>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 class ThreadPool;
@@ -55,4 +57,5 @@ private:
 };
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -5,6 +5,8 @@
 #include "normals.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::size_t min_inliers, double noise_bound,
@@ -33,4 +35,5 @@ Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

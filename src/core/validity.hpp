@@ -5,6 +5,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 enum class Reason { None = 0, TooFewVoxels, TooFewFeatures, TooFewCorrespondences, SolverFailed, TooFewInliers, Degenerate };
@@ -21,4 +23,5 @@ Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::
                         const Eigen::Matrix3d &rotation, const Eigen::Vector3d &translation);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

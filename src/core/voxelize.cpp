@@ -7,6 +7,8 @@
 #include "failure.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -88,4 +90,5 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

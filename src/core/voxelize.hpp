@@ -7,6 +7,8 @@
 #include "run_context.hpp"
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // At most this many voxels per axis: keys then pack into 63 bits, and single-precision local coordinates
@@ -20,4 +22,5 @@ constexpr std::uint64_t kMaxVoxelsPerAxis = std::uint64_t(1) << 21;
 VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

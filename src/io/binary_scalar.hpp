@@ -6,6 +6,8 @@
 #include <cstring>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 enum class Scalar { I8, U8, I16, U16, I32, U32, I64, U64, F32, F64 };
@@ -83,4 +85,5 @@ inline bool load_count(const char *p, Scalar s, bool swap, std::uint64_t &out) {
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -9,6 +9,8 @@
 #include <system_error>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -67,4 +69,5 @@ std::string read_file_bytes(const std::string &path) {
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -7,6 +7,8 @@
 #include <string>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // The file's bytes. Throws Failure(Io) naming the path and the OS reason when it cannot be opened or read
@@ -30,4 +32,5 @@ inline bool checked_add(std::uint64_t a, std::uint64_t b, std::uint64_t &out) {
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

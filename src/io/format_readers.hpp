@@ -7,6 +7,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 std::vector<double> parse_ply(const std::string &path, std::string_view bytes);
@@ -17,4 +19,5 @@ std::vector<double> parse_npy(const std::string &path, std::string_view bytes);
 std::vector<double> parse_xyz_text(const std::string &path, std::string_view bytes);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -11,6 +11,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -230,4 +232,5 @@ std::vector<double> parse_npy(const std::string &path, std::string_view bytes) {
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

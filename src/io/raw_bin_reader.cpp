@@ -7,6 +7,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -41,4 +43,5 @@ std::vector<double> parse_bin_xyz(const std::string &path, std::string_view byte
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

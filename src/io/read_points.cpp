@@ -12,6 +12,8 @@
 #include <string_view>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -111,4 +113,5 @@ std::vector<double> read_points_file(const std::string &path, FileFormat format)
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -7,6 +7,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 // Values equal the KISSM_FORMAT_* constants of kissm.h.
@@ -20,4 +22,5 @@ enum class FileFormat { Auto = 0, Ply = 1, Pcd = 2, KittiBin = 3, Npy = 4, Xyz =
 std::vector<double> read_points_file(const std::string &path, FileFormat format);
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

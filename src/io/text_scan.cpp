@@ -6,6 +6,8 @@
 #include <system_error>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -150,4 +152,5 @@ bool TokenCursor::next(const char *&token_begin, const char *&token_end) {
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

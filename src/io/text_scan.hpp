@@ -8,6 +8,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
@@ -51,4 +53,5 @@ struct TokenCursor {
 };
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm

@@ -10,6 +10,8 @@
 #include <vector>
 
 namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
 namespace detail {
 
 namespace {
@@ -67,4 +69,5 @@ std::vector<double> parse_xyz_text(const std::string &path, std::string_view byt
 }
 
 } // namespace detail
+} // namespace v0_1
 } // namespace kissm
