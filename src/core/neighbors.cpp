@@ -3,17 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "radix_sort.hpp"
+
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
 inline namespace v0_1 {
 namespace detail {
 
 namespace {
-
-struct CellEntry {
-    std::uint64_t key;
-    std::uint32_t index;
-};
 
 // Cell coordinates are offset by one so that the -1 neighbour of cell 0 is still a valid unsigned key.
 constexpr std::uint64_t kBits = 21;
@@ -41,15 +38,13 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
         }
     };
 
-    std::vector<CellEntry> entries(n);
+    std::vector<KeyIndex> entries(n);
     for (std::size_t i = 0; i < n; ++i) {
         std::uint64_t c[3];
         cell_of(points[i], c);
         entries[i] = {pack(c[0], c[1], c[2]), static_cast<std::uint32_t>(i)};
     }
-    std::sort(entries.begin(), entries.end(), [](const CellEntry &a, const CellEntry &b) {
-        return a.key != b.key ? a.key < b.key : a.index < b.index;
-    });
+    radix_sort_by_key(entries); // stable: ties stay in index order
     // Unique cells with their ranges in `entries`.
     std::vector<std::uint64_t> cell_keys;
     std::vector<std::uint32_t> cell_start;

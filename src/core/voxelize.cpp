@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "failure.hpp"
+#include "radix_sort.hpp"
 
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
@@ -12,11 +13,6 @@ inline namespace v0_1 {
 namespace detail {
 
 namespace {
-
-struct Keyed {
-    std::uint64_t key;
-    std::uint32_t index;
-};
 
 std::uint64_t cells_for(double extent, double voxel_size) {
     const double n = std::floor(extent / voxel_size) + 1.0;
@@ -46,7 +42,8 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
         }
     }
 
-    std::vector<Keyed> keyed(n);
+    const auto &pts = input.points;
+    std::vector<KeyIndex> keyed(n);
     const double inv = 1.0 / voxel_size;
     ctx.parallel_for(n, 8192, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
@@ -63,14 +60,21 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
         }
     });
 
-    const auto &pts = input.points;
-    std::sort(keyed.begin(), keyed.end(), [&](const Keyed &a, const Keyed &b) {
-        if (a.key != b.key) return a.key < b.key;
+    // By key, then (within a voxel) by coordinates, so that the centroid sums run in an order that does not
+    // depend on the input order.
+    radix_sort_by_key(keyed);
+    const auto by_xyz = [&](const KeyIndex &a, const KeyIndex &b) {
         const Vec3d &pa = pts[a.index], &pb = pts[b.index];
         if (pa.x() != pb.x()) return pa.x() < pb.x();
         if (pa.y() != pb.y()) return pa.y() < pb.y();
         return pa.z() < pb.z();
-    });
+    };
+    for (std::size_t i = 0; i < n;) {
+        std::size_t j = i + 1;
+        while (j < n && keyed[j].key == keyed[i].key) ++j;
+        if (j - i > 1) std::sort(keyed.begin() + static_cast<std::ptrdiff_t>(i), keyed.begin() + static_cast<std::ptrdiff_t>(j), by_xyz);
+        i = j;
+    }
 
     std::size_t voxels = 0;
     for (std::size_t i = 0; i < n; ++i)

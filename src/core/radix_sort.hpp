@@ -1,0 +1,24 @@
+// Stable sort of (key, index) records by key: LSD radix sort, 11 bits per pass, as many passes as the
+// largest key needs. Replaces comparison sorts of voxel and grid keys (15% of a full KITTI registration's
+// instructions went into std::sort).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace kissm {
+// Versioned so that two kissm versions linked statically into one program never share a symbol.
+inline namespace v0_1 {
+namespace detail {
+
+struct KeyIndex {
+    std::uint64_t key;
+    std::uint32_t index;
+};
+
+// Sorts by key; records with equal keys keep their relative order.
+void radix_sort_by_key(std::vector<KeyIndex> &records);
+
+} // namespace detail
+} // namespace v0_1
+} // namespace kissm
