@@ -1,0 +1,340 @@
+//! [`Config`] and its [`ConfigBuilder`].
+
+use std::fmt;
+use std::mem;
+
+use kissm_sys as sys;
+
+use crate::error::Error;
+
+/// What a registration does with NaN or infinite coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum NonfinitePolicy {
+    /// Such a point fails the call with [`ErrorKind::NonFinite`](crate::ErrorKind::NonFinite) (the default).
+    #[default]
+    Reject,
+    /// Such points are skipped and counted in [`Counts::source_nonfinite`](crate::Counts::source_nonfinite)
+    /// and [`Counts::target_nonfinite`](crate::Counts::target_nonfinite).
+    Drop,
+}
+
+/// Where surface normals are oriented toward.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Viewpoint {
+    /// A fixed sensor position, in each cloud's own input frame (single scans; the default is the origin).
+    Fixed([f64; 3]),
+    /// Each cloud's bounding-box centre (maps and merged clouds, which have no single sensor position).
+    CloudCenter,
+}
+
+impl Default for Viewpoint {
+    fn default() -> Self {
+        Viewpoint::Fixed([0.0; 3])
+    }
+}
+
+/// A validated registration configuration.
+///
+/// Built with [`Config::builder`], whose defaults are the C library's (`kissm_config_init`): voxel size
+/// 0.3, normal radius gain 3.5, FPFH radius gain 5.0, maximum linearity 0.99, ratio test 0.9, pruning
+/// and solver noise bound gains 1.0 and 0.75, no noise bound cap, viewpoint at the origin, 3 normal
+/// neighbours, 5000 correspondences, 15 inliers, non-finite points rejected, all hardware threads. Every
+/// length scales with the voxel size, so it is usually the only value to set.
+///
+/// ```
+/// let config = kissm::Config::builder().voxel_size(0.5).num_threads(2).build()?;
+/// assert_eq!(config.voxel_size(), 0.5);
+/// assert_eq!(config.min_inliers(), 15);
+/// # Ok::<(), kissm::Error>(())
+/// ```
+#[derive(Clone)]
+pub struct Config {
+    raw: sys::kissm_config,
+}
+
+// SAFETY: the only pointers in the raw config are the log and progress callbacks and their user data,
+// which this crate always leaves NULL; everything else is plain data.
+unsafe impl Send for Config {}
+// SAFETY: as above; a shared Config is never mutated.
+unsafe impl Sync for Config {}
+
+/// The documented defaults, as written by `kissm_config_init`. On the impossible failure of that call (it
+/// only rejects a struct size below the first published layout) the config is left zeroed, which every
+/// later validation rejects with a proper error: this never panics.
+fn raw_defaults() -> (sys::kissm_config, i32) {
+    let mut raw = sys::kissm_config::default();
+    let size = mem::size_of::<sys::kissm_config>() as u32;
+    // SAFETY: raw is a valid, writable kissm_config of exactly `size` bytes.
+    let status = unsafe { sys::kissm_config_init(&mut raw, size) };
+    if status != sys::KISSM_OK {
+        raw = sys::kissm_config::default();
+        raw.struct_size = size;
+    }
+    (raw, status)
+}
+
+fn to_i32(value: usize) -> i32 {
+    // Out-of-range values become i32::MAX, which the library's validation rejects with a message naming
+    // the field.
+    i32::try_from(value).unwrap_or(i32::MAX)
+}
+
+impl Config {
+    /// A builder starting from the library's defaults.
+    pub fn builder() -> ConfigBuilder {
+        ConfigBuilder::new()
+    }
+
+    /// A builder starting from this configuration.
+    pub fn to_builder(&self) -> ConfigBuilder {
+        ConfigBuilder { raw: self.raw, init_status: sys::KISSM_OK }
+    }
+
+    /// Checks every field with `kissm_config_validate` (the same checks as creating a matcher).
+    pub fn validate(&self) -> Result<(), Error> {
+        // SAFETY: self.raw is a complete kissm_config with struct_size set.
+        Error::check(unsafe { sys::kissm_config_validate(&self.raw) })
+    }
+
+    /// Wraps a raw config as it is (not validated: [`Matcher::new`](crate::Matcher::new) validates).
+    /// The callbacks and their user data are cleared, as this crate never calls back into Rust.
+    pub fn from_raw(mut raw: sys::kissm_config) -> Config {
+        raw.log_fn = None;
+        raw.log_user_data = std::ptr::null_mut();
+        raw.progress_fn = None;
+        raw.progress_user_data = std::ptr::null_mut();
+        Config { raw }
+    }
+
+    /// The raw C struct, for use with `kissm-sys`.
+    pub fn as_raw(&self) -> &sys::kissm_config {
+        &self.raw
+    }
+
+    /// Worker threads per call; 0 = all hardware threads. Results do not depend on it.
+    pub fn num_threads(&self) -> usize {
+        usize::try_from(self.raw.num_threads).unwrap_or(0)
+    }
+    /// Voxel size in the clouds' unit (metres for LiDAR); every radius and bound scales with it.
+    pub fn voxel_size(&self) -> f64 {
+        self.raw.voxel_size
+    }
+    /// Normal estimation radius, in voxel sizes.
+    pub fn normal_radius_gain(&self) -> f64 {
+        self.raw.normal_radius_gain
+    }
+    /// FPFH descriptor radius, in voxel sizes.
+    pub fn fpfh_radius_gain(&self) -> f64 {
+        self.raw.fpfh_radius_gain
+    }
+    /// Linearity `(l1 - l2) / l1` above which a point gets no normal.
+    pub fn max_linearity(&self) -> f64 {
+        self.raw.max_linearity
+    }
+    /// Lowe ratio on squared descriptor distances; 1 = off.
+    pub fn ratio_test(&self) -> f64 {
+        self.raw.ratio_test
+    }
+    /// Correspondence-graph edge tolerance, in voxel sizes.
+    pub fn prune_noise_bound_gain(&self) -> f64 {
+        self.raw.prune_noise_bound_gain
+    }
+    /// Solver inlier bound, in voxel sizes.
+    pub fn solver_noise_bound_gain(&self) -> f64 {
+        self.raw.solver_noise_bound_gain
+    }
+    /// Cap on both noise bounds in the clouds' unit; 0 = no cap.
+    pub fn noise_bound_max(&self) -> f64 {
+        self.raw.noise_bound_max
+    }
+    /// Where normals are oriented toward.
+    pub fn viewpoint(&self) -> Viewpoint {
+        if self.raw.viewpoint_mode == sys::KISSM_VIEWPOINT_CLOUD_CENTER {
+            Viewpoint::CloudCenter
+        } else {
+            Viewpoint::Fixed(self.raw.viewpoint)
+        }
+    }
+    /// Neighbours needed for a normal and a descriptor.
+    pub fn min_normal_neighbors(&self) -> usize {
+        usize::try_from(self.raw.min_normal_neighbors).unwrap_or(0)
+    }
+    /// Cap on the mutual matches kept, best ratio first.
+    pub fn max_correspondences(&self) -> usize {
+        usize::try_from(self.raw.max_correspondences).unwrap_or(0)
+    }
+    /// Final inliers needed for a valid pose.
+    pub fn min_inliers(&self) -> usize {
+        usize::try_from(self.raw.min_inliers).unwrap_or(0)
+    }
+    /// What happens to NaN and infinite coordinates.
+    pub fn nonfinite_policy(&self) -> NonfinitePolicy {
+        if self.raw.nonfinite_policy == sys::KISSM_NONFINITE_DROP {
+            NonfinitePolicy::Drop
+        } else {
+            NonfinitePolicy::Reject
+        }
+    }
+}
+
+impl Default for Config {
+    /// The library's defaults (see [`Config`]).
+    fn default() -> Self {
+        Config { raw: raw_defaults().0 }
+    }
+}
+
+impl fmt::Debug for Config {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Config")
+            .field("num_threads", &self.raw.num_threads)
+            .field("voxel_size", &self.raw.voxel_size)
+            .field("normal_radius_gain", &self.raw.normal_radius_gain)
+            .field("fpfh_radius_gain", &self.raw.fpfh_radius_gain)
+            .field("max_linearity", &self.raw.max_linearity)
+            .field("ratio_test", &self.raw.ratio_test)
+            .field("prune_noise_bound_gain", &self.raw.prune_noise_bound_gain)
+            .field("solver_noise_bound_gain", &self.raw.solver_noise_bound_gain)
+            .field("noise_bound_max", &self.raw.noise_bound_max)
+            .field("viewpoint", &self.viewpoint())
+            .field("min_normal_neighbors", &self.raw.min_normal_neighbors)
+            .field("max_correspondences", &self.raw.max_correspondences)
+            .field("min_inliers", &self.raw.min_inliers)
+            .field("nonfinite_policy", &self.nonfinite_policy())
+            .finish()
+    }
+}
+
+/// Builds a [`Config`]; [`build`](ConfigBuilder::build) validates every field with the C library and
+/// returns an [`Error`] naming the first invalid one. Setters never fail or panic.
+///
+/// ```
+/// use kissm::{Config, ErrorKind, NonfinitePolicy, Viewpoint};
+/// let config = Config::builder()
+///     .voxel_size(0.05)
+///     .viewpoint(Viewpoint::CloudCenter)
+///     .nonfinite_policy(NonfinitePolicy::Drop)
+///     .min_inliers(20)
+///     .build()?;
+/// assert_eq!(config.min_inliers(), 20);
+///
+/// let err = Config::builder().num_threads(1_000_000).build().unwrap_err();
+/// assert_eq!(err.kind(), ErrorKind::InvalidArgument);
+/// # Ok::<(), kissm::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct ConfigBuilder {
+    raw: sys::kissm_config,
+    init_status: i32,
+}
+
+impl Default for ConfigBuilder {
+    fn default() -> Self {
+        ConfigBuilder::new()
+    }
+}
+
+impl ConfigBuilder {
+    /// A builder holding the library's defaults.
+    pub fn new() -> ConfigBuilder {
+        let (raw, init_status) = raw_defaults();
+        ConfigBuilder { raw, init_status }
+    }
+
+    /// Worker threads, 0..=1024; 0 (the default) = all hardware threads. Results do not depend on it.
+    pub fn num_threads(mut self, threads: usize) -> Self {
+        self.raw.num_threads = to_i32(threads);
+        self
+    }
+    /// Voxel size in the clouds' unit, > 0 (default 0.3). Try 0.3-0.5 for outdoor LiDAR in metres, 0.05
+    /// for indoor RGB-D fragments.
+    pub fn voxel_size(mut self, voxel_size: f64) -> Self {
+        self.raw.voxel_size = voxel_size;
+        self
+    }
+    /// Normal radius in voxel sizes, in (0, fpfh_radius_gain] (default 3.5).
+    pub fn normal_radius_gain(mut self, gain: f64) -> Self {
+        self.raw.normal_radius_gain = gain;
+        self
+    }
+    /// FPFH radius in voxel sizes, in [1.5, 50] and at least the normal gain (default 5.0).
+    pub fn fpfh_radius_gain(mut self, gain: f64) -> Self {
+        self.raw.fpfh_radius_gain = gain;
+        self
+    }
+    /// Linearity above which a point gets no normal, in (0, 1] (default 0.99).
+    pub fn max_linearity(mut self, value: f64) -> Self {
+        self.raw.max_linearity = value;
+        self
+    }
+    /// Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off (default 0.9).
+    pub fn ratio_test(mut self, ratio: f64) -> Self {
+        self.raw.ratio_test = ratio;
+        self
+    }
+    /// Correspondence-graph edge tolerance in voxel sizes, in (0, 1e6] (default 1.0).
+    pub fn prune_noise_bound_gain(mut self, gain: f64) -> Self {
+        self.raw.prune_noise_bound_gain = gain;
+        self
+    }
+    /// Solver inlier bound in voxel sizes, in (0, 1e6] (default 0.75).
+    pub fn solver_noise_bound_gain(mut self, gain: f64) -> Self {
+        self.raw.solver_noise_bound_gain = gain;
+        self
+    }
+    /// Cap on both noise bounds in the clouds' unit, finite; 0 = no cap (the default).
+    pub fn noise_bound_max(mut self, bound: f64) -> Self {
+        self.raw.noise_bound_max = bound;
+        self
+    }
+    /// Where normals are oriented toward (default: a fixed sensor at the origin of each cloud's frame).
+    pub fn viewpoint(mut self, viewpoint: Viewpoint) -> Self {
+        match viewpoint {
+            Viewpoint::Fixed(position) => {
+                self.raw.viewpoint_mode = sys::KISSM_VIEWPOINT_FIXED;
+                self.raw.viewpoint = position;
+            }
+            Viewpoint::CloudCenter => self.raw.viewpoint_mode = sys::KISSM_VIEWPOINT_CLOUD_CENTER,
+        }
+        self
+    }
+    /// Neighbours needed for a normal and a descriptor, 3..=100000 (default 3).
+    pub fn min_normal_neighbors(mut self, count: usize) -> Self {
+        self.raw.min_normal_neighbors = to_i32(count);
+        self
+    }
+    /// Cap on the mutual matches kept (best ratio first), 3..=100000 (default 5000).
+    pub fn max_correspondences(mut self, count: usize) -> Self {
+        self.raw.max_correspondences = to_i32(count);
+        self
+    }
+    /// Final inliers a valid pose needs, 3..=100000 (default 15).
+    pub fn min_inliers(mut self, count: usize) -> Self {
+        self.raw.min_inliers = to_i32(count);
+        self
+    }
+    /// What happens to NaN and infinite coordinates (default [`NonfinitePolicy::Reject`]).
+    pub fn nonfinite_policy(mut self, policy: NonfinitePolicy) -> Self {
+        self.raw.nonfinite_policy = match policy {
+            NonfinitePolicy::Reject => sys::KISSM_NONFINITE_REJECT,
+            NonfinitePolicy::Drop => sys::KISSM_NONFINITE_DROP,
+        };
+        self
+    }
+
+    /// Validates every field (`kissm_config_validate`) and returns the configuration, or an
+    /// [`ErrorKind::InvalidArgument`](crate::ErrorKind::InvalidArgument) error whose message names the
+    /// field.
+    pub fn build(self) -> Result<Config, Error> {
+        crate::check_library()?;
+        if self.init_status != sys::KISSM_OK {
+            return Err(Error::new(
+                self.init_status,
+                "kissm_config_init rejected this crate's kissm_config layout (library and bindings disagree)",
+            ));
+        }
+        let config = Config { raw: self.raw };
+        config.validate()?;
+        Ok(config)
+    }
+}

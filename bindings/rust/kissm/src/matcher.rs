@@ -1,0 +1,238 @@
+//! [`Matcher`], [`Features`] and [`CancelHandle`].
+
+use std::cell::Cell;
+use std::fmt;
+use std::marker::PhantomData;
+use std::mem;
+use std::ptr::NonNull;
+use std::sync::Arc;
+
+use kissm_sys as sys;
+
+use crate::config::Config;
+use crate::error::Error;
+use crate::points::AsPoints;
+use crate::registration::Registration;
+
+/// Owns a kissm_matcher; destroyed when the Matcher and every CancelHandle are gone.
+struct RawMatcher(NonNull<sys::kissm_matcher>);
+
+// SAFETY: a kissm_matcher is not tied to a thread. Through a shared RawMatcher (the CancelHandles) only
+// kissm_cancel is called, which the C API documents as safe from any thread at any time; every other
+// call goes through `&mut Matcher`, which is unique.
+unsafe impl Send for RawMatcher {}
+// SAFETY: as above.
+unsafe impl Sync for RawMatcher {}
+
+impl Drop for RawMatcher {
+    fn drop(&mut self) {
+        // SAFETY: the pointer came from kissm_create and this is its only owner, dropped once.
+        unsafe { sys::kissm_destroy(self.0.as_ptr()) }
+    }
+}
+
+/// A registration engine with a fixed [`Config`]: the C library's `kissm_matcher`, destroyed on drop.
+///
+/// A matcher may be reused for any number of registrations (reuse never changes results) and moved
+/// between threads (`Send`), but is used by one thread at a time (not `Sync`; its calls take
+/// `&mut self`). Run registrations in parallel with one matcher per thread; they can share
+/// [`Features`]. A registration in progress can be stopped from another thread through a
+/// [`CancelHandle`].
+///
+/// ```no_run
+/// use kissm::{Config, Matcher};
+/// let source: Vec<[f32; 3]> = load("source");
+/// let target: Vec<[f64; 3]> = load("target");
+///
+/// let mut matcher = Matcher::new(&Config::builder().voxel_size(0.5).build()?)?;
+/// let reg = matcher.register(&source, &target)?;
+/// if reg.valid {
+///     println!("transform: {:?}", reg.transform);
+/// } else {
+///     println!("no trustworthy pose: {} ({} inliers)", reg.reason, reg.final_inliers());
+/// }
+/// # fn load<T>(_: &str) -> Vec<T> { Vec::new() }
+/// # Ok::<(), kissm::Error>(())
+/// ```
+pub struct Matcher {
+    raw: Arc<RawMatcher>,
+    config: Config,
+    _not_sync: PhantomData<Cell<()>>,
+}
+
+impl Matcher {
+    /// Creates a matcher; fails with [`ErrorKind::InvalidArgument`](crate::ErrorKind::InvalidArgument)
+    /// naming the field when the configuration is invalid.
+    pub fn new(config: &Config) -> Result<Matcher, Error> {
+        crate::check_library()?;
+        let mut raw: *mut sys::kissm_matcher = std::ptr::null_mut();
+        // SAFETY: the config is a complete kissm_config (copied by the library); raw is a valid out pointer.
+        Error::check(unsafe { sys::kissm_create(config.as_raw(), &mut raw) })?;
+        let raw = NonNull::new(raw)
+            .ok_or_else(|| Error::new(sys::KISSM_ERR_INTERNAL, "kissm_create succeeded but returned no matcher"))?;
+        Ok(Matcher { raw: Arc::new(RawMatcher(raw)), config: config.clone(), _not_sync: PhantomData })
+    }
+
+    /// A matcher with the default configuration and the given voxel size.
+    pub fn with_voxel_size(voxel_size: f64) -> Result<Matcher, Error> {
+        Matcher::new(&Config::builder().voxel_size(voxel_size).build()?)
+    }
+
+    /// The configuration the matcher was created with.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    fn ptr(&mut self) -> *mut sys::kissm_matcher {
+        self.raw.0.as_ptr()
+    }
+
+    fn new_result() -> sys::kissm_result {
+        sys::kissm_result { struct_size: mem::size_of::<sys::kissm_result>() as u32, ..Default::default() }
+    }
+
+    /// Globally registers `source` against `target` (no initial guess needed): the returned transform
+    /// maps source points into the target frame.
+    ///
+    /// Accepts any mix of `&[[f32; 3]]`, `&[[f64; 3]]`, `Vec`s of them, [`PointsView`](crate::PointsView)s
+    /// (strided data) and [`Cloud`](crate::Cloud)s. Returns `Ok` whenever the inputs were acceptable,
+    /// including when the pose is not [`valid`](Registration::valid); `Err` for an empty or too small
+    /// cloud, rejected non-finite coordinates, a voxel size too small for the clouds' extent, or a
+    /// cancellation.
+    pub fn register<S, T>(&mut self, source: &S, target: &T) -> Result<Registration, Error>
+    where
+        S: AsPoints + ?Sized,
+        T: AsPoints + ?Sized,
+    {
+        let source = source.as_points();
+        let target = target.as_points();
+        let mut result = Self::new_result();
+        // SAFETY: the matcher is live and used by this thread only (&mut self); both views borrow data
+        // that outlives the call; result is a writable kissm_result with struct_size set.
+        let status = unsafe { sys::kissm_register(self.ptr(), source.as_raw(), target.as_raw(), &mut result) };
+        Error::check(status)?;
+        Ok(Registration::from_raw(&result))
+    }
+
+    /// Describes a cloud once (voxelisation, normals, descriptors) for any number of
+    /// [`register_features`](Matcher::register_features) calls, on any matcher with the same descriptor
+    /// settings and from any thread.
+    pub fn compute_features<P: AsPoints + ?Sized>(&mut self, cloud: &P) -> Result<Features, Error> {
+        let cloud = cloud.as_points();
+        let mut raw: *mut sys::kissm_features = std::ptr::null_mut();
+        // SAFETY: as in register; raw is a valid out pointer.
+        Error::check(unsafe { sys::kissm_features_compute(self.ptr(), cloud.as_raw(), &mut raw) })?;
+        NonNull::new(raw).map(|raw| Features { raw }).ok_or_else(|| {
+            Error::new(sys::KISSM_ERR_INTERNAL, "kissm_features_compute succeeded but returned no features")
+        })
+    }
+
+    /// Registers two described clouds: the same pose, counts and validity as [`register`](Matcher::register)
+    /// on the clouds themselves (voxelisation and feature times are 0). Fails with
+    /// [`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch) when either was computed under
+    /// descriptor settings different from this matcher's.
+    pub fn register_features(&mut self, source: &Features, target: &Features) -> Result<Registration, Error> {
+        let mut result = Self::new_result();
+        // SAFETY: the matcher is live and exclusively borrowed; features are immutable and live.
+        let status =
+            unsafe { sys::kissm_register_features(self.ptr(), source.raw.as_ptr(), target.raw.as_ptr(), &mut result) };
+        Error::check(status)?;
+        Ok(Registration::from_raw(&result))
+    }
+
+    /// A handle that stops this matcher's running call from another thread. The matcher lives on until
+    /// it and all its handles are dropped.
+    pub fn cancel_handle(&self) -> CancelHandle {
+        CancelHandle { raw: Arc::clone(&self.raw) }
+    }
+}
+
+impl fmt::Debug for Matcher {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Matcher").field("config", &self.config).finish()
+    }
+}
+
+/// Stops a [`Matcher`]'s running registration (or feature computation) from any thread: the call then
+/// fails with [`ErrorKind::Cancelled`](crate::ErrorKind::Cancelled). A request made while no call is
+/// running is cleared when the next call starts. `Send + Sync + Clone`.
+///
+/// ```no_run
+/// # let (source, target) = (vec![[0.0f32; 3]; 100], vec![[0.0f32; 3]; 100]);
+/// let mut matcher = kissm::Matcher::with_voxel_size(0.5)?;
+/// let cancel = matcher.cancel_handle();
+/// std::thread::spawn(move || {
+///     std::thread::sleep(std::time::Duration::from_millis(100));
+///     cancel.cancel();
+/// });
+/// match matcher.register(&source, &target) {
+///     Err(e) if e.kind() == kissm::ErrorKind::Cancelled => println!("stopped"),
+///     other => println!("{:?}", other.map(|r| r.valid)),
+/// }
+/// # Ok::<(), kissm::Error>(())
+/// ```
+#[derive(Clone)]
+pub struct CancelHandle {
+    raw: Arc<RawMatcher>,
+}
+
+impl CancelHandle {
+    /// Requests that the call running on the matcher stop.
+    pub fn cancel(&self) {
+        // SAFETY: the matcher is alive (this handle co-owns it); kissm_cancel is safe from any thread.
+        unsafe { sys::kissm_cancel(self.raw.0.as_ptr()) }
+    }
+}
+
+impl fmt::Debug for CancelHandle {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("CancelHandle").finish_non_exhaustive()
+    }
+}
+
+/// A described cloud ([`Matcher::compute_features`]): immutable, shareable between threads
+/// (`Send + Sync`, e.g. in an `Arc`) and independent of the matcher that computed it.
+pub struct Features {
+    raw: NonNull<sys::kissm_features>,
+}
+
+// SAFETY: the C API documents kissm_features as immutable once created, usable from several threads at
+// once, and free to outlive its matcher.
+unsafe impl Send for Features {}
+// SAFETY: as above.
+unsafe impl Sync for Features {}
+
+impl Features {
+    /// Points of the described cloud.
+    pub fn num_points(&self) -> u64 {
+        // SAFETY: live features.
+        unsafe { sys::kissm_features_num_points(self.raw.as_ptr()) }
+    }
+    /// Occupied voxels.
+    pub fn num_voxels(&self) -> u64 {
+        // SAFETY: live features.
+        unsafe { sys::kissm_features_num_voxels(self.raw.as_ptr()) }
+    }
+    /// Voxels with a descriptor.
+    pub fn num_keypoints(&self) -> u64 {
+        // SAFETY: live features.
+        unsafe { sys::kissm_features_num_keypoints(self.raw.as_ptr()) }
+    }
+}
+
+impl Drop for Features {
+    fn drop(&mut self) {
+        // SAFETY: the pointer came from kissm_features_compute and is destroyed exactly once.
+        unsafe { sys::kissm_features_destroy(self.raw.as_ptr()) }
+    }
+}
+
+impl fmt::Debug for Features {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Features")
+            .field("num_points", &self.num_points())
+            .field("num_voxels", &self.num_voxels())
+            .field("num_keypoints", &self.num_keypoints())
+            .finish()
+    }
+}

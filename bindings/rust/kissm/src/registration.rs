@@ -1,0 +1,242 @@
+//! [`Registration`]: the pose and every number behind the decision to trust it.
+
+use kissm_sys as sys;
+
+use crate::error::static_str;
+
+/// Why a registration gave no trustworthy pose ([`Registration::valid`] is `false`).
+///
+/// A well-formed input that gives no trustworthy pose is not an error: the call succeeds and says why.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Reason {
+    /// The pose is valid.
+    None,
+    /// A cloud has too few occupied voxels to describe.
+    TooFewVoxels,
+    /// A cloud has too few points with a reliable descriptor.
+    TooFewFeatures,
+    /// Matching or pruning left too few correspondences.
+    TooFewCorrespondences,
+    /// The robust solver found no consistent rotation.
+    SolverFailed,
+    /// Final inliers below [`Config::min_inliers`](crate::Config::min_inliers).
+    TooFewInliers,
+    /// The inliers are collinear or planar: the pose is ambiguous.
+    Degenerate,
+    /// A reason this version of the crate does not know (from a newer library), with its code.
+    Other(i32),
+}
+
+impl Reason {
+    /// The reason of a `KISSM_REASON_*` code.
+    pub fn from_code(code: i32) -> Reason {
+        match code {
+            sys::KISSM_REASON_NONE => Reason::None,
+            sys::KISSM_REASON_TOO_FEW_VOXELS => Reason::TooFewVoxels,
+            sys::KISSM_REASON_TOO_FEW_FEATURES => Reason::TooFewFeatures,
+            sys::KISSM_REASON_TOO_FEW_CORRESPONDENCES => Reason::TooFewCorrespondences,
+            sys::KISSM_REASON_SOLVER_FAILED => Reason::SolverFailed,
+            sys::KISSM_REASON_TOO_FEW_INLIERS => Reason::TooFewInliers,
+            sys::KISSM_REASON_DEGENERATE => Reason::Degenerate,
+            other => Reason::Other(other),
+        }
+    }
+
+    /// The `KISSM_REASON_*` code.
+    pub fn code(self) -> i32 {
+        match self {
+            Reason::None => sys::KISSM_REASON_NONE,
+            Reason::TooFewVoxels => sys::KISSM_REASON_TOO_FEW_VOXELS,
+            Reason::TooFewFeatures => sys::KISSM_REASON_TOO_FEW_FEATURES,
+            Reason::TooFewCorrespondences => sys::KISSM_REASON_TOO_FEW_CORRESPONDENCES,
+            Reason::SolverFailed => sys::KISSM_REASON_SOLVER_FAILED,
+            Reason::TooFewInliers => sys::KISSM_REASON_TOO_FEW_INLIERS,
+            Reason::Degenerate => sys::KISSM_REASON_DEGENERATE,
+            Reason::Other(code) => code,
+        }
+    }
+
+    /// The library's static description (`kissm_reason_string()`), such as `"none"`.
+    pub fn as_str(self) -> &'static str {
+        // SAFETY: no preconditions; returns a static string.
+        static_str(unsafe { sys::kissm_reason_string(self.code()) }, "unknown reason")
+    }
+}
+
+impl std::fmt::Display for Reason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Counts behind a registration, per stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[non_exhaustive]
+pub struct Counts {
+    /// Source points given.
+    pub source_points: u64,
+    /// Target points given.
+    pub target_points: u64,
+    /// Source points dropped as non-finite (under [`NonfinitePolicy::Drop`](crate::NonfinitePolicy::Drop)).
+    pub source_nonfinite: u64,
+    /// Target points dropped as non-finite.
+    pub target_nonfinite: u64,
+    /// Occupied source voxels.
+    pub source_voxels: u64,
+    /// Occupied target voxels.
+    pub target_voxels: u64,
+    /// Source voxels with a descriptor.
+    pub source_keypoints: u64,
+    /// Target voxels with a descriptor.
+    pub target_keypoints: u64,
+    /// Mutual, ratio-tested, capped matches.
+    pub initial_correspondences: u64,
+    /// Correspondences in the maximum k-core.
+    pub pruned_correspondences: u64,
+    /// The k of the maximum k-core.
+    pub max_core_number: u64,
+    /// Pruned correspondences the rotation solver kept.
+    pub rotation_inliers: u64,
+    /// Pruned correspondences within the solver bound after rotation and translation.
+    pub final_inliers: u64,
+}
+
+/// Wall-clock milliseconds per stage (stages not run are 0). The only values that differ between
+/// identical calls.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[non_exhaustive]
+pub struct Timings {
+    /// Input checks, recentring and voxelisation.
+    pub voxelize_ms: f64,
+    /// Neighbour search, normals, FPFH descriptors.
+    pub features_ms: f64,
+    /// Descriptor matching.
+    pub matching_ms: f64,
+    /// Compatibility graph and maximum k-core.
+    pub pruning_ms: f64,
+    /// GNC-TLS rotation, translation, inliers and validity.
+    pub solver_ms: f64,
+    /// Sum of the stages.
+    pub total_ms: f64,
+}
+
+/// The result of a registration: the rigid transform mapping source points into the target frame
+/// (`p_target = R p_source + t`), whether it can be trusted, and the counts and timings behind it.
+///
+/// The transform is NaN when no pose was estimated; when [`valid`](Registration::valid) is `false` but a
+/// pose was estimated, it is kept for inspection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Registration {
+    /// Whether the pose can be trusted (see [`reason`](Registration::reason) and the counts).
+    pub valid: bool,
+    /// Why the pose is not valid ([`Reason::None`] when it is).
+    pub reason: Reason,
+    /// The 4 x 4 homogeneous transform, `transform[row][col]`.
+    pub transform: [[f64; 4]; 4],
+    /// The rotation `R`, `rotation[row][col]`.
+    pub rotation: [[f64; 3]; 3],
+    /// The translation `t`.
+    pub translation: [f64; 3],
+    /// Counts per stage.
+    pub counts: Counts,
+    /// Final inliers / initial correspondences (0 when there are none).
+    pub inlier_ratio: f64,
+    /// RMS of `|R a + t - b|` over the final inliers, in the clouds' unit (NaN when there are none).
+    pub residual_rms: f64,
+    /// The solver's inlier bound, in the clouds' unit.
+    pub noise_bound: f64,
+    /// Square roots of the eigenvalues (descending) of the inliers' source covariance: how well spread
+    /// the inliers are.
+    pub inlier_extent: [f64; 3],
+    /// Milliseconds per stage.
+    pub timings: Timings,
+}
+
+impl Registration {
+    pub(crate) fn from_raw(r: &sys::kissm_result) -> Registration {
+        let mut transform = [[0.0; 4]; 4];
+        for (row, out) in transform.iter_mut().enumerate() {
+            out.copy_from_slice(&r.transform[4 * row..4 * row + 4]);
+        }
+        let mut rotation = [[0.0; 3]; 3];
+        for (row, out) in rotation.iter_mut().enumerate() {
+            out.copy_from_slice(&r.rotation[3 * row..3 * row + 3]);
+        }
+        Registration {
+            valid: r.valid != 0,
+            reason: Reason::from_code(r.reason),
+            transform,
+            rotation,
+            translation: r.translation,
+            counts: Counts {
+                source_points: r.num_source_points,
+                target_points: r.num_target_points,
+                source_nonfinite: r.num_source_nonfinite,
+                target_nonfinite: r.num_target_nonfinite,
+                source_voxels: r.num_source_voxels,
+                target_voxels: r.num_target_voxels,
+                source_keypoints: r.num_source_keypoints,
+                target_keypoints: r.num_target_keypoints,
+                initial_correspondences: r.num_initial_correspondences,
+                pruned_correspondences: r.num_pruned_correspondences,
+                max_core_number: r.max_core_number,
+                rotation_inliers: r.num_rotation_inliers,
+                final_inliers: r.num_final_inliers,
+            },
+            inlier_ratio: r.inlier_ratio,
+            residual_rms: r.residual_rms,
+            noise_bound: r.noise_bound,
+            inlier_extent: r.inlier_extent,
+            timings: Timings {
+                voxelize_ms: r.time_voxelize_ms,
+                features_ms: r.time_features_ms,
+                matching_ms: r.time_matching_ms,
+                pruning_ms: r.time_pruning_ms,
+                solver_ms: r.time_solver_ms,
+                total_ms: r.time_total_ms,
+            },
+        }
+    }
+
+    /// Final inliers (the same as `counts.final_inliers`).
+    pub fn final_inliers(&self) -> u64 {
+        self.counts.final_inliers
+    }
+
+    /// Whether a pose was estimated (the transform is finite), valid or not.
+    pub fn has_pose(&self) -> bool {
+        self.transform.iter().flatten().all(|v| v.is_finite())
+    }
+
+    /// Maps a source point into the target frame: `R p + t`.
+    pub fn transform_point(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = &self.rotation;
+        let t = &self.translation;
+        [
+            r[0][0] * p[0] + r[0][1] * p[1] + r[0][2] * p[2] + t[0],
+            r[1][0] * p[0] + r[1][1] * p[1] + r[1][2] * p[2] + t[1],
+            r[2][0] * p[0] + r[2][1] * p[1] + r[2][2] * p[2] + t[2],
+        ]
+    }
+
+    /// Whether two results are identical bit for bit in everything but the timings (the library's
+    /// determinism promise: same input and config give the same bits, whatever the thread count).
+    pub fn same_result(&self, other: &Registration) -> bool {
+        fn bits<const N: usize>(a: &[f64; N], b: &[f64; N]) -> bool {
+            a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        }
+        self.valid == other.valid
+            && self.reason == other.reason
+            && self.counts == other.counts
+            && self.transform.iter().zip(&other.transform).all(|(a, b)| bits(a, b))
+            && self.rotation.iter().zip(&other.rotation).all(|(a, b)| bits(a, b))
+            && bits(&self.translation, &other.translation)
+            && bits(
+                &[self.inlier_ratio, self.residual_rms, self.noise_bound],
+                &[other.inlier_ratio, other.residual_rms, other.noise_bound],
+            )
+            && bits(&self.inlier_extent, &other.inlier_extent)
+    }
+}

@@ -1,0 +1,380 @@
+//! API surface without registrations of real size: versions, config defaults and validation, error
+//! mapping for every reachable status code, point views, file reading, and the Send/Sync contract.
+
+mod common;
+
+use std::io::Write as _;
+
+use kissm::{
+    AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonfinitePolicy, PointsView,
+    Reason, Viewpoint,
+};
+use kissm_sys as sys;
+
+#[test]
+fn version_matches_header() {
+    kissm::check_library().expect("the linked library matches the bindings");
+    assert_eq!(kissm::version_number(), sys::KISSM_VERSION_NUMBER as u32);
+    assert_eq!(kissm::version().as_bytes(), &sys::KISSM_VERSION_STRING[..sys::KISSM_VERSION_STRING.len() - 1]);
+    assert_eq!(kissm::MIN_POINTS, 4);
+}
+
+#[test]
+fn struct_layouts_match_the_library() {
+    // SAFETY: no preconditions.
+    let sizes = unsafe {
+        [
+            sys::kissm_abi_sizeof(sys::KISSM_STRUCT_CONFIG),
+            sys::kissm_abi_sizeof(sys::KISSM_STRUCT_POINTS),
+            sys::kissm_abi_sizeof(sys::KISSM_STRUCT_RESULT),
+        ]
+    };
+    assert_eq!(sizes[0] as usize, std::mem::size_of::<sys::kissm_config>());
+    assert_eq!(sizes[1] as usize, std::mem::size_of::<sys::kissm_points>());
+    assert_eq!(sizes[2] as usize, std::mem::size_of::<sys::kissm_result>());
+}
+
+#[test]
+fn config_defaults_are_the_documented_ones() {
+    let c = Config::default();
+    assert_eq!(c.num_threads(), 0);
+    assert_eq!(c.voxel_size(), 0.3);
+    assert_eq!(c.normal_radius_gain(), 3.5);
+    assert_eq!(c.fpfh_radius_gain(), 5.0);
+    assert_eq!(c.max_linearity(), 0.99);
+    assert_eq!(c.ratio_test(), 0.9);
+    assert_eq!(c.prune_noise_bound_gain(), 1.0);
+    assert_eq!(c.solver_noise_bound_gain(), 0.75);
+    assert_eq!(c.noise_bound_max(), 0.0);
+    assert_eq!(c.viewpoint(), Viewpoint::Fixed([0.0; 3]));
+    assert_eq!(c.min_normal_neighbors(), 3);
+    assert_eq!(c.max_correspondences(), 5000);
+    assert_eq!(c.min_inliers(), 15);
+    assert_eq!(c.nonfinite_policy(), NonfinitePolicy::Reject);
+    c.validate().expect("defaults are valid");
+    // The builder starts from the same values.
+    let built = Config::builder().build().unwrap();
+    assert_eq!(format!("{built:?}"), format!("{c:?}"));
+    assert!(c.as_raw().log_fn.is_none() && c.as_raw().progress_fn.is_none());
+}
+
+#[test]
+fn builder_sets_every_field() {
+    let c = Config::builder()
+        .num_threads(3)
+        .voxel_size(0.25)
+        .normal_radius_gain(3.0)
+        .fpfh_radius_gain(6.0)
+        .max_linearity(0.9)
+        .ratio_test(0.8)
+        .prune_noise_bound_gain(1.5)
+        .solver_noise_bound_gain(0.5)
+        .noise_bound_max(0.2)
+        .viewpoint(Viewpoint::Fixed([1.0, 2.0, 3.0]))
+        .min_normal_neighbors(5)
+        .max_correspondences(1000)
+        .min_inliers(12)
+        .nonfinite_policy(NonfinitePolicy::Drop)
+        .build()
+        .unwrap();
+    assert_eq!(c.num_threads(), 3);
+    assert_eq!(c.voxel_size(), 0.25);
+    assert_eq!(c.normal_radius_gain(), 3.0);
+    assert_eq!(c.fpfh_radius_gain(), 6.0);
+    assert_eq!(c.max_linearity(), 0.9);
+    assert_eq!(c.ratio_test(), 0.8);
+    assert_eq!(c.prune_noise_bound_gain(), 1.5);
+    assert_eq!(c.solver_noise_bound_gain(), 0.5);
+    assert_eq!(c.noise_bound_max(), 0.2);
+    assert_eq!(c.viewpoint(), Viewpoint::Fixed([1.0, 2.0, 3.0]));
+    assert_eq!(c.min_normal_neighbors(), 5);
+    assert_eq!(c.max_correspondences(), 1000);
+    assert_eq!(c.min_inliers(), 12);
+    assert_eq!(c.nonfinite_policy(), NonfinitePolicy::Drop);
+    let center = c.to_builder().viewpoint(Viewpoint::CloudCenter).build().unwrap();
+    assert_eq!(center.viewpoint(), Viewpoint::CloudCenter);
+    assert_eq!(center.min_inliers(), 12);
+    // The matcher keeps the config it was created with.
+    let m = Matcher::new(&center).unwrap();
+    assert_eq!(format!("{:?}", m.config()), format!("{center:?}"));
+}
+
+fn invalid(builder: kissm::ConfigBuilder, field: &str) {
+    let err = builder.build().expect_err(field);
+    assert_eq!(err.kind(), ErrorKind::InvalidArgument, "{field}: {err}");
+    assert_eq!(err.code(), sys::KISSM_ERR_INVALID_ARGUMENT);
+    assert!(err.message().contains(field), "the message names {field}: {err}");
+    assert!(err.to_string().contains(err.message()));
+}
+
+#[test]
+fn invalid_config_values_are_errors_not_panics() {
+    let b = Config::builder;
+    invalid(b().voxel_size(0.0), "voxel_size");
+    invalid(b().voxel_size(-0.5), "voxel_size");
+    invalid(b().voxel_size(f64::NAN), "voxel_size");
+    invalid(b().voxel_size(f64::INFINITY), "voxel_size");
+    invalid(b().num_threads(1025), "num_threads");
+    invalid(b().num_threads(usize::MAX), "num_threads");
+    invalid(b().fpfh_radius_gain(1.0), "fpfh_radius_gain");
+    invalid(b().fpfh_radius_gain(51.0), "fpfh_radius_gain");
+    invalid(b().normal_radius_gain(0.0), "normal_radius_gain");
+    invalid(b().normal_radius_gain(6.0), "normal_radius_gain");
+    invalid(b().max_linearity(0.0), "max_linearity");
+    invalid(b().ratio_test(1.5), "ratio_test");
+    invalid(b().prune_noise_bound_gain(0.0), "prune_noise_bound_gain");
+    invalid(b().solver_noise_bound_gain(-1.0), "solver_noise_bound_gain");
+    invalid(b().noise_bound_max(f64::NAN), "noise_bound_max");
+    invalid(b().viewpoint(Viewpoint::Fixed([0.0, f64::INFINITY, 0.0])), "viewpoint");
+    invalid(b().min_normal_neighbors(2), "min_normal_neighbors");
+    invalid(b().max_correspondences(usize::MAX), "max_correspondences");
+    invalid(b().min_inliers(2), "min_inliers");
+    // An unvalidated raw config is checked again by Matcher::new.
+    let mut raw = *Config::default().as_raw();
+    raw.voxel_size = -1.0;
+    let err = Matcher::new(&Config::from_raw(raw)).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::InvalidArgument);
+    assert!(err.message().contains("voxel_size"), "{err}");
+    assert!(Matcher::with_voxel_size(0.0).is_err());
+}
+
+#[test]
+fn error_kinds_map_every_code() {
+    let codes = [
+        (sys::KISSM_ERR_INVALID_ARGUMENT, ErrorKind::InvalidArgument),
+        (sys::KISSM_ERR_NULL_ARGUMENT, ErrorKind::NullArgument),
+        (sys::KISSM_ERR_EMPTY_INPUT, ErrorKind::EmptyInput),
+        (sys::KISSM_ERR_TOO_FEW_POINTS, ErrorKind::TooFewPoints),
+        (sys::KISSM_ERR_NONFINITE, ErrorKind::NonFinite),
+        (sys::KISSM_ERR_VOXEL_RANGE, ErrorKind::VoxelRange),
+        (sys::KISSM_ERR_STRUCT_SIZE, ErrorKind::StructSize),
+        (sys::KISSM_ERR_OUT_OF_MEMORY, ErrorKind::OutOfMemory),
+        (sys::KISSM_ERR_CANCELLED, ErrorKind::Cancelled),
+        (sys::KISSM_ERR_FEATURES_MISMATCH, ErrorKind::FeaturesMismatch),
+        (sys::KISSM_ERR_IO, ErrorKind::Io),
+        (sys::KISSM_ERR_PARSE, ErrorKind::Parse),
+        (sys::KISSM_ERR_UNSUPPORTED_FORMAT, ErrorKind::UnsupportedFormat),
+        (sys::KISSM_ERR_INTERNAL, ErrorKind::Internal),
+    ];
+    let mut descriptions = std::collections::HashSet::new();
+    for (code, kind) in codes {
+        assert_eq!(ErrorKind::from_code(code), kind);
+        assert!(descriptions.insert(kissm::status_string(code)), "distinct description for {code}");
+    }
+    assert_eq!(ErrorKind::from_code(-1000), ErrorKind::Unknown);
+    assert_eq!(ErrorKind::from_code(0), ErrorKind::Unknown);
+    assert_eq!(kissm::status_string(-1000), "unknown status");
+}
+
+#[test]
+fn reasons_round_trip() {
+    for code in 0..=6 {
+        let reason = Reason::from_code(code);
+        assert_eq!(reason.code(), code);
+        assert!(!matches!(reason, Reason::Other(_)));
+        assert!(!reason.as_str().is_empty());
+    }
+    assert_eq!(Reason::from_code(0), Reason::None);
+    assert_eq!(Reason::from_code(99), Reason::Other(99));
+    assert_eq!(Reason::Other(99).code(), 99);
+    assert_eq!(Reason::None.to_string(), "none");
+}
+
+fn line(n: usize) -> Vec<[f64; 3]> {
+    (0..n).map(|i| [i as f64 * 0.1, (i % 7) as f64 * 0.13, (i % 3) as f64 * 0.2]).collect()
+}
+
+fn register_err(source: &dyn Fn() -> Vec<[f64; 3]>, config: &Config) -> Error {
+    let mut m = Matcher::new(config).unwrap();
+    let good = common::yard(5, 5.0);
+    m.register(&source(), &good).expect_err("the registration fails")
+}
+
+#[test]
+fn registration_errors_carry_code_and_message() {
+    let config = Config::default();
+    let empty = register_err(&Vec::new, &config);
+    assert_eq!(empty.kind(), ErrorKind::EmptyInput, "{empty}");
+    assert!(!empty.message().is_empty());
+
+    let few = register_err(&|| line(3), &config);
+    assert_eq!(few.kind(), ErrorKind::TooFewPoints, "{few}");
+    assert_eq!(few.code(), sys::KISSM_ERR_TOO_FEW_POINTS);
+
+    let nan = register_err(
+        &|| {
+            let mut p = line(100);
+            p[42][1] = f64::NAN;
+            p
+        },
+        &config,
+    );
+    assert_eq!(nan.kind(), ErrorKind::NonFinite, "{nan}");
+
+    let all_nan = register_err(
+        &|| vec![[f64::NAN; 3]; 50],
+        &config.to_builder().nonfinite_policy(NonfinitePolicy::Drop).build().unwrap(),
+    );
+    assert_eq!(all_nan.kind(), ErrorKind::EmptyInput, "{all_nan}");
+
+    let huge = register_err(
+        &|| vec![[0.0, 0.0, 0.0], [1e4, 0.0, 0.0], [0.0, 1e4, 0.0], [0.0, 0.0, 1e4], [5.0, 5.0, 5.0]],
+        &Config::builder().voxel_size(0.001).build().unwrap(),
+    );
+    assert_eq!(huge.kind(), ErrorKind::VoxelRange, "{huge}");
+
+    // The error belongs to the failing call, and the next successful call is not affected.
+    let mut m = Matcher::new(&config).unwrap();
+    let pts = common::yard(5, 5.0);
+    assert!(m.register(&line(2), &pts).is_err());
+    let ok = m.register(&pts, &pts).expect("a good call after a failed one");
+    assert!(ok.counts.source_points > 0);
+}
+
+#[test]
+fn nonfinite_points_are_dropped_and_counted() {
+    let config = Config::builder().nonfinite_policy(NonfinitePolicy::Drop).build().unwrap();
+    let mut m = Matcher::new(&config).unwrap();
+    let mut source = common::yard(7, 5.0);
+    source[3] = [f64::NAN, 0.0, 0.0];
+    source[10] = [0.0, f64::INFINITY, 0.0];
+    let target = common::yard(8, 5.0);
+    let reg = m.register(&source, &target).unwrap();
+    assert_eq!(reg.counts.source_nonfinite, 2);
+    assert_eq!(reg.counts.target_nonfinite, 0);
+    assert_eq!(reg.counts.source_points, source.len() as u64);
+}
+
+#[test]
+fn degenerate_input_is_invalid_not_an_error() {
+    // A flat, featureless plane: accepted, but no trustworthy pose.
+    let mut rng = common::Rng::new(3);
+    let plane: Vec<[f64; 3]> = (0..5000).map(|_| [rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0]).collect();
+    let mut m = Matcher::with_voxel_size(0.3).unwrap();
+    let reg = m.register(&plane, &plane).expect("well-formed input is not an error");
+    assert!(!reg.valid);
+    assert_ne!(reg.reason, Reason::None);
+}
+
+#[test]
+fn features_from_another_config_are_rejected() {
+    let cloud = common::yard(9, 5.0);
+    let mut a = Matcher::with_voxel_size(0.3).unwrap();
+    let mut b = Matcher::with_voxel_size(0.5).unwrap();
+    let fa = a.compute_features(&cloud).unwrap();
+    let fb = b.compute_features(&cloud).unwrap();
+    assert_eq!(fa.num_points(), cloud.len() as u64);
+    assert!(fa.num_keypoints() > 0 && fa.num_keypoints() <= fa.num_voxels());
+    let err = a.register_features(&fa, &fb).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::FeaturesMismatch, "{err}");
+    assert!(!err.message().is_empty());
+    let err = a.compute_features(&line(2)).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::TooFewPoints);
+}
+
+#[test]
+fn points_views() {
+    let packed32: Vec<[f32; 3]> = vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+    assert_eq!(packed32.as_points().len(), 2);
+    assert_eq!(packed32.as_points().as_raw().scalar_type, sys::KISSM_SCALAR_FLOAT32);
+    assert_eq!(packed32.as_points().as_raw().stride_bytes, 0);
+    let arr = [[0.0f64; 3]; 5];
+    assert_eq!(arr.as_points().len(), 5);
+    assert_eq!(arr.as_points().as_raw().scalar_type, sys::KISSM_SCALAR_FLOAT64);
+    assert!(Vec::<[f64; 3]>::new().as_points().is_empty());
+
+    let xyzi = [0.0f32; 12];
+    let v = PointsView::strided_f32(&xyzi, 4).unwrap();
+    assert_eq!((v.len(), v.as_raw().stride_bytes), (3, 16));
+    // Sliced from a column offset, the last row's padding is missing: still 3 points.
+    assert_eq!(PointsView::strided_f32(&xyzi[1..], 4).unwrap().len(), 3);
+    assert_eq!(PointsView::strided_f64(&[0.0; 7], 5).unwrap().len(), 1);
+    assert_eq!(PointsView::strided_f64(&[0.0; 2], 3).unwrap().len(), 0);
+    assert_eq!(PointsView::strided_f64(&[0.0; 9], 3).unwrap().len(), 3);
+    assert_eq!(PointsView::strided_f32(&xyzi, usize::MAX).unwrap().len(), 1);
+    let err = PointsView::strided_f32(&xyzi, 2).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::InvalidArgument);
+    assert!(err.message().contains("stride"));
+    let view: PointsView = packed32.as_slice().into();
+    assert_eq!(format!("{view:?}"), "PointsView { len: 2, scalar: \"f32\", stride_bytes: 0 }");
+}
+
+#[test]
+fn read_points_formats_and_errors() {
+    let dir = common::temp_dir("read");
+    let xyz = dir.join("cloud.xyz");
+    std::fs::write(&xyz, "0 0 0\n1.5 2 3\n-4 5.25 6\n").unwrap();
+    let cloud = kissm::read_points(&xyz).unwrap();
+    assert_eq!(cloud.len(), 3);
+    assert_eq!(cloud.as_slice()[1], [1.5, 2.0, 3.0]);
+    assert_eq!(cloud.to_vec()[2], [-4.0, 5.25, 6.0]);
+    assert_eq!(cloud.as_points().len(), 3);
+
+    // Raw float32 xyz needs the explicit format: by extension .bin is KITTI x y z intensity.
+    let bin = dir.join("cloud.bin");
+    let mut f = std::fs::File::create(&bin).unwrap();
+    for v in [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0] {
+        f.write_all(&v.to_le_bytes()).unwrap();
+    }
+    drop(f);
+    let as_xyz = kissm::read_points_with_format(&bin, Format::BinXyz).unwrap();
+    assert_eq!(as_xyz.len(), 4);
+    assert_eq!(as_xyz.as_slice()[3], [10.0, 11.0, 12.0]);
+    let as_kitti = kissm::read_points(&bin).unwrap();
+    assert_eq!(as_kitti.len(), 3);
+    assert_eq!(as_kitti.as_slice()[1], [5.0, 6.0, 7.0]);
+
+    let missing = kissm::read_points(dir.join("missing.ply")).unwrap_err();
+    assert_eq!(missing.kind(), ErrorKind::Io, "{missing}");
+    assert!(missing.message().contains("missing.ply"), "{missing}");
+
+    let bad_ply = dir.join("bad.ply");
+    std::fs::write(&bad_ply, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n").unwrap();
+    let parse = kissm::read_points(&bad_ply).unwrap_err();
+    assert_eq!(parse.kind(), ErrorKind::Parse, "{parse}");
+
+    let unknown = dir.join("cloud.unknown");
+    std::fs::write(&unknown, "something that is no point file").unwrap();
+    let unsupported = kissm::read_points(&unknown).unwrap_err();
+    assert_eq!(unsupported.kind(), ErrorKind::UnsupportedFormat, "{unsupported}");
+
+    let nul = kissm::read_points("bad\0name.ply").unwrap_err();
+    assert_eq!(nul.kind(), ErrorKind::InvalidArgument);
+
+    assert_eq!(Format::from_name("BIN_XYZ"), Some(Format::BinXyz));
+    assert_eq!(Format::from_name("bin_xyz_f32"), Some(Format::BinXyz));
+    assert_eq!(Format::from_name("kitti_bin_xyzi_f32"), Some(Format::KittiBin));
+    assert_eq!(Format::from_name("npy_xyz"), Some(Format::Npy));
+    assert_eq!(Format::from_name("ply").map(Format::code), Some(sys::KISSM_FORMAT_PLY));
+    assert_eq!(Format::from_name("las"), None);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// Compile-time thread-safety contract.
+fn assert_send<T: Send>() {}
+fn assert_sync<T: Sync>() {}
+
+/// Resolves only when `T` is not `Sync` (otherwise the call below is ambiguous and fails to compile).
+trait NotSync<A> {
+    fn check() {}
+}
+impl<T: ?Sized> NotSync<()> for T {}
+impl<T: ?Sized + Sync> NotSync<u8> for T {}
+
+#[test]
+fn thread_safety_contract() {
+    assert_send::<Matcher>();
+    <Matcher as NotSync<_>>::check();
+    assert_send::<Features>();
+    assert_sync::<Features>();
+    assert_send::<CancelHandle>();
+    assert_sync::<CancelHandle>();
+    assert_send::<Cloud>();
+    assert_sync::<Cloud>();
+    assert_send::<Config>();
+    assert_sync::<Config>();
+    assert_send::<Error>();
+    assert_sync::<Error>();
+    assert_send::<PointsView<'static>>();
+    assert_sync::<PointsView<'static>>();
+}

@@ -1,0 +1,186 @@
+//! Registrations of a synthetic pair (no data needed): accuracy, every input form, determinism across
+//! thread counts and matcher reuse, feature reuse, threads, and cancellation.
+
+mod common;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use common::{synthetic_pair, Pose, SYNTHETIC_VOXEL};
+use kissm::{Config, ErrorKind, Matcher, PointsView, Reason, Registration};
+
+fn config(threads: usize) -> Config {
+    Config::builder().voxel_size(SYNTHETIC_VOXEL).num_threads(threads).build().unwrap()
+}
+
+fn check_accurate(reg: &Registration, truth: &Pose) {
+    assert!(reg.valid, "valid pose expected, got reason {} ({} inliers)", reg.reason, reg.final_inliers());
+    assert_eq!(reg.reason, Reason::None);
+    assert!(reg.has_pose());
+    let (rot, trans) = truth.errors(&Pose::from_matrix(&reg.transform));
+    assert!(rot < 1.0 && trans < 0.2, "rotation error {rot} deg, translation error {trans}");
+    // The transform, rotation and translation agree.
+    for i in 0..3 {
+        assert_eq!(reg.transform[i][3], reg.translation[i]);
+        for j in 0..3 {
+            assert_eq!(reg.transform[i][j], reg.rotation[i][j]);
+        }
+    }
+    assert_eq!(reg.transform[3], [0.0, 0.0, 0.0, 1.0]);
+    let p = [1.0, 2.0, 3.0];
+    assert_eq!(reg.transform_point(p), Pose::from_matrix(&reg.transform).apply(p));
+    let c = &reg.counts;
+    assert!(c.final_inliers >= 15 && c.final_inliers <= c.pruned_correspondences);
+    assert!(c.pruned_correspondences <= c.initial_correspondences);
+    assert!(c.source_keypoints <= c.source_voxels && c.source_voxels <= c.source_points);
+    assert!(reg.timings.total_ms > 0.0);
+}
+
+#[test]
+fn synthetic_pair_registers_accurately() {
+    let pair = synthetic_pair();
+    let mut m = Matcher::new(&config(2)).unwrap();
+    let reg = m.register(&pair.source, &pair.target).unwrap();
+    check_accurate(&reg, &pair.truth);
+    assert_eq!(reg.counts.source_points, pair.source.len() as u64);
+    assert_eq!(reg.counts.target_points, pair.target.len() as u64);
+    assert!(reg.residual_rms.is_finite() && reg.residual_rms < reg.noise_bound);
+    assert!(reg.inlier_ratio > 0.0 && reg.inlier_ratio <= 1.0);
+}
+
+#[test]
+fn results_do_not_depend_on_threads_or_reuse() {
+    let pair = synthetic_pair();
+    let reference = Matcher::new(&config(1)).unwrap().register(&pair.source, &pair.target).unwrap();
+    for threads in [2, 0] {
+        let mut m = Matcher::new(&config(threads)).unwrap();
+        let first = m.register(&pair.source, &pair.target).unwrap();
+        let again = m.register(&pair.source, &pair.target).unwrap();
+        assert!(first.same_result(&reference), "threads {threads}: {first:?} vs {reference:?}");
+        assert!(again.same_result(&reference), "threads {threads}, reused matcher");
+    }
+}
+
+#[test]
+fn every_input_form_gives_the_same_result() {
+    let pair = synthetic_pair();
+    let mut m = Matcher::new(&config(2)).unwrap();
+    let packed = m.register(&pair.source, &pair.target).unwrap();
+
+    // f64 x, y, z, w rows through a strided view: the same values, so the same bits.
+    let source_rows: Vec<f64> = pair.source.iter().flat_map(|p| [p[0], p[1], p[2], 7.0]).collect();
+    let target_rows: Vec<f64> = pair.target.iter().flat_map(|p| [p[0], p[1], p[2], -1.0]).collect();
+    let strided = m
+        .register(
+            &PointsView::strided_f64(&source_rows, 4).unwrap(),
+            &PointsView::strided_f64(&target_rows, 4).unwrap(),
+        )
+        .unwrap();
+    assert!(strided.same_result(&packed));
+    // Slices and references work as well.
+    let sliced = m.register(pair.source.as_slice(), &&pair.target[..]).unwrap();
+    assert!(sliced.same_result(&packed));
+    assert!(kissm::register(&config(1), &pair.source, &pair.target).unwrap().same_result(&packed));
+
+    // float32: packed and strided float32 agree with each other, and register well.
+    let source32: Vec<[f32; 3]> = pair.source.iter().map(|p| p.map(|v| v as f32)).collect();
+    let target32: Vec<[f32; 3]> = pair.target.iter().map(|p| p.map(|v| v as f32)).collect();
+    let packed32 = m.register(&source32, &target32).unwrap();
+    check_accurate(&packed32, &pair.truth);
+    let rows32: Vec<f32> = source32.iter().flat_map(|p| [0.5, p[0], p[1], p[2], 0.25]).collect();
+    let strided32 = m.register(&PointsView::strided_f32(&rows32[1..], 5).unwrap(), &target32).unwrap();
+    assert!(strided32.same_result(&packed32));
+    // Mixed precisions.
+    let mixed = m.register(&source32, &pair.target).unwrap();
+    check_accurate(&mixed, &pair.truth);
+}
+
+#[test]
+fn feature_reuse_matches_direct_registration() {
+    let pair = synthetic_pair();
+    let mut m = Matcher::new(&config(2)).unwrap();
+    let direct = m.register(&pair.source, &pair.target).unwrap();
+    let fs = m.compute_features(&pair.source).unwrap();
+    let ft = m.compute_features(&pair.target).unwrap();
+    assert_eq!(fs.num_points(), pair.source.len() as u64);
+    assert_eq!(fs.num_voxels(), direct.counts.source_voxels);
+    assert_eq!(ft.num_keypoints(), direct.counts.target_keypoints);
+    for _ in 0..2 {
+        let reused = m.register_features(&fs, &ft).unwrap();
+        assert!(reused.same_result(&direct), "{reused:?} vs {direct:?}");
+        assert_eq!(reused.timings.voxelize_ms, 0.0);
+        assert_eq!(reused.timings.features_ms, 0.0);
+    }
+    // Features outlive the matcher that computed them and work with another one.
+    drop(m);
+    let mut other = Matcher::new(&config(1)).unwrap();
+    assert!(other.register_features(&fs, &ft).unwrap().same_result(&direct));
+}
+
+#[test]
+fn matchers_on_threads_share_features() {
+    let pair = synthetic_pair();
+    let reference = Matcher::new(&config(1)).unwrap().register(&pair.source, &pair.target).unwrap();
+    let mut m = Matcher::new(&config(1)).unwrap();
+    let fs = Arc::new(m.compute_features(&pair.source).unwrap());
+    let ft = Arc::new(m.compute_features(&pair.target).unwrap());
+    let handles: Vec<_> = (0..3)
+        .map(|i| {
+            let (fs, ft) = (Arc::clone(&fs), Arc::clone(&ft));
+            std::thread::spawn(move || {
+                let mut m = Matcher::new(&config(1)).unwrap();
+                if i == 0 {
+                    // One thread registers the raw clouds while the others use the shared features.
+                    m.register(&synthetic_pair().source, &synthetic_pair().target).unwrap()
+                } else {
+                    m.register_features(&fs, &ft).unwrap()
+                }
+            })
+        })
+        .collect();
+    for h in handles {
+        let reg = h.join().expect("no panic in a registration thread");
+        assert!(reg.same_result(&reference));
+    }
+    // A matcher moves to another thread and back (Send).
+    let moved = std::thread::spawn(move || {
+        let reg = m.register(&synthetic_pair().source, &synthetic_pair().target).unwrap();
+        (m, reg)
+    });
+    let (mut m, reg) = moved.join().unwrap();
+    assert!(reg.same_result(&reference));
+    assert!(m.register_features(&fs, &ft).unwrap().same_result(&reference));
+}
+
+#[test]
+fn cancel_stops_a_running_call_and_the_matcher_stays_usable() {
+    let pair = synthetic_pair();
+    let mut m = Matcher::new(&config(1)).unwrap();
+    // A request made while no call runs is cleared when the next call starts.
+    m.cancel_handle().cancel();
+    let reference = m.register(&pair.source, &pair.target).expect("a stale cancel request is cleared");
+
+    let cancel = m.cancel_handle();
+    let done = Arc::new(AtomicBool::new(false));
+    let spammer = {
+        let done = Arc::clone(&done);
+        std::thread::spawn(move || {
+            while !done.load(Ordering::Relaxed) {
+                cancel.cancel();
+                std::thread::yield_now();
+            }
+        })
+    };
+    let outcome = m.register(&pair.source, &pair.target);
+    done.store(true, Ordering::Relaxed);
+    spammer.join().unwrap();
+    let err = outcome.expect_err("cancelled while running");
+    assert_eq!(err.kind(), ErrorKind::Cancelled, "{err}");
+
+    let after = m.register(&pair.source, &pair.target).unwrap();
+    assert!(after.same_result(&reference));
+    // The handle keeps the matcher alive after the Matcher is dropped.
+    let handle = m.cancel_handle();
+    drop(m);
+    handle.cancel();
+}
