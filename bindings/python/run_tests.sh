@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# The Python binding's suite: makes a venv, installs the package the way users do
+# (pip install ./bindings/python[test], which builds libkissm again), then runs pytest.
+#
+# Run by tools/test.sh with KISSM_BUILD_DIR (the CMake build: its `kissm` CLI is the reference for the
+# bitwise cross-checks) and KISSM_DATA_DIR (the real scans; those tests skip when absent). Both default as
+# in tools/test.sh. Extra arguments go to pytest (e.g. -k cli -x).
+set -euo pipefail
+here=$(cd "$(dirname "$0")/../.." && pwd)
+build=${KISSM_BUILD_DIR:-$here/build}
+data_dir=${KISSM_DATA_DIR:-$here/../shared/data}
+venv=${KISSM_PYTHON_VENV:-$build/venv-python}
+python=${PYTHON:-python3}
+mkdir -p "$build"
+
+# ---- a venv (Debian's python3 needs python3-venv for it) ---------------------------------------------
+make_venv() { "$python" -m venv "$venv" >/dev/null 2>&1; }
+if ! "$python" -c 'import sys; assert sys.version_info >= (3, 10)' >/dev/null 2>&1; then
+  echo "python: '$python' is not a working Python >= 3.10 (set PYTHON=/path/to/python3)" >&2
+  exit 1
+fi
+if ! "$venv/bin/python" -c 'import sys' >/dev/null 2>&1; then
+  rm -rf "$venv"
+  if ! make_venv; then
+    if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
+      echo "python: installing python3-venv"
+      export DEBIAN_FRONTEND=noninteractive
+      apt-get update -qq
+      apt-get install -y -qq --no-install-recommends python3-venv python3-pip >/dev/null
+      rm -rf "$venv"
+      make_venv
+    else
+      echo "python: '$python -m venv' failed; install python3-venv (sudo apt-get install python3-venv)" >&2
+      exit 1
+    fi
+  fi
+fi
+py="$venv/bin/python"
+echo "python: $("$py" --version) in $venv"
+
+# ---- the package, built and installed as users do ----------------------------------------------------
+# The CMake build directory is kept between runs (incremental rebuilds); a failed build is retried once
+# from scratch in case the kept directory is stale.
+pip_build_dir="$build/python-build"
+install_package() {
+  "$py" -m pip install --quiet --disable-pip-version-check \
+    --config-settings=build-dir="$pip_build_dir" "$here/bindings/python[test]"
+}
+start=$(date +%s)
+"$py" -m pip uninstall --quiet --yes kissm >/dev/null 2>&1 || true
+if ! install_package; then
+  echo "python: build failed; retrying with a clean build directory" >&2
+  rm -rf "$pip_build_dir"
+  install_package
+fi
+echo "python: pip install ./bindings/python[test] took $(($(date +%s) - start)) s"
+
+# ---- the tests: against the installed package and its own library -----------------------------------
+unset KISSM_LIBRARY
+# (The package sits under src/, so running from bindings/python cannot import the source tree instead.)
+cd "$here/bindings/python"
+status=0
+KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir "$py" -m pytest -p no:cacheprovider tests "$@" || status=$?
+if ((status == 5)); then
+  echo "python: pytest collected no tests" >&2
+  exit 1
+fi
+exit "$status"

@@ -1,0 +1,99 @@
+"""kissm: fast, robust, deterministic global 3D point cloud registration.
+
+A thin Python layer over the kissm C library (loaded through cffi in ABI mode)::
+
+    import kissm
+
+    result = kissm.register(source_xyz, target_xyz, voxel_size=0.5)  # (N, 3) arrays
+    if result.valid:
+        aligned = source_xyz @ result.rotation.T + result.translation
+
+    with kissm.Matcher(voxel_size=0.5, num_threads=2) as matcher:     # reuse settings and threads
+        target = matcher.features(target_xyz)                       # describe a map once...
+        for scan in scans:
+            print(matcher.register_features(matcher.features(scan), target))  # ...match it many times
+
+Results are bitwise identical to the C library's (and the ``kissm`` CLI's) on the same input, whatever
+``num_threads``. The library never prints; neither does this package.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ._config import Config, NonFinitePolicy, ViewpointMode
+from ._errors import (
+    CancelledError,
+    EmptyInputError,
+    Error,
+    FeaturesMismatchError,
+    InternalError,
+    InvalidArgumentError,
+    IoError,
+    NonFiniteError,
+    NullArgumentError,
+    OutOfMemoryError,
+    ParseError,
+    StructSizeError,
+    TooFewPointsError,
+    UnsupportedFormatError,
+    VoxelRangeError,
+)
+from ._ffi import lib as _lib
+from ._ffi import library_path
+from ._ffi import text as _text
+from ._matcher import Features, Matcher
+from ._points import PointsLike, as_point_array
+from ._read import FORMATS, read_points
+from ._result import Result
+
+#: The library's version (kissm_version_string()); equal to the package's.
+__version__: str = _text(_lib.kissm_version_string())
+
+#: Fewest points a cloud may have (fewer raise TooFewPointsError).
+MIN_POINTS: int = int(_lib.KISSM_MIN_POINTS)
+
+
+def register(source: PointsLike, target: PointsLike, voxel_size: float, **config: Any) -> Result:
+    """Register ``source`` against ``target`` once: ``Matcher(voxel_size=voxel_size, **config).register(...)``.
+
+    ``voxel_size`` (the clouds' unit) has no default because it depends on the data: 0.3-0.5 for outdoor
+    LiDAR in metres, about 0.05 for indoor RGB-D fragments. Other keyword arguments are :class:`Config`
+    fields, e.g. ``num_threads=2`` or ``nonfinite_policy="drop"``. To register many pairs, keep a
+    :class:`Matcher`.
+    """
+    with Matcher(voxel_size=voxel_size, **config) as matcher:
+        return matcher.register(source, target)
+
+
+__all__ = [
+    "FORMATS",
+    "MIN_POINTS",
+    "CancelledError",
+    "Config",
+    "EmptyInputError",
+    "Error",
+    "Features",
+    "FeaturesMismatchError",
+    "InternalError",
+    "InvalidArgumentError",
+    "IoError",
+    "Matcher",
+    "NonFiniteError",
+    "NonFinitePolicy",
+    "NullArgumentError",
+    "OutOfMemoryError",
+    "ParseError",
+    "PointsLike",
+    "Result",
+    "StructSizeError",
+    "TooFewPointsError",
+    "UnsupportedFormatError",
+    "ViewpointMode",
+    "VoxelRangeError",
+    "__version__",
+    "as_point_array",
+    "library_path",
+    "read_points",
+    "register",
+]

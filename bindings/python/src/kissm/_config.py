@@ -1,0 +1,179 @@
+"""``kissm.Config``: every setting of ``kissm_config``, validated by the library at construction."""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+from collections.abc import Mapping
+from typing import Any, Literal
+
+from ._errors import check
+from ._ffi import ffi, lib
+
+NonFinitePolicy = Literal["reject", "drop"]
+ViewpointMode = Literal["fixed", "cloud_center"]
+
+#: Python names of the C enumerations (the fields hold the names; the ints are accepted too).
+NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "drop": lib.KISSM_NONFINITE_DROP}
+VIEWPOINT_MODES: dict[str, int] = {"fixed": lib.KISSM_VIEWPOINT_FIXED, "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER}
+_ENUMS: dict[str, dict[str, int]] = {"nonfinite_policy": NONFINITE_POLICIES, "viewpoint_mode": VIEWPOINT_MODES}
+
+_FLOAT_FIELDS = ("voxel_size", "normal_radius_gain", "fpfh_radius_gain", "max_linearity", "ratio_test",
+                 "prune_noise_bound_gain", "solver_noise_bound_gain", "noise_bound_max")
+_INT_FIELDS = ("num_threads", "min_normal_neighbors", "max_correspondences", "min_inliers", "log_level")
+
+
+def _new_c_config() -> Any:
+    c = ffi.new("kissm_config *")
+    check(lib.kissm_config_init(c, ffi.sizeof("kissm_config")))
+    return c
+
+
+def _enum_name(field: str, value: int) -> str | int:
+    for name, number in _ENUMS[field].items():
+        if number == value:
+            return name
+    return value
+
+
+def _library_defaults() -> dict[str, Any]:
+    c = _new_c_config()
+    values: dict[str, Any] = {name: float(getattr(c, name)) for name in _FLOAT_FIELDS}
+    values.update({name: int(getattr(c, name)) for name in _INT_FIELDS})
+    values["viewpoint"] = tuple(float(v) for v in c.viewpoint)
+    for field in _ENUMS:
+        values[field] = _enum_name(field, int(getattr(c, field)))
+    return values
+
+
+_DEFAULTS = _library_defaults()
+
+
+def _as_int(field: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"Config.{field} must be an int, not {type(value).__name__}")
+    return int(value)
+
+
+def _as_float(field: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"Config.{field} must be a real number, not {type(value).__name__}")
+    return float(value)
+
+
+def _as_enum(field: str, value: Any) -> str | int:
+    choices = _ENUMS[field]
+    if isinstance(value, str):
+        if value not in choices:
+            raise ValueError(f"Config.{field} is {value!r}; use one of {', '.join(map(repr, choices))}")
+        return value
+    # An int that names no choice is kept: the library rejects it with its own message.
+    return _enum_name(field, _as_int(field, value))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True, repr=False)
+class Config:
+    """Settings of a :class:`Matcher`: the fields of the C ``kissm_config``, with the library's defaults.
+
+    Lengths are in the clouds' unit (metres for LiDAR); every radius and noise bound is a gain times
+    ``voxel_size``. Invalid values raise :class:`ValueError` (a :class:`kissm.InvalidArgumentError`) with
+    the library's message when the Config is made. Configs are immutable, hashable and picklable; derive
+    one from another with :meth:`replace`.
+
+    Attributes:
+        voxel_size: voxel edge length, > 0; the one setting to choose per data set (0.3-0.5 m for outdoor
+            LiDAR, about 0.05 m for indoor RGB-D fragments).
+        num_threads: worker threads per call, 0..1024; 0 = all hardware threads. Results never depend on it.
+        normal_radius_gain: normal-estimation radius = gain * voxel_size; in (0, fpfh_radius_gain].
+        fpfh_radius_gain: FPFH radius = gain * voxel_size; in [1.5, 50].
+        max_linearity: voxels with (l1 - l2) / l1 above this get no normal; in (0, 1].
+        ratio_test: Lowe ratio on squared descriptor distances; in (0, 1]; 1 = off.
+        prune_noise_bound_gain: graph-pruning bound = gain * voxel_size; in (0, 1e6].
+        solver_noise_bound_gain: solver inlier bound = gain * voxel_size; in (0, 1e6].
+        noise_bound_max: cap on both bounds, in the clouds' unit; 0 = no cap.
+        viewpoint: sensor position (x, y, z) toward which normals point, under viewpoint_mode='fixed'.
+        min_normal_neighbors: neighbours needed for a normal and a descriptor; 3..100000.
+        max_correspondences: cap on the mutual matches kept, best ratio first; 3..100000.
+        min_inliers: final inliers needed for ``Result.valid``; 3..100000.
+        nonfinite_policy: 'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are
+            skipped and counted).
+        viewpoint_mode: 'fixed' (toward ``viewpoint``, in each cloud's frame: single scans) or
+            'cloud_center' (toward each cloud's bounding-box centre: maps, merged clouds).
+        log_level: most verbose level passed to a log callback (0..4); kept for completeness: the Python
+            package installs no log callback, and the library itself never prints.
+    """
+
+    voxel_size: float = _DEFAULTS["voxel_size"]
+    num_threads: int = _DEFAULTS["num_threads"]
+    normal_radius_gain: float = _DEFAULTS["normal_radius_gain"]
+    fpfh_radius_gain: float = _DEFAULTS["fpfh_radius_gain"]
+    max_linearity: float = _DEFAULTS["max_linearity"]
+    ratio_test: float = _DEFAULTS["ratio_test"]
+    prune_noise_bound_gain: float = _DEFAULTS["prune_noise_bound_gain"]
+    solver_noise_bound_gain: float = _DEFAULTS["solver_noise_bound_gain"]
+    noise_bound_max: float = _DEFAULTS["noise_bound_max"]
+    viewpoint: tuple[float, float, float] = _DEFAULTS["viewpoint"]
+    min_normal_neighbors: int = _DEFAULTS["min_normal_neighbors"]
+    max_correspondences: int = _DEFAULTS["max_correspondences"]
+    min_inliers: int = _DEFAULTS["min_inliers"]
+    nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]
+    viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
+    log_level: int = _DEFAULTS["log_level"]
+
+    def __post_init__(self) -> None:
+        set_field = object.__setattr__  # frozen: normalise through object
+        for name in _FLOAT_FIELDS:
+            set_field(self, name, _as_float(name, getattr(self, name)))
+        for name in _INT_FIELDS:
+            set_field(self, name, _as_int(name, getattr(self, name)))
+        for name in _ENUMS:
+            set_field(self, name, _as_enum(name, getattr(self, name)))
+        try:
+            viewpoint = tuple(_as_float("viewpoint", v) for v in self.viewpoint)
+        except TypeError:
+            raise TypeError(f"Config.viewpoint must be 3 real numbers, not {self.viewpoint!r}") from None
+        if len(viewpoint) != 3:
+            raise ValueError(f"Config.viewpoint must have 3 coordinates, not {len(viewpoint)}")
+        set_field(self, "viewpoint", viewpoint)
+        check(lib.kissm_config_validate(self._to_c()))
+
+    def _to_c(self) -> Any:
+        """A fresh ``kissm_config *`` holding these settings (no callbacks)."""
+        c = _new_c_config()
+        for name in _FLOAT_FIELDS:
+            setattr(c, name, getattr(self, name))
+        for name in _INT_FIELDS + tuple(_ENUMS):
+            value = getattr(self, name)
+            if isinstance(value, str):
+                value = _ENUMS[name][value]
+            try:
+                setattr(c, name, value)
+            except OverflowError:
+                raise ValueError(f"config.{name} is {value}; it does not fit in a 32-bit int") from None
+        for i in range(3):
+            c.viewpoint[i] = self.viewpoint[i]
+        return c
+
+    def replace(self, **changes: Any) -> Config:
+        """A copy with some fields changed (validated like a new Config)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as a plain dict (``Config(**config.to_dict()) == config``)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def __repr__(self) -> str:
+        changed = [f"{name}={value!r}" for name, value in self.to_dict().items() if value != _DEFAULTS[name]]
+        return f"kissm.Config({', '.join(changed)})"
+
+    def __reduce__(self) -> tuple[Any, tuple[Mapping[str, Any]]]:
+        return (_config_from_dict, (self.to_dict(),))
+
+
+def _config_from_dict(values: Mapping[str, Any]) -> Config:
+    return Config(**values)
+
+
+def default_config() -> Config:
+    """The library's defaults (``kissm_config_init``)."""
+    return Config()

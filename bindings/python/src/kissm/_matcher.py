@@ -1,0 +1,168 @@
+"""``kissm.Matcher`` and ``kissm.Features``: the C handles, owned, locked and released."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, NoReturn
+
+from ._config import Config
+from ._errors import check, raise_status
+from ._ffi import ffi, lib
+from ._points import PointsLike, points_view
+from ._result import Result
+
+
+class Features:
+    """A cloud described once (voxels, normals, FPFH descriptors), to be matched against many others.
+
+    Made by :meth:`Matcher.features`. Immutable: one Features object may be used by several threads and
+    matchers at once, and may outlive the matcher that made it. It can be matched by any matcher whose
+    descriptor settings (voxel size, radii, ``min_normal_neighbors``, ``max_linearity``, viewpoint) are the
+    same, else :class:`kissm.FeaturesMismatchError` is raised. Not picklable (the library has no
+    serialisation): pickle the points and recompute.
+    """
+
+    __slots__ = ("_ptr", "num_points", "num_voxels", "num_keypoints", "__weakref__")
+    _ptr: Any
+    num_points: int  #: points given
+    num_voxels: int  #: occupied voxels
+    num_keypoints: int  #: voxels with a descriptor
+
+    def __init__(self) -> None:
+        raise TypeError("kissm.Features objects are made by Matcher.features(cloud)")
+
+    @classmethod
+    def _adopt(cls, ptr: Any) -> Features:
+        self = object.__new__(cls)
+        self._ptr = ffi.gc(ptr, lib.kissm_features_destroy)
+        self.num_points = int(lib.kissm_features_num_points(ptr))
+        self.num_voxels = int(lib.kissm_features_num_voxels(ptr))
+        self.num_keypoints = int(lib.kissm_features_num_keypoints(ptr))
+        return self
+
+    def __repr__(self) -> str:
+        return (f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, "
+                f"{self.num_keypoints} keypoints>")
+
+    def __reduce__(self) -> NoReturn:
+        raise TypeError("kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
+                        "and call Matcher.features() again")
+
+
+class Matcher:
+    """A registration engine with fixed settings.
+
+    ``Matcher(config=None, **overrides)``: ``config`` is a :class:`Config` (default: the library's
+    defaults) and keyword arguments override its fields, e.g. ``Matcher(voxel_size=0.5, num_threads=2)``.
+    Invalid settings raise :class:`ValueError` here.
+
+    One Matcher may be shared between threads: its calls are serialised by a lock. Different Matchers run
+    in parallel (the GIL is released while the library works). Use it as a context manager, or call
+    :meth:`close`, to free it at once; otherwise it is freed when garbage-collected. A Matcher pickles as
+    its settings.
+    """
+
+    def __init__(self, config: Config | None = None, **overrides: Any) -> None:
+        if config is not None and not isinstance(config, Config):
+            raise TypeError(f"config must be a kissm.Config or None, not {type(config).__name__}")
+        config = config if config is not None else Config()
+        if overrides:
+            config = config.replace(**overrides)
+        out = ffi.new("kissm_matcher **")
+        check(lib.kissm_create(config._to_c(), out))
+        self._config = config
+        self._ptr: Any = ffi.gc(out[0], lib.kissm_destroy)
+        self._call_lock = threading.Lock()  # one C call at a time (the C matcher is single-threaded)
+        self._handle_lock = threading.Lock()  # guards _ptr between close() and cancel()
+
+    @property
+    def config(self) -> Config:
+        """The settings this matcher was made with."""
+        return self._config
+
+    @property
+    def closed(self) -> bool:
+        return self._ptr is None
+
+    def _handle(self) -> Any:
+        ptr = self._ptr
+        if ptr is None:
+            raise ValueError("operation on a closed kissm.Matcher")
+        return ptr
+
+    def register(self, source: PointsLike, target: PointsLike) -> Result:
+        """Globally register ``source`` against ``target``; no initial guess is needed.
+
+        Both are (N, 3) float32/float64 array-likes (or objects with a ``.points`` attribute, such as Open3D
+        point clouds), read without copying when their layout allows. Returns a :class:`Result` whose
+        ``transform`` maps source points into the target frame. A well-formed input that yields no
+        trustworthy pose gives ``valid=False`` and a ``reason``, not an exception.
+
+        Raises:
+            TypeError, ValueError: the inputs are not (N, 3) arrays of real numbers (before the library is
+                called); or the library refused them (:class:`kissm.TooFewPointsError`,
+                :class:`kissm.NonFiniteError`, :class:`kissm.VoxelRangeError`... all ValueErrors).
+            kissm.CancelledError: :meth:`cancel` was called meanwhile.
+        """
+        src = points_view(source, "source")
+        tgt = points_view(target, "target")
+        result = ffi.new("kissm_result *")
+        result.struct_size = ffi.sizeof("kissm_result")
+        with self._call_lock:
+            status = lib.kissm_register(self._handle(), src.c, tgt.c, result)
+            if status != 0:
+                raise_status(status)  # reads the thread-local message before any other call
+        return Result._from_c(result)
+
+    def features(self, cloud: PointsLike) -> Features:
+        """Describe ``cloud`` once, for :meth:`register_features` against any number of other clouds."""
+        view = points_view(cloud, "cloud")
+        out = ffi.new("kissm_features **")
+        with self._call_lock:
+            status = lib.kissm_features_compute(self._handle(), view.c, out)
+            if status != 0:
+                raise_status(status)
+        return Features._adopt(out[0])
+
+    def register_features(self, source: Features, target: Features) -> Result:
+        """Register two described clouds: the same pose, counts and validity as :meth:`register` on the
+        clouds they were computed from (voxelisation and feature times are reported as 0)."""
+        for name, value in (("source", source), ("target", target)):
+            if not isinstance(value, Features):
+                raise TypeError(f"{name} must be kissm.Features (from Matcher.features), not {type(value).__name__}")
+        result = ffi.new("kissm_result *")
+        result.struct_size = ffi.sizeof("kissm_result")
+        with self._call_lock:
+            status = lib.kissm_register_features(self._handle(), source._ptr, target._ptr, result)
+            if status != 0:
+                raise_status(status)
+        return Result._from_c(result)
+
+    def cancel(self) -> None:
+        """Ask the call running on this matcher (in another thread) to stop with
+        :class:`kissm.CancelledError`. Does nothing when no call is running."""
+        with self._handle_lock:
+            if self._ptr is not None:
+                lib.kissm_cancel(self._ptr)
+
+    def close(self) -> None:
+        """Free the C matcher now (waiting for a running call). Idempotent."""
+        with self._call_lock, self._handle_lock:
+            ptr, self._ptr = self._ptr, None
+        if ptr is not None:
+            ffi.release(ptr)
+
+    def __enter__(self) -> Matcher:
+        self._handle()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def __reduce__(self) -> tuple[Any, tuple[Config]]:
+        self._handle()
+        return (Matcher, (self._config,))
+
+    def __repr__(self) -> str:
+        state = " (closed)" if self._ptr is None else ""
+        return f"kissm.Matcher({self._config!r}){state}"

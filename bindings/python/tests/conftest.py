@@ -1,0 +1,89 @@
+"""Shared fixtures: the repository, the real data, the kissm CLI, synthetic pairs."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/scenes.py, tests/helpers.py
+
+import kissm  # noqa: E402
+
+import scenes  # noqa: E402
+
+TESTS_DIR = Path(__file__).resolve().parent
+PACKAGE_ROOT = TESTS_DIR.parent  # bindings/python
+REPO_ROOT = PACKAGE_ROOT.parent.parent
+
+
+def data_dir() -> Path:
+    return Path(os.environ.get("KISSM_DATA_DIR") or REPO_ROOT.parent / "shared" / "data")
+
+
+def cli_path() -> Path | None:
+    """The kissm CLI built from the same checkout: $KISSM_CLI, else $KISSM_BUILD_DIR/kissm, else build/kissm."""
+    candidates = [os.environ.get("KISSM_CLI")]
+    if os.environ.get("KISSM_BUILD_DIR"):
+        candidates.append(str(Path(os.environ["KISSM_BUILD_DIR"]) / "kissm"))
+    candidates.append(str(REPO_ROOT / "build" / "kissm"))
+    for candidate in candidates:
+        if candidate and os.path.isfile(candidate) and os.access(candidate, os.X_OK):
+            return Path(candidate)
+    return None
+
+
+def pytest_report_header(config: pytest.Config) -> list[str]:
+    return [
+        f"kissm {kissm.__version__} from {Path(kissm.__file__).parent}",
+        f"library: {kissm.library_path}",
+        f"data: {data_dir()} ({'present' if (data_dir() / 'index.tsv').is_file() else 'absent: real-data tests skip'})",
+        f"cli: {cli_path() or 'absent: CLI cross-checks skip'}",
+    ]
+
+
+@pytest.fixture(scope="session")
+def real_data() -> Path:
+    root = data_dir()
+    if not (root / "index.tsv").is_file():
+        pytest.skip(f"real data not found ({root}/index.tsv); set KISSM_DATA_DIR or provide ../shared/data")
+    return root
+
+
+@pytest.fixture(scope="session")
+def cli() -> Path:
+    path = cli_path()
+    if path is None:
+        pytest.skip("the kissm CLI was not found (set KISSM_CLI or KISSM_BUILD_DIR)")
+    return path
+
+
+@pytest.fixture(scope="session")
+def demo_clouds(cli: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """source.ply and target.ply (binary float64 PLY) written by `kissm demo`: no real data needed."""
+    out = tmp_path_factory.mktemp("demo")
+    subprocess.run([str(cli), "demo", "--out", str(out), "--threads", "2"], check=True, capture_output=True,
+                   timeout=300)
+    return out / "source.ply", out / "target.ply"
+
+
+@pytest.fixture(scope="session")
+def pair() -> scenes.Pair:
+    return scenes.yard_pair(130.0)
+
+
+@pytest.fixture(scope="session")
+def pairs() -> list[scenes.Pair]:
+    return [scenes.yard_pair(yaw, seed) for yaw, seed in ((130.0, 7), (25.0, 11), (-95.0, 13), (170.0, 17))]
+
+
+@pytest.fixture()
+def cc() -> str:
+    compiler = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+    if compiler is None:
+        pytest.skip("no C compiler")
+    return compiler

@@ -1,0 +1,83 @@
+"""Bitwise equality with the C library as the kissm CLI runs it, on inputs that need no real data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import kissm
+
+from cli_json import assert_matches_cli, run_cli
+
+
+def test_demo_clouds_bitwise_equal_cli(cli: Path, demo_clouds: tuple[Path, Path]) -> None:
+    """The CLI's demo scans (float64 PLY), read by kissm.read_points and registered from Python."""
+    source_path, target_path = demo_clouds
+    expected = run_cli(cli, source_path, target_path, 0.3)
+    assert expected["valid"]
+    source, target = kissm.read_points(source_path), kissm.read_points(target_path)
+    for threads in (1, 2):
+        with kissm.Matcher(voxel_size=0.3, num_threads=threads) as matcher:
+            assert_matches_cli(matcher.register(source, target), expected)
+            assert_matches_cli(matcher.register_features(matcher.features(source), matcher.features(target)),
+                               expected)
+
+
+def test_python_arrays_bitwise_equal_cli_on_the_same_values(cli: Path, pair, tmp_path: Path) -> None:
+    """Arrays made in Python, registered in place, against the CLI reading them from .npy (exact float64)."""
+    np.save(tmp_path / "source.npy", pair.source)
+    np.save(tmp_path / "target.npy", pair.target)
+    expected = run_cli(cli, tmp_path / "source.npy", tmp_path / "target.npy", pair.voxel_size)
+    assert expected["valid"]
+    assert_matches_cli(kissm.register(pair.source, pair.target, voxel_size=pair.voxel_size), expected)
+    strided = np.zeros((len(pair.source), 4))
+    strided[:, :3] = pair.source
+    assert_matches_cli(kissm.register(strided[:, :3], np.asfortranarray(pair.target),
+                                      voxel_size=pair.voxel_size), expected)
+
+
+def test_float32_arrays_bitwise_equal_cli(cli: Path, pair, tmp_path: Path) -> None:
+    """float32 arrays passed in place against the CLI reading raw float32 triples (bin_xyz)."""
+    source, target = pair.source.astype("<f4"), pair.target.astype("<f4")
+    source.tofile(tmp_path / "source.bin")
+    target.tofile(tmp_path / "target.bin")
+    expected = run_cli(cli, tmp_path / "source.bin", tmp_path / "target.bin", pair.voxel_size,
+                       ["--format", "bin_xyz"])
+    assert_matches_cli(kissm.register(source, target, voxel_size=pair.voxel_size), expected)
+
+
+def test_xyz_text_with_python_repr_is_exact(cli: Path, pair, tmp_path: Path) -> None:
+    """Shortest round-trip text written by Python reads back to the same doubles in C."""
+    for name, xyz in (("source.xyz", pair.source), ("target.xyz", pair.target)):
+        (tmp_path / name).write_text("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in xyz.tolist()))
+    expected = run_cli(cli, tmp_path / "source.xyz", tmp_path / "target.xyz", pair.voxel_size)
+    assert_matches_cli(kissm.register(pair.source, pair.target, voxel_size=pair.voxel_size), expected)
+
+
+def test_invalid_result_matches_cli(cli: Path, tmp_path: Path) -> None:
+    """A degenerate input (a plane): valid = 0, the same reason and NaN/null fields in both."""
+    plane = np.c_[np.random.default_rng(3).random((3000, 2)) * 8.0, np.zeros(3000)]
+    np.save(tmp_path / "plane.npy", plane)
+    expected = run_cli(cli, tmp_path / "plane.npy", tmp_path / "plane.npy", 0.3)
+    assert not expected["valid"]
+    assert_matches_cli(kissm.register(plane, plane, voxel_size=0.3), expected)
+
+
+def test_cli_config_flags_match_config_fields(cli: Path, pair, tmp_path: Path) -> None:
+    np.save(tmp_path / "s.npy", pair.source)
+    np.save(tmp_path / "t.npy", pair.target)
+    expected = run_cli(cli, tmp_path / "s.npy", tmp_path / "t.npy", 0.35,
+                       ["--min-inliers", "12", "--max-correspondences", "800", "--viewpoint-center"])
+    result = kissm.register(pair.source, pair.target, voxel_size=0.35, min_inliers=12, max_correspondences=800,
+                            viewpoint_mode="cloud_center")
+    assert_matches_cli(result, expected)
+
+
+@pytest.mark.parametrize("threads", [0, 3])
+def test_cli_threads_do_not_matter(cli: Path, demo_clouds: tuple[Path, Path], threads: int) -> None:
+    source_path, target_path = demo_clouds
+    expected = run_cli(cli, source_path, target_path, 0.3, threads=threads)
+    assert_matches_cli(kissm.register(kissm.read_points(source_path), kissm.read_points(target_path),
+                                      voxel_size=0.3, num_threads=1), expected)

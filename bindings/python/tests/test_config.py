@@ -1,0 +1,182 @@
+"""kissm.Config: every C field as a keyword, library defaults, library validation, pickling, repr."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import pickle
+
+import numpy as np
+import pytest
+
+import kissm
+from kissm import _ffi
+
+C_FIELDS = [name for name, _ in _ffi.ffi.typeof("kissm_config").fields]
+PLUMBING = {"struct_size", "log_fn", "log_user_data", "progress_fn", "progress_user_data"}
+
+
+def c_defaults():
+    c = _ffi.ffi.new("kissm_config *")
+    assert _ffi.lib.kissm_config_init(c, _ffi.ffi.sizeof("kissm_config")) == 0
+    return c
+
+
+def test_every_c_field_is_a_keyword() -> None:
+    python_fields = {f.name for f in dataclasses.fields(kissm.Config)}
+    assert python_fields == set(C_FIELDS) - PLUMBING
+
+
+def test_defaults_come_from_kissm_config_init() -> None:
+    c = c_defaults()
+    config = kissm.Config()
+    for name in set(C_FIELDS) - PLUMBING:
+        value = getattr(config, name)
+        if name == "viewpoint":
+            assert value == tuple(c.viewpoint)
+        elif name == "nonfinite_policy":
+            assert kissm._config.NONFINITE_POLICIES[value] == c.nonfinite_policy
+        elif name == "viewpoint_mode":
+            assert kissm._config.VIEWPOINT_MODES[value] == c.viewpoint_mode
+        else:
+            assert value == getattr(c, name), name
+    # and the struct handed to the library is byte for byte kissm_config_init's
+    assert bytes(_ffi.ffi.buffer(config._to_c())) == bytes(_ffi.ffi.buffer(c))
+
+
+def test_fields_round_trip_into_the_c_struct() -> None:
+    config = kissm.Config(voxel_size=0.25, num_threads=3, normal_radius_gain=2.5, fpfh_radius_gain=6.0,
+                          max_linearity=0.95, ratio_test=1.0, prune_noise_bound_gain=1.5,
+                          solver_noise_bound_gain=0.5, noise_bound_max=0.4, viewpoint=(1, 2.5, -3),
+                          min_normal_neighbors=5, max_correspondences=3000, min_inliers=20,
+                          nonfinite_policy="drop", viewpoint_mode="cloud_center", log_level=0)
+    c = config._to_c()
+    assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
+    assert (c.max_linearity, c.ratio_test, c.prune_noise_bound_gain) == (0.95, 1.0, 1.5)
+    assert (c.solver_noise_bound_gain, c.noise_bound_max, tuple(c.viewpoint)) == (0.5, 0.4, (1.0, 2.5, -3.0))
+    assert (c.min_normal_neighbors, c.max_correspondences, c.min_inliers, c.log_level) == (5, 3000, 20, 0)
+    assert c.nonfinite_policy == _ffi.lib.KISSM_NONFINITE_DROP
+    assert c.viewpoint_mode == _ffi.lib.KISSM_VIEWPOINT_CLOUD_CENTER
+    assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
+    # what the matcher got is what was asked for
+    with kissm.Matcher(config) as matcher:
+        out = _ffi.ffi.new("kissm_config *")
+        out.struct_size = _ffi.ffi.sizeof("kissm_config")
+        assert _ffi.lib.kissm_get_config(matcher._ptr, out) == 0
+        assert bytes(_ffi.ffi.buffer(out)) == bytes(_ffi.ffi.buffer(c))
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "message"),
+    [
+        ("voxel_size", 0.0, "config.voxel_size is 0; it must be a finite length > 0"),
+        ("voxel_size", -1.0, "config.voxel_size is -1"),
+        ("voxel_size", float("nan"), "config.voxel_size is nan"),
+        ("voxel_size", float("inf"), "config.voxel_size is inf"),
+        ("num_threads", -1, "config.num_threads is -1; it must be in [0, 1024]"),
+        ("num_threads", 5000, "config.num_threads is 5000"),
+        ("normal_radius_gain", 6.0, "config.normal_radius_gain is 6; it must be in (0, 5]"),
+        ("fpfh_radius_gain", 1.0, "config.fpfh_radius_gain is 1; it must be in [1.5, 50]"),
+        ("max_linearity", 0.0, "config.max_linearity is 0"),
+        ("ratio_test", 1.5, "config.ratio_test is 1.5"),
+        ("prune_noise_bound_gain", 0.0, "config.prune_noise_bound_gain is 0"),
+        ("solver_noise_bound_gain", -2.0, "config.solver_noise_bound_gain is -2"),
+        ("noise_bound_max", -1.0, "config.noise_bound_max is -1"),
+        ("viewpoint", (0.0, float("nan"), 0.0), "config.viewpoint[1] is not finite"),
+        ("min_normal_neighbors", 2, "config.min_normal_neighbors is 2; it must be in [3, 100000]"),
+        ("max_correspondences", 2, "config.max_correspondences is 2"),
+        ("min_inliers", 100001, "config.min_inliers is 100001"),
+        ("nonfinite_policy", 7, "config.nonfinite_policy is 7; it must be in [0, 1]"),
+        ("viewpoint_mode", -1, "config.viewpoint_mode is -1"),
+        ("log_level", 5, "config.log_level is 5; it must be in [0, 4]"),
+    ],
+)
+def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:
+    with pytest.raises(ValueError) as info:
+        kissm.Config(**{field: value})
+    assert isinstance(info.value, kissm.InvalidArgumentError)
+    assert message in str(info.value)
+    assert str(info.value).startswith("kissm_config_validate: ")  # the library's message, verbatim
+    with pytest.raises(kissm.InvalidArgumentError, match=f"config.{field}"):
+        kissm.Matcher(**{field: value})
+
+
+def test_out_of_int32_range_is_a_valueerror() -> None:
+    with pytest.raises(ValueError, match="num_threads"):
+        kissm.Config(num_threads=2**40)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("voxel_size", "0.3"), ("voxel_size", None), ("num_threads", 2.0), ("num_threads", True),
+     ("min_inliers", "15"), ("viewpoint", 3.0), ("viewpoint", ("a", 0, 0)), ("nonfinite_policy", 0.5)],
+)
+def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
+    with pytest.raises(TypeError, match=field):
+        kissm.Config(**{field: value})
+
+
+def test_viewpoint_needs_three_coordinates() -> None:
+    with pytest.raises(ValueError, match="3 coordinates"):
+        kissm.Config(viewpoint=(1.0, 2.0))
+
+
+def test_numpy_scalars_and_sequences_are_accepted() -> None:
+    config = kissm.Config(voxel_size=np.float32(0.5), num_threads=np.int64(2), viewpoint=np.array([1, 2, 3]))
+    assert config.voxel_size == 0.5 and type(config.voxel_size) is float
+    assert config.num_threads == 2 and type(config.num_threads) is int
+    assert config.viewpoint == (1.0, 2.0, 3.0)
+
+
+def test_enumerations_take_names_or_the_c_constants() -> None:
+    assert kissm.Config(nonfinite_policy="drop") == kissm.Config(nonfinite_policy=_ffi.lib.KISSM_NONFINITE_DROP)
+    assert kissm.Config(viewpoint_mode=1).viewpoint_mode == "cloud_center"
+    assert kissm.Config().nonfinite_policy == "reject" and kissm.Config().viewpoint_mode == "fixed"
+    with pytest.raises(ValueError, match="'reject', 'drop'"):
+        kissm.Config(nonfinite_policy="ignore")
+
+
+def test_unknown_keywords_are_typeerrors() -> None:
+    with pytest.raises(TypeError, match="voxel"):
+        kissm.Config(voxel=0.3)
+    with pytest.raises(TypeError, match="voxel"):
+        kissm.Matcher(voxel=0.3)
+    with pytest.raises(TypeError):
+        kissm.Config(0.3)  # keyword-only
+
+
+def test_configs_are_immutable_values() -> None:
+    config = kissm.Config(voxel_size=0.5)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        config.voxel_size = 1.0  # type: ignore[misc]
+    assert config == kissm.Config(voxel_size=0.5) and config != kissm.Config()
+    assert hash(config) == hash(kissm.Config(voxel_size=0.5))
+    assert config.replace(num_threads=2) == kissm.Config(voxel_size=0.5, num_threads=2)
+    with pytest.raises(ValueError):
+        config.replace(voxel_size=-1.0)
+    assert kissm.Config(**config.to_dict()) == config
+
+
+def test_pickle_and_copy() -> None:
+    config = kissm.Config(voxel_size=0.45, num_threads=2, viewpoint=(0, 0, 1.7), nonfinite_policy="drop")
+    for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
+        assert pickle.loads(pickle.dumps(config, protocol)) == config
+    assert copy.deepcopy(config) == config and copy.copy(config) == config
+
+
+def test_repr_is_readable_and_evaluable() -> None:
+    assert repr(kissm.Config()) == "kissm.Config()"
+    config = kissm.Config(voxel_size=0.5, num_threads=2, viewpoint_mode="cloud_center")
+    assert repr(config) == "kissm.Config(voxel_size=0.5, num_threads=2, viewpoint_mode='cloud_center')"
+    assert eval(repr(config), {"kissm": kissm}) == config
+
+
+def test_matcher_overrides_and_config() -> None:
+    base = kissm.Config(voxel_size=0.5, min_inliers=10)
+    with kissm.Matcher(base, num_threads=2) as matcher:
+        assert matcher.config == base.replace(num_threads=2)
+    with kissm.Matcher(voxel_size=0.4) as matcher:
+        assert matcher.config == kissm.Config(voxel_size=0.4)
+        assert "voxel_size=0.4" in repr(matcher)
+    with pytest.raises(TypeError, match="kissm.Config"):
+        kissm.Matcher({"voxel_size": 0.4})  # type: ignore[arg-type]
