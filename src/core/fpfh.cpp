@@ -115,7 +115,7 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
             for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
                 const std::uint32_t j = nb.index[k];
                 if (j == i || !normals.valid[j]) continue;
-                const float w2 = v2 / nb.dist2[k];
+                const float w2 = v2 / (points[j] - points[i]).squaredNorm();
                 const float w = weight_power == 2 ? w2 : std::sqrt(w2);
                 const float *h = &spfh[static_cast<std::size_t>(j) * D];
                 for (int c = 0; c < D; ++c) acc[c] += w * h[c];

@@ -55,21 +55,26 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
         }
     }
     cell_start.push_back(static_cast<std::uint32_t>(n));
-    std::vector<Vec3f> sorted_pts(n);
-    for (std::size_t i = 0; i < n; ++i) sorted_pts[i] = points[entries[i].index];
+    // Points in cell order, as structure of arrays: a run of three z-adjacent cells is one contiguous
+    // stretch, scanned by a loop the compiler vectorises.
+    std::vector<float> sx(n), sy(n), sz(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3f &p = points[entries[i].index];
+        sx[i] = p.x(), sy[i] = p.y(), sz[i] = p.z();
+    }
 
     const float r2 = radius * radius;
     constexpr std::size_t kChunk = 1024;
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
     std::vector<std::vector<std::uint32_t>> chunk_index(num_chunks);
-    std::vector<std::vector<float>> chunk_dist(num_chunks);
     std::vector<std::uint32_t> counts(n, 0);
 
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
         auto &idx = chunk_index[b / kChunk];
-        auto &dst = chunk_dist[b / kChunk];
+        std::vector<unsigned char> inside;
         for (std::size_t i = b; i < e; ++i) {
             const Vec3f &q = points[i];
+            const float qx = q.x(), qy = q.y(), qz = q.z();
             std::uint64_t c[3];
             cell_of(q, c);
             const std::size_t before = idx.size();
@@ -77,17 +82,20 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
                 for (std::uint64_t dy = c[1] - 1; dy <= c[1] + 1; ++dy) {
                     // z is the fastest-varying part of the key: the three z cells are one contiguous run.
                     const std::uint64_t first = pack(dx, dy, c[2] - 1), last = pack(dx, dy, c[2] + 1);
-                    auto it = std::lower_bound(cell_keys.begin(), cell_keys.end(), first);
-                    for (; it != cell_keys.end() && *it <= last; ++it) {
-                        const std::size_t cell = static_cast<std::size_t>(it - cell_keys.begin());
-                        for (std::uint32_t s = cell_start[cell]; s < cell_start[cell + 1]; ++s) {
-                            const float d2 = (sorted_pts[s] - q).squaredNorm();
-                            if (d2 < r2) {
-                                idx.push_back(entries[s].index);
-                                dst.push_back(d2);
-                            }
-                        }
+                    auto lo_it = std::lower_bound(cell_keys.begin(), cell_keys.end(), first);
+                    auto hi_it = std::upper_bound(lo_it, cell_keys.end(), last);
+                    if (lo_it == hi_it) continue;
+                    const std::uint32_t s0 = cell_start[static_cast<std::size_t>(lo_it - cell_keys.begin())];
+                    const std::uint32_t s1 = cell_start[static_cast<std::size_t>(hi_it - cell_keys.begin())];
+                    const std::size_t len = s1 - s0;
+                    inside.resize(len);
+                    const float *px = &sx[s0], *py = &sy[s0], *pz = &sz[s0];
+                    for (std::size_t s = 0; s < len; ++s) {
+                        const float ddx = px[s] - qx, ddy = py[s] - qy, ddz = pz[s] - qz;
+                        inside[s] = ddx * ddx + ddy * ddy + ddz * ddz < r2;
                     }
+                    for (std::size_t s = 0; s < len; ++s)
+                        if (inside[s]) idx.push_back(entries[s0 + s].index);
                 }
             }
             counts[i] = static_cast<std::uint32_t>(idx.size() - before);
@@ -96,14 +104,11 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
 
     for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + counts[i];
     nb.index.resize(nb.offsets[n]);
-    nb.dist2.resize(nb.offsets[n]);
     ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t c = b; c < e; ++c) {
             const std::size_t start = nb.offsets[c * kChunk];
             std::copy(chunk_index[c].begin(), chunk_index[c].end(), nb.index.begin() + static_cast<std::ptrdiff_t>(start));
-            std::copy(chunk_dist[c].begin(), chunk_dist[c].end(), nb.dist2.begin() + static_cast<std::ptrdiff_t>(start));
             std::vector<std::uint32_t>().swap(chunk_index[c]);
-            std::vector<float>().swap(chunk_dist[c]);
         }
     });
     return nb;

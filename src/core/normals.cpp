@@ -25,26 +25,27 @@ Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &
     const std::uint64_t tau = static_cast<std::uint64_t>(params.min_neighbors);
 
     ctx.parallel_for(n, 2048, [&](std::size_t b, std::size_t e) {
+        std::vector<std::uint32_t> near; // neighbours within the normal radius, reused across points
         for (std::size_t i = b; i < e; ++i) {
             const std::uint64_t begin = nb.offsets[i], end = nb.offsets[i + 1];
             if (end - begin < tau) continue;
             // Covariance about the mean, in double: centred sums avoid cancellation.
+            near.clear();
             Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-            std::uint64_t count = 0;
             for (std::uint64_t k = begin; k < end; ++k) {
-                if (nb.dist2[k] < rn2) {
-                    mean += points[nb.index[k]].cast<double>();
-                    ++count;
+                const std::uint32_t j = nb.index[k];
+                if ((points[j] - points[i]).squaredNorm() < rn2) {
+                    near.push_back(j);
+                    mean += points[j].cast<double>();
                 }
             }
+            const std::uint64_t count = near.size();
             if (count < tau) continue;
             mean /= static_cast<double>(count);
             Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-            for (std::uint64_t k = begin; k < end; ++k) {
-                if (nb.dist2[k] < rn2) {
-                    const Eigen::Vector3d d = points[nb.index[k]].cast<double>() - mean;
-                    cov.noalias() += d * d.transpose();
-                }
+            for (const std::uint32_t j : near) {
+                const Eigen::Vector3d d = points[j].cast<double>() - mean;
+                cov.noalias() += d * d.transpose();
             }
             cov /= static_cast<double>(count);
             Eigen::Vector3d lambda, normal;
