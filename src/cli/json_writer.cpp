@@ -52,12 +52,9 @@ void JsonWriter::newline_indent() {
     out_.append(2 * stack_.size(), ' ');
 }
 
-void JsonWriter::before_value() {
-    if (after_key_) {
-        after_key_ = false;
-        return;
-    }
-    if (stack_.empty()) return;
+// The separator before the next member of the innermost object or array: a comma after the first, then a
+// space (inline levels) or a new indented line.
+void JsonWriter::next_member() {
     Level &level = stack_.back();
     if (level.count > 0) out_.push_back(',');
     if (level.is_inline) {
@@ -68,15 +65,17 @@ void JsonWriter::before_value() {
     ++level.count;
 }
 
-void JsonWriter::key(const std::string &name) {
-    Level &level = stack_.back();
-    if (level.count > 0) out_.push_back(',');
-    if (level.is_inline) {
-        if (level.count > 0) out_.push_back(' ');
-    } else {
-        newline_indent();
+void JsonWriter::before_value() {
+    if (after_key_) {
+        after_key_ = false;
+        return;
     }
-    ++level.count;
+    if (stack_.empty()) return;
+    next_member();
+}
+
+void JsonWriter::key(const std::string &name) {
+    next_member();
     out_ += escape(name);
     out_ += ": ";
     after_key_ = true;

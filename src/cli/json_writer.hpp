@@ -49,6 +49,7 @@ private:
         int count;
     };
     void before_value();
+    void next_member();
     void newline_indent();
 
     std::vector<Level> stack_;
