@@ -18,3 +18,10 @@ for suite in bindings/python/run_tests.sh bindings/rust/run_tests.sh; do
     KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir bash "$here/$suite"
   fi
 done
+
+# Benchmark smoke run (seconds): keeps bench/ from rotting. The full benchmark is `bash bench/run.sh`,
+# never a timed test.
+if [[ -f $here/bench/bench.py && -x $build/venv-python/bin/python ]]; then
+  echo "== bench/bench.py --smoke =="
+  KISSM_DATA_DIR=$data_dir "$build/venv-python/bin/python" "$here/bench/bench.py" --smoke --out "$build/bench-smoke"
+fi
