@@ -11,17 +11,22 @@ build=${KISSM_BUILD_DIR:-$here/build}
 echo "== C/C++ tests (CTest) =="
 ctest --test-dir "$build" --output-on-failure --parallel 2 --timeout 900
 
-# Language bindings: each has its own script (set-up included) that runs its suite against this build.
-for suite in bindings/python/run_tests.sh bindings/rust/run_tests.sh; do
-  if [[ -f $here/$suite ]]; then
-    echo "== $suite =="
-    KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir bash "$here/$suite"
+run_suite() {
+  if [[ -f $here/$1 ]]; then
+    echo "== $1 =="
+    KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir bash "$here/$1"
   fi
-done
+}
 
-# Benchmark smoke run (seconds): keeps bench/ from rotting. The full benchmark is `bash bench/run.sh`,
-# never a timed test.
+# Python binding (its own venv in $build/venv-python, set up by the script).
+run_suite bindings/python/run_tests.sh
+
+# Benchmark smoke run (seconds, in the Python binding's venv): keeps bench/ from rotting. The full
+# benchmark is `bash bench/run.sh`, never a timed test.
 if [[ -f $here/bench/bench.py && -x $build/venv-python/bin/python ]]; then
   echo "== bench/bench.py --smoke =="
   KISSM_DATA_DIR=$data_dir "$build/venv-python/bin/python" "$here/bench/bench.py" --smoke --out "$build/bench-smoke"
 fi
+
+# Rust binding (cargo test), last so that a test runner's summary closes the log.
+run_suite bindings/rust/run_tests.sh
