@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Every test: set up, build, then the C/C++ suite (CTest). Tests that need ../shared/data skip with a
+# Every test: set up, build, then the C/C++ suite (CTest), the Python binding (pytest), a seconds-long
+# benchmark smoke run and the Rust binding (cargo test). Tests that need ../shared/data skip with a
 # message when it is absent (point KISSM_DATA_DIR elsewhere to use another copy).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
