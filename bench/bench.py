@@ -423,7 +423,7 @@ def list_pairs(data_dir: Path) -> list[dict]:
     for line in lines[1:]:
         if not line.strip():
             continue
-        row = dict(zip(header, line.split("\t")))
+        row = dict(zip(header, line.split("\t"), strict=False))
         kind = row["kind"]
         if kind not in KIND_SETTINGS:
             raise SystemExit(f"bench: unknown kind {kind!r} in index.tsv; add it to KIND_SETTINGS")
@@ -434,9 +434,8 @@ def list_pairs(data_dir: Path) -> list[dict]:
 
 
 def load_pair(data_dir: Path, row: dict):
-    import numpy as np
-
     import kissm
+    import numpy as np
 
     pair_dir = data_dir / row["pair_dir"]
     meta = read_pair_txt(pair_dir / "pair.txt")
@@ -473,7 +472,8 @@ def make_cases(data_dir: Path, rows: list[dict], rotations: int, tmp: Path) -> l
             truth[:3, :3] = gt[:3, :3] @ rot.T  # p_t = R_gt p_s + t = (R_gt R^T)(R p_s) + t
             src_path = tmp / f"case{len(cases):03d}_src.npy"
             np.save(src_path, src_r)
-            case.update(src_path=str(src_path), gt=truth.tolist(), seed=zlib.crc32(f"{name}#{r}#ransac".encode()) & 0x7FFFFFFF)
+            seed = zlib.crc32(f"{name}#{r}#ransac".encode()) & 0x7FFFFFFF  # Open3D takes an int32 seed
+            case.update(src_path=str(src_path), gt=truth.tolist(), seed=seed)
             cases.append(case)
     return cases
 
@@ -502,7 +502,8 @@ def scene_layout(size: float, seed: int) -> dict:
         wavelength = rng.uniform(15.0, 90.0)
         direction = rng.uniform(0, 2 * math.pi)
         k = 2 * math.pi / wavelength
-        waves.append((rng.uniform(0.2, 0.8), k * math.cos(direction), k * math.sin(direction), rng.uniform(0, 2 * math.pi)))
+        amplitude = rng.uniform(0.2, 0.8)
+        waves.append((amplitude, k * math.cos(direction), k * math.sin(direction), rng.uniform(0, 2 * math.pi)))
     boxes, poles = [], []
     tiles = int(math.ceil(size / SYN_TILE))
     for i in range(tiles):
@@ -623,7 +624,10 @@ def median(values):
 
 
 def cpus_for(threads: int) -> list[int]:
-    available = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else list(range(os.cpu_count() or 1))
+    if hasattr(os, "sched_getaffinity"):
+        available = sorted(os.sched_getaffinity(0))
+    else:
+        available = list(range(os.cpu_count() or 1))
     if threads > len(available):
         raise SystemExit(f"bench: {threads} threads asked for, but only CPUs {available} are available")
     return available[:threads]
@@ -687,7 +691,7 @@ def run_real(args, cases, methods, threads_list, log, results) -> None:
                                peak_kb=max(0, st["VmHWM"] - workers[m].baseline_kb))
                 else:
                     mem.update(error=failed.get(m, "not run"))
-                    if m in failed and failed[m] != "timeout":
+                    if m in failed and (failed[m] != "timeout" or args.smoke):
                         results["errors"].append(f"{METHOD_LABEL[m]} on {case['name']} {case['variant']} "
                                                  f"({threads}t): {failed[m]}")
                 results["memory"].append(mem)

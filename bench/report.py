@@ -72,7 +72,7 @@ def fmt_ratio(value):
 
 
 def slope(xs, ys):
-    pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys) if x and y and x > 0 and y > 0]
+    pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys, strict=False) if x and y and x > 0 and y > 0]
     if len(pts) < 2:
         return None
     mx = sum(p[0] for p in pts) / len(pts)
@@ -181,7 +181,7 @@ def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
         fig, axes = plt.subplots(rows, cols, figsize=(7.0 * cols, 0.55 * len(res.methods) * rows + 1.0 * rows + 0.8),
                                  squeeze=False)
         used = set()
-        for ax, pair in zip(axes.flat, show_pairs):
+        for ax, pair in zip(axes.flat, show_pairs, strict=False):
             ids = res.case_ids(pair=pair)
             c = res.cases[ids[0]]
             labels, y = [], 0
@@ -236,8 +236,10 @@ def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
                 ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", color=METHOD_COLOR[m], lw=2,
                           label=f"{METHOD_LABEL[m]} (slope {k:.2f})" if k is not None else METHOD_LABEL[m])
                 stops = [r for r in sc["runs"] if r["method"] == m and r["status"] == "timeout"]
-                if stops:
-                    ax.plot([xs[stops[0]["size"]]], [pts[-1][1]], "x", color=METHOD_COLOR[m], ms=10, mew=2)
+                if stops and kind == "time":  # a timed-out call: drawn at the timeout, "more than this"
+                    ax.plot([xs[stops[0]["size"]]], [sc["timeout_s"]], "x", color=METHOD_COLOR[m], ms=10, mew=2)
+                    ax.annotate("timeout", (xs[stops[0]["size"]], sc["timeout_s"]), textcoords="offset points",
+                                xytext=(6, -3), fontsize=7, color=METHOD_COLOR[m])
             if kind == "time":
                 for st in ("voxelize", "features", "matching", "pruning", "solver"):
                     pts = [(xs[r["size"]], r["stages"].get(st, 0) / 1e3) for r in sc["runs"]
@@ -307,11 +309,11 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     L.append(f"- Run: {meta['started']} to {meta.get('finished', '?')} ({meta.get('duration_s', 0) / 60:.0f} min)")
     ls, le = meta.get("load_start"), meta.get("load_end")
     if ls and le:
+        busy = max(ls[0], le[0]) > 0.5 * (mach.get("cpus_online") or 1)
         L.append(f"- Load average (1/5/15 min) at the start {ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end "
                  f"{le[0]:.2f} / {le[1]:.2f} / {le[2]:.2f} on {mach.get('cpus_online')} CPUs"
                  + (" — **the machine was busy with other work: absolute times are noisy; ratios come from "
-                    "interleaved calls and are more robust**" if max(ls[0], le[0]) > 0.5 * (mach.get("cpus_online") or 1)
-                    else ""))
+                    "interleaved calls and are more robust**" if busy else ""))
     L.append(f"- Machine: {mach.get('cpu', '?')}, {mach.get('cpus_online')} CPUs (allowed: "
              f"{mach.get('cpus_allowed')}), {mach.get('mem_total_gb', '?')} GB RAM, {mach.get('platform')}, "
              f"Python {mach.get('python')}")
@@ -557,24 +559,39 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
         if any(r["status"] != "ok" for r in sc["runs"]):
             L.append("")
         # slopes
-        L.append("Log–log slopes (least squares over the sizes each method finished; 1.0 = linear):")
+        L.append("Log–log slopes (1.0 = linear): over every size the method finished (least squares), and between "
+                 "its two largest sizes (local, where superlinear growth shows first):")
         L.append("")
         rows = []
+        superlinear = []
         for m in sm:
             ok = [r for r in sc["runs"] if r["method"] == m and r["status"] == "ok"]
             if len(ok) < 2:
                 continue
             x = [xs[r["size"]] for r in ok]
-            rows.append([METHOD_LABEL[m], "total wall time", fmt(slope(x, [r["wall_ms"] for r in ok]), 2),
-                         f"{fmt(min(x), 0)}–{fmt(max(x), 0)}"])
+
+            def add(quantity, ys, note, label=METHOD_LABEL[m], x=x):
+                whole, local = slope(x, ys), slope(x[-2:], ys[-2:])
+                rows.append([label, quantity, fmt(whole, 2), fmt(local, 2), note])
+                if quantity != "peak memory" and local is not None and local > 1.15 and ys[-1] and ys[-1] > 50:
+                    superlinear.append(f"{label} {quantity} (local slope {local:.2f})")
+                if quantity == "peak memory" and local is not None and local > 1.15:
+                    superlinear.append(f"{label} peak memory (local slope {local:.2f})")
+
+            add("total wall time", [r["wall_ms"] for r in ok], f"{fmt(min(x), 0)}–{fmt(max(x), 0)} voxels")
             if m == "kissm":
                 for st in ("voxelize", "features", "matching", "pruning", "solver"):
                     ys = [r["stages"].get(st) for r in ok]
-                    rows.append(["kissm", f"stage: {STAGE_LABEL[st]}", fmt(slope(x, ys), 2),
-                                 f"{fmt(med(ys[-1:]), 0)} ms at the largest"])
-            rows.append([METHOD_LABEL[m], "peak memory", fmt(slope(x, [r["peak_kb"] for r in ok]), 2),
-                         f"{fmt(ok[-1]['peak_kb'] / 1024, 0)} MB at the largest"])
-        L.append(table(["method", "quantity", "slope", "range / note"], rows, ["---", "---", "--:", "---"]))
+                    add(f"stage: {STAGE_LABEL[st]}", ys, f"{fmt_ms(ys[-1])} ms at the largest", "kissm")
+            add("peak memory", [r["peak_kb"] for r in ok], f"{fmt(ok[-1]['peak_kb'] / 1024, 0)} MB at the largest")
+        L.append(table(["method", "quantity", "slope (all)", "slope (two largest)", "note"], rows,
+                       ["---", "---", "--:", "--:", "---"]))
+        L.append("")
+        if superlinear:
+            L.append("**Superlinear** (local slope above 1.15, ignoring parts under 50 ms): " + "; ".join(superlinear)
+                     + ".")
+        else:
+            L.append("No time or memory grows superlinearly (every local slope at most 1.15).")
         L.append("")
         k_ok = [r for r in sc["runs"] if r["method"] == "kissm" and r["status"] == "ok"]
         if k_ok:
@@ -607,8 +624,8 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     L.append("## Reproduce")
     L.append("")
     L.append("```sh")
-    L.append("bash bench/run.sh            # the full run (about an hour on 2 cores); see bench/README.md")
-    L.append("bash bench/run.sh --smoke    # seconds: the harness with kissm only")
+    L.append("bash bench/run.sh            # the full run (about 40 minutes on 2 cores); see bench/README.md")
+    L.append("bash bench/run.sh --smoke    # seconds: a check of the harness")
     L.append("```")
     L.append("")
     return "\n".join(L)
