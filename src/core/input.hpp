@@ -5,14 +5,16 @@
 
 #include "cloud.hpp"
 #include "params.hpp"
+#include "run_context.hpp"
 
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
 inline namespace v0_1 {
 namespace detail {
 
-// `name` ("source", "target", "cloud") is used in error messages.
-InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const std::string &name);
+// `name` ("source", "target", "cloud") is used in error messages. Under NonFinitePolicy::Reject the error
+// names the first non-finite point, whatever the thread count.
+InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const std::string &name, RunContext &ctx);
 
 } // namespace detail
 } // namespace v0_1

@@ -61,7 +61,7 @@ void voxelize_cloud(const PointsView &view, const Params &params, const std::str
     f.params = params;
     Stopwatch clock;
     ctx.checkpoint(kStageVoxelize, progress);
-    InputCloud input = gather_points(view, params.nonfinite, name);
+    InputCloud input = gather_points(view, params.nonfinite, name, ctx);
     f.num_points = input.num_given;
     f.num_nonfinite = input.num_nonfinite;
     if (input.points.empty())

@@ -16,8 +16,8 @@ namespace detail {
 constexpr std::uint64_t kMaxVoxelsPerAxis = std::uint64_t(1) << 21;
 
 // The grid is anchored at the cloud's bounding-box minimum; the local origin is the bounding-box centre.
-// Output order is by voxel key (x-major), independent of input order and thread count; within a voxel the
-// points are summed in (x, y, z) order, so a permutation of the input gives a bitwise identical output.
+// Output order is by voxel key (x-major), independent of input order and thread count; centroids come from
+// integer sums of fixed-point offsets, so a permutation of the input gives a bitwise identical output.
 // Throws Failure(VoxelRange) when the extent needs more than kMaxVoxelsPerAxis voxels on an axis.
 VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx);
 

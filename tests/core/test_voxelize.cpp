@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <map>
 
 #include "core/failure.hpp"
 #include "core/voxelize.hpp"
@@ -45,7 +47,8 @@ static void test_counts_and_centroids() {
 static void test_order_independent_of_threads_and_permutation() {
     TestRng rng(2);
     std::vector<Vec3d> pts;
-    for (int i = 0; i < 50000; ++i) pts.emplace_back(rng.uniform(-20, 20), rng.uniform(-20, 20), rng.uniform(-2, 2));
+    // Past 65536 points the sums come in per-chunk parts: a shuffle moves points of one voxel between chunks.
+    for (int i = 0; i < 150000; ++i) pts.emplace_back(rng.uniform(-20, 20), rng.uniform(-20, 20), rng.uniform(-2, 2));
     RunContext one(1, nullptr, Hooks()), four(4, nullptr, Hooks());
     const VoxelCloud a = voxelize(make_input(pts), 0.5, "cloud", one);
     const VoxelCloud b = voxelize(make_input(pts), 0.5, "cloud", four);
@@ -57,6 +60,33 @@ static void test_order_independent_of_threads_and_permutation() {
     CHECK(std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(Vec3f)) == 0);
     CHECK(std::memcmp(a.points.data(), c.points.data(), a.points.size() * sizeof(Vec3f)) == 0);
     CHECK(a.origin == c.origin);
+}
+
+static void test_centroids_are_means() {
+    // Against a plain double-precision mean per voxel (the fixed-point sums resolve 2^-30 voxels).
+    TestRng rng(4);
+    std::vector<Vec3d> pts;
+    for (int i = 0; i < 100000; ++i) pts.emplace_back(rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(0, 2));
+    const double size = 0.7;
+    const InputCloud in = make_input(pts);
+    RunContext ctx(2, nullptr, Hooks());
+    const VoxelCloud v = voxelize(in, size, "cloud", ctx);
+    std::map<std::array<long, 3>, std::pair<Vec3d, int>> sums;
+    for (const auto &p : pts) {
+        const Vec3d rel = (p - in.min) / size;
+        const std::array<long, 3> cell = {static_cast<long>(std::floor(rel.x())), static_cast<long>(std::floor(rel.y())),
+                                          static_cast<long>(std::floor(rel.z()))};
+        auto it = sums.emplace(cell, std::make_pair(Vec3d(Vec3d::Zero()), 0)).first;
+        it->second.first += p - v.origin, ++it->second.second;
+    }
+    REQUIRE(v.points.size() == sums.size());
+    double worst = 0.0;
+    std::size_t k = 0;
+    for (const auto &kv : sums) { // std::map order is x-major like the voxel keys
+        const Vec3d mean = kv.second.first / kv.second.second;
+        worst = std::max(worst, (v.points[k++].cast<double>() - mean).norm());
+    }
+    CHECK_MSG(worst < 2e-6, "worst centroid error %g m", worst);
 }
 
 static void test_range_check() {
@@ -96,6 +126,7 @@ static void test_large_coordinates_keep_precision() {
 int main() {
     RUN_TEST(test_counts_and_centroids);
     RUN_TEST(test_order_independent_of_threads_and_permutation);
+    RUN_TEST(test_centroids_are_means);
     RUN_TEST(test_range_check);
     RUN_TEST(test_large_coordinates_keep_precision);
     return TEST_SUMMARY();
