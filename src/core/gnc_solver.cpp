@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace kissm {
@@ -11,11 +12,9 @@ namespace kissm {
 inline namespace v0_1 {
 namespace detail {
 
-Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
-                                  const std::vector<double> &w) {
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    for (std::size_t k = 0; k < a.size(); ++k)
-        if (w[k] > 0.0) H.noalias() += w[k] * a[k] * b[k].transpose();
+namespace {
+
+Eigen::Matrix3d rotation_from_correlation(const Eigen::Matrix3d &H) {
     Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
     Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
@@ -23,52 +22,99 @@ Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const s
     return V * S * U.transpose();
 }
 
+// One GNC pass: residuals under R, weights under the current mu, the weighted correlation sum and cost.
+// Fixed chunks with partial sums added in chunk order: the same numbers for any thread count.
+struct GncPass {
+    static constexpr std::size_t kChunk = 2048;
+    struct Partial {
+        Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+        double cost = 0.0;
+        double max_r2 = 0.0;
+        bool binary = true;
+    };
+
+    const std::vector<Eigen::Vector3d> &a, &b;
+    std::vector<double> &r2, &w;
+    std::vector<Partial> partial;
+
+    GncPass(const std::vector<Eigen::Vector3d> &a_, const std::vector<Eigen::Vector3d> &b_, std::vector<double> &r2_,
+            std::vector<double> &w_)
+        : a(a_), b(b_), r2(r2_), w(w_), partial((a_.size() + kChunk - 1) / kChunk) {}
+
+    // mu <= 0: residuals only (weights untouched). Otherwise the GNC-TLS weights for c2 and mu.
+    Partial run(const Eigen::Matrix3d &R, double c2, double mu, RunContext &ctx) {
+        const std::size_t n = a.size();
+        const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2;
+        ctx.parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+            Partial p;
+            for (std::size_t k = begin; k < end; ++k) {
+                const double e = (b[k] - R * a[k]).squaredNorm();
+                r2[k] = e;
+                p.max_r2 = std::max(p.max_r2, e);
+                if (mu <= 0.0) continue;
+                double wk;
+                if (e >= hi)
+                    wk = 0.0;
+                else if (e <= lo)
+                    wk = 1.0;
+                else
+                    wk = std::sqrt(c2 * mu * (mu + 1.0) / e) - mu;
+                w[k] = wk;
+                p.cost += wk * e;
+                p.binary = p.binary && (wk == 0.0 || wk == 1.0);
+                if (wk > 0.0) p.H.noalias() += wk * a[k] * b[k].transpose();
+            }
+            partial[begin / kChunk] = p;
+        });
+        Partial total;
+        for (const Partial &p : partial) {
+            total.H += p.H;
+            total.cost += p.cost;
+            total.max_r2 = std::max(total.max_r2, p.max_r2);
+            total.binary = total.binary && p.binary;
+        }
+        return total;
+    }
+};
+
+} // namespace
+
+Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
+                                  const std::vector<double> &w) {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (std::size_t k = 0; k < a.size(); ++k)
+        if (w[k] > 0.0) H.noalias() += w[k] * a[k] * b[k].transpose();
+    return rotation_from_correlation(H);
+}
+
 bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                       const SolverParams &params, Eigen::Matrix3d &rotation, std::vector<double> &weights,
-                      int &iterations) {
+                      int &iterations, RunContext &ctx) {
     const std::size_t n = a.size();
     weights.assign(n, 1.0);
     iterations = 0;
     if (n < 2) return false;
     const double c2 = std::max(bound * bound, 1e-12);
     std::vector<double> r2(n);
-    auto residuals = [&](const Eigen::Matrix3d &R) {
-        for (std::size_t k = 0; k < n; ++k) r2[k] = (b[k] - R * a[k]).squaredNorm();
-    };
+    GncPass pass(a, b, r2, weights);
 
     rotation = weighted_rotation(a, b, weights);
-    residuals(rotation);
-    const double max_r2 = *std::max_element(r2.begin(), r2.end());
+    const double max_r2 = pass.run(rotation, c2, 0.0, ctx).max_r2;
     if (max_r2 > c2) {
         // mu starts where the surrogate is convex over all residuals and grows until it is the TLS loss.
+        // Each pass evaluates the residuals of the previous rotation and the weights for this mu in one go.
         double mu = 1.0 / (2.0 * max_r2 / c2 - 1.0);
         double prev_cost = std::numeric_limits<double>::infinity();
         for (int it = 0; it < params.max_iterations; ++it) {
             iterations = it + 1;
-            const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2;
-            double cost = 0.0;
-            for (std::size_t k = 0; k < n; ++k) {
-                if (r2[k] >= hi)
-                    weights[k] = 0.0;
-                else if (r2[k] <= lo)
-                    weights[k] = 1.0;
-                else
-                    weights[k] = std::sqrt(c2 * mu * (mu + 1.0) / r2[k]) - mu;
-                cost += weights[k] * r2[k];
-            }
-            rotation = weighted_rotation(a, b, weights);
-            residuals(rotation);
-            if (std::fabs(cost - prev_cost) < 1e-12 * std::max(1.0, cost)) break;
-            prev_cost = cost;
-            bool binary = true;
-            for (double w : weights)
-                if (w != 0.0 && w != 1.0) {
-                    binary = false;
-                    break;
-                }
-            if (binary && it > 0) break;
+            const GncPass::Partial p = pass.run(rotation, c2, mu, ctx);
+            rotation = rotation_from_correlation(p.H);
+            if (std::fabs(p.cost - prev_cost) < 1e-12 * std::max(1.0, p.cost)) break;
+            prev_cost = p.cost;
+            if (p.binary && it > 0) break;
             mu *= params.gnc_factor;
         }
+        pass.run(rotation, c2, 0.0, ctx);
     }
     std::size_t inliers = 0;
     for (std::size_t k = 0; k < n; ++k) {
@@ -172,7 +218,7 @@ std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs) {
 }
 
 SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
-                        std::vector<IndexPair> pairs, const SolverParams &params) {
+                        std::vector<IndexPair> pairs, const SolverParams &params, RunContext &ctx) {
     SolverOutput out;
     const std::size_t n = a.size();
     out.rotation_inlier.assign(n, 0);
@@ -189,7 +235,7 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
     }
     Eigen::Matrix3d R;
     std::vector<double> w;
-    if (!gnc_tls_rotation(ta, tb, 2.0 * beta, params, R, w, out.iterations)) return out;
+    if (!gnc_tls_rotation(ta, tb, 2.0 * beta, params, R, w, out.iterations, ctx)) return out;
 
     // A correspondence is a rotation inlier when at least half of its measurements are.
     std::vector<std::uint32_t> good(n, 0), total(n, 0);

@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "run_context.hpp"
+
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
 inline namespace v0_1 {
@@ -38,7 +40,7 @@ Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const s
 // Returns false when fewer than two measurements end up as inliers.
 bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                       const SolverParams &params, Eigen::Matrix3d &rotation, std::vector<double> &weights,
-                      int &iterations);
+                      int &iterations, RunContext &ctx);
 
 // Globally optimal 1-D truncated least squares: argmin_x sum_k min((x_k - x)^2, bound^2).
 double scalar_tls(std::vector<double> values, double bound);
@@ -62,7 +64,7 @@ std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs);
 // inlier-inlier, so GNC sees far fewer outliers than the correspondences have. Empty = strided_pairs().
 // The result depends only on the inputs' content, never on threads.
 SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
-                        std::vector<IndexPair> pairs, const SolverParams &params);
+                        std::vector<IndexPair> pairs, const SolverParams &params, RunContext &ctx);
 
 } // namespace detail
 } // namespace v0_1

@@ -185,7 +185,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         pa[k] = a[core[k]].cast<double>();
         pb[k] = b[core[k]].cast<double>();
     }
-    SolverOutput sol = solve_pose(pa, pb, std::move(tim_pairs), sp);
+    SolverOutput sol = solve_pose(pa, pb, std::move(tim_pairs), sp, ctx);
     r.num_rotation_inliers = sol.num_rotation_inliers;
     if (!sol.solved) {
         r.reason = Reason::SolverFailed;

@@ -1,3 +1,4 @@
+#include <cstring>
 #include <Eigen/Geometry>
 #include <cmath>
 
@@ -56,7 +57,7 @@ static void test_gnc_with_90_percent_outliers() {
         std::vector<bool> cinl;
         for (auto v : core) ca.push_back(a[v]), cb.push_back(b[v]), cinl.push_back(inl[v]);
         a = ca, b = cb, inl = cinl;
-        const SolverOutput out = solve_pose(a, b, sample_induced_edges(g, core, p.max_tims), p);
+        const SolverOutput out = solve_pose(a, b, sample_induced_edges(g, core, p.max_tims), p, ctx);
         REQUIRE(out.solved);
         CHECK_MSG(rotation_error_deg(out.rotation, R) < 0.5, "seed %d: %g deg", (int)seed, rotation_error_deg(out.rotation, R));
         CHECK_MSG((out.translation - t).norm() < 0.1, "seed %d: %g m", (int)seed, (out.translation - t).norm());
@@ -86,7 +87,8 @@ static void test_rotation_only_gnc() {
     Eigen::Matrix3d est;
     std::vector<double> w;
     int iterations = 0;
-    REQUIRE(gnc_tls_rotation(a, b, 0.1, p, est, w, iterations));
+    RunContext ctx(2, nullptr, Hooks());
+    REQUIRE(gnc_tls_rotation(a, b, 0.1, p, est, w, iterations, ctx));
     CHECK(rotation_error_deg(est, R) < 1e-6);
     CHECK(iterations > 0 && iterations <= p.max_iterations);
     CHECK(std::abs(est.determinant() - 1.0) < 1e-12);
@@ -100,15 +102,39 @@ static void test_order_independence() {
     make_problem(21, 400, 0.5, 0.05, R, t, a, b, inl);
     SolverParams p;
     p.noise_bound = 0.2;
-    const SolverOutput x = solve_pose(a, b, {}, p);
+    RunContext ctx(2, nullptr, Hooks());
+    const SolverOutput x = solve_pose(a, b, {}, p, ctx);
     // The solver's contract: the answer depends only on the order's content; reversing it must still
     // give the same pose to numerical precision.
     std::vector<Eigen::Vector3d> ra(a.rbegin(), a.rend()), rb(b.rbegin(), b.rend());
-    const SolverOutput y = solve_pose(ra, rb, {}, p);
+    const SolverOutput y = solve_pose(ra, rb, {}, p, ctx);
     REQUIRE(x.solved && y.solved);
     CHECK(rotation_error_deg(x.rotation, y.rotation) < 1e-6);
     CHECK((x.translation - y.translation).norm() < 1e-6);
     CHECK_EQ_INT(x.num_inliers, y.num_inliers);
+}
+
+static void test_same_bits_for_any_thread_count() {
+    // Enough measurements for several fixed chunks of partial sums.
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    std::vector<Eigen::Vector3d> a, b;
+    std::vector<bool> inl;
+    make_problem(22, 3000, 0.7, 0.05, R, t, a, b, inl);
+    SolverParams p;
+    p.noise_bound = 0.2;
+    RunContext one(1, nullptr, Hooks());
+    const SolverOutput x = solve_pose(a, b, {}, p, one);
+    REQUIRE(x.solved);
+    CHECK(rotation_error_deg(x.rotation, R) < 0.5);
+    for (int threads : {2, 3, 8}) {
+        RunContext ctx(threads, nullptr, Hooks());
+        const SolverOutput y = solve_pose(a, b, {}, p, ctx);
+        CHECK_MSG(std::memcmp(x.rotation.data(), y.rotation.data(), sizeof(double) * 9) == 0 &&
+                      std::memcmp(x.translation.data(), y.translation.data(), sizeof(double) * 3) == 0 &&
+                      x.num_inliers == y.num_inliers && x.iterations == y.iterations,
+                  "%d threads", threads);
+    }
 }
 
 static void test_scalar_tls() {
@@ -131,6 +157,7 @@ int main() {
     RUN_TEST(test_gnc_with_90_percent_outliers);
     RUN_TEST(test_rotation_only_gnc);
     RUN_TEST(test_order_independence);
+    RUN_TEST(test_same_bits_for_any_thread_count);
     RUN_TEST(test_scalar_tls);
     return TEST_SUMMARY();
 }
