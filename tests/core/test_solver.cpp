@@ -94,14 +94,23 @@ static void test_rotation_only_gnc() {
     CHECK(std::abs(est.determinant() - 1.0) < 1e-12);
 }
 
-static void test_order_independence() {
+// A problem with noise 0.05 and noise bound 0.2.
+struct Problem {
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
     std::vector<Eigen::Vector3d> a, b;
     std::vector<bool> inl;
-    make_problem(21, 400, 0.5, 0.05, R, t, a, b, inl);
     SolverParams p;
-    p.noise_bound = 0.2;
+    Problem(std::uint64_t seed, std::size_t n, double outliers) {
+        make_problem(seed, n, outliers, 0.05, R, t, a, b, inl);
+        p.noise_bound = 0.2;
+    }
+};
+
+static void test_order_independence() {
+    const Problem q(21, 400, 0.5);
+    const auto &a = q.a, &b = q.b;
+    const SolverParams &p = q.p;
     RunContext ctx(2, nullptr, Hooks());
     const SolverOutput x = solve_pose(a, b, {}, p, ctx);
     // The solver's contract: the answer depends only on the order's content; reversing it must still
@@ -116,20 +125,14 @@ static void test_order_independence() {
 
 static void test_same_bits_for_any_thread_count() {
     // Enough measurements for several fixed chunks of partial sums.
-    Eigen::Matrix3d R;
-    Eigen::Vector3d t;
-    std::vector<Eigen::Vector3d> a, b;
-    std::vector<bool> inl;
-    make_problem(22, 3000, 0.7, 0.05, R, t, a, b, inl);
-    SolverParams p;
-    p.noise_bound = 0.2;
+    const Problem q(22, 3000, 0.7);
     RunContext one(1, nullptr, Hooks());
-    const SolverOutput x = solve_pose(a, b, {}, p, one);
+    const SolverOutput x = solve_pose(q.a, q.b, {}, q.p, one);
     REQUIRE(x.solved);
-    CHECK(rotation_error_deg(x.rotation, R) < 0.5);
+    CHECK(rotation_error_deg(x.rotation, q.R) < 0.5);
     for (int threads : {2, 3, 8}) {
         RunContext ctx(threads, nullptr, Hooks());
-        const SolverOutput y = solve_pose(a, b, {}, p, ctx);
+        const SolverOutput y = solve_pose(q.a, q.b, {}, q.p, ctx);
         CHECK_MSG(std::memcmp(x.rotation.data(), y.rotation.data(), sizeof(double) * 9) == 0 &&
                       std::memcmp(x.translation.data(), y.translation.data(), sizeof(double) * 3) == 0 &&
                       x.num_inliers == y.num_inliers && x.iterations == y.iterations,
