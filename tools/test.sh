@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Every test: set up, build, then the C/C++ suite (CTest), the Python binding (pytest), a seconds-long
-# benchmark smoke run and the Rust binding (cargo test). Tests that need ../shared/data skip with a
+# Every test: set up, build, then the C/C++ suite (CTest), the same suite under ASan + UBSan and the
+# concurrency tests under TSan, the Python binding (pytest), a seconds-long benchmark smoke run and the
+# Rust binding (cargo test). Tests that need ../shared/data skip with a
 # message when it is absent (point KISSM_DATA_DIR elsewhere to use another copy).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -18,6 +19,12 @@ run_suite() {
     KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir bash "$here/$1"
   fi
 }
+
+# The same C/C++ suite under ASan + UBSan, and the concurrency tests under TSan (separate build trees).
+# KISSM_SKIP_SANITIZERS=1 skips them for a quick local run; CI never sets it.
+if [[ ${KISSM_SKIP_SANITIZERS:-0} != 1 ]]; then
+  bash "$here/tools/sanitize.sh"
+fi
 
 # Python binding (its own venv in $build/venv-python, set up by the script).
 run_suite bindings/python/run_tests.sh

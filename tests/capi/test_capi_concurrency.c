@@ -1,0 +1,142 @@
+/* Concurrency: eight threads, each with its own matcher, register different pairs at once and share
+ * kissm_features objects; every result must equal the serial run's bit for bit. A child forked after the
+ * parent has registered must register too, with the same result. C99 + pthreads; also run under TSan
+ * (CMakePresets.json, label "concurrency"). */
+#define _POSIX_C_SOURCE 200809L
+
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "harness.h"
+#include "kissm.h"
+#include "scenes.h"
+
+#define VOXEL 0.5
+#define NUM_PAIRS 4
+#define NUM_WORKERS 8
+#define ROUNDS 2
+
+static scn_pair g_pairs[NUM_PAIRS];
+static kissm_result g_serial[NUM_PAIRS]; /* one thread, one call at a time */
+/* Computed once, then read by every worker at the same time (documented as safe). */
+static kissm_features *g_source_features[NUM_PAIRS], *g_target_features[NUM_PAIRS];
+
+static int register_pair(int pair, int32_t num_threads, kissm_result *r) {
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    kissm_points s = scn_points(&g_pairs[pair].source), t = scn_points(&g_pairs[pair].target);
+    int32_t st;
+    c.num_threads = num_threads;
+    if (kissm_create(&c, &m) != KISSM_OK) return 0;
+    scn_result_poison(r);
+    st = kissm_register(m, &s, &t, r);
+    kissm_destroy(m);
+    return st == KISSM_OK;
+}
+
+/* Workers must not touch the harness counters (not thread-safe): they record, main checks. */
+typedef struct worker {
+    pthread_t thread;
+    int pair;
+    int32_t num_threads;
+    int calls_ok;  /* calls that returned KISSM_OK */
+    int equal;     /* results equal to g_serial[pair] */
+} worker;
+
+static void *work(void *arg) {
+    worker *w = (worker *)arg;
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    kissm_points s = scn_points(&g_pairs[w->pair].source), t = scn_points(&g_pairs[w->pair].target);
+    kissm_result r;
+    int round;
+    c.num_threads = w->num_threads;
+    if (kissm_create(&c, &m) != KISSM_OK) return NULL;
+    for (round = 0; round < ROUNDS; ++round) {
+        /* The same handle reused: from raw points, then from the shared features. */
+        scn_result_poison(&r);
+        if (kissm_register(m, &s, &t, &r) == KISSM_OK) {
+            w->calls_ok++;
+            w->equal += scn_result_equal(&g_serial[w->pair], &r);
+        }
+        scn_result_poison(&r);
+        if (kissm_register_features(m, g_source_features[w->pair], g_target_features[w->pair], &r) == KISSM_OK) {
+            w->calls_ok++;
+            w->equal += scn_result_equal(&g_serial[w->pair], &r);
+        }
+    }
+    kissm_destroy(m);
+    return NULL;
+}
+
+static void test_parallel_matchers_equal_serial(void) {
+    worker workers[NUM_WORKERS];
+    int i, started = 0;
+    for (i = 0; i < NUM_PAIRS; ++i) REQUIRE(register_pair(i, 1, &g_serial[i]));
+    for (i = 0; i < NUM_PAIRS; ++i) CHECK(g_serial[i].valid == 1); /* the comparison means something */
+    memset(workers, 0, sizeof(workers));
+    for (i = 0; i < NUM_WORKERS; ++i) {
+        workers[i].pair = i % NUM_PAIRS;
+        workers[i].num_threads = 1 + i % 3; /* per-call pools of 1, 2 and 3 threads run side by side */
+        if (pthread_create(&workers[i].thread, NULL, work, &workers[i]) == 0) started++;
+        else break;
+    }
+    CHECK_EQ_INT(started, NUM_WORKERS);
+    for (i = 0; i < started; ++i) pthread_join(workers[i].thread, NULL);
+    for (i = 0; i < started; ++i) {
+        CHECK_MSG(workers[i].calls_ok == 2 * ROUNDS, "worker %d: %d of %d calls OK", i, workers[i].calls_ok, 2 * ROUNDS);
+        CHECK_MSG(workers[i].equal == 2 * ROUNDS, "worker %d (pair %d, %d threads): %d of %d results equal the serial run",
+                  i, workers[i].pair, (int)workers[i].num_threads, workers[i].equal, 2 * ROUNDS);
+    }
+}
+
+static void test_fork_after_register(void) {
+    kissm_result parent;
+    pid_t child;
+    int status = 0;
+    /* The parent has run a multi-threaded call; its pool is gone, so the child starts clean. */
+    REQUIRE(register_pair(1, 2, &parent));
+    CHECK(scn_result_equal(&g_serial[1], &parent));
+    fflush(NULL);
+    child = fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+        kissm_result r;
+        const int ok = register_pair(1, 2, &r) && scn_result_equal(&g_serial[1], &r) && register_pair(2, 3, &r) &&
+                       scn_result_equal(&g_serial[2], &r);
+        _exit(ok ? 0 : 1);
+    }
+    REQUIRE(waitpid(child, &status, 0) == child);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 0, "child status %d", status);
+    /* And the parent still works afterwards. */
+    REQUIRE(register_pair(3, 2, &parent));
+    CHECK(scn_result_equal(&g_serial[3], &parent));
+}
+
+int main(void) {
+    int i;
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    for (i = 0; i < NUM_PAIRS; ++i) scn_make_pair(&g_pairs[i], 40 + (uint64_t)i, 10.0, 0.01);
+    if (kissm_create(&c, &m) != KISSM_OK) return 1;
+    for (i = 0; i < NUM_PAIRS; ++i) {
+        kissm_points s = scn_points(&g_pairs[i].source), t = scn_points(&g_pairs[i].target);
+        if (kissm_features_compute(m, &s, &g_source_features[i]) != KISSM_OK ||
+            kissm_features_compute(m, &t, &g_target_features[i]) != KISSM_OK)
+            return 1;
+    }
+    kissm_destroy(m); /* features outlive the matcher that computed them */
+    RUN_TEST(test_parallel_matchers_equal_serial);
+    RUN_TEST(test_fork_after_register);
+    for (i = 0; i < NUM_PAIRS; ++i) {
+        kissm_features_destroy(g_source_features[i]);
+        kissm_features_destroy(g_target_features[i]);
+        scn_pair_free(&g_pairs[i]);
+    }
+    return TEST_SUMMARY();
+}
