@@ -17,6 +17,12 @@ constexpr int kBinsPerFeature = 11;
 // does not depend on the order of the two points.
 bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]);
 
+// SPFH (n x 33, row-major) of every point with a normal: the bins of its pairs with each neighbour that has a
+// normal, each block scaled by 100 / (number of pairs with a frame); zero rows for points without a normal.
+// Bitwise identical to evaluating every ordered pair with pair_feature_bins, for any thread count.
+std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
+                                RunContext &ctx);
+
 // SPFH of every point with a normal (neighbours without a normal are skipped), then FPFH of each keypoint:
 // its SPFH plus the mean of its neighbours' SPFH weighted by (voxel_size / distance)^weight_power, each 11-bin block
 // rescaled to sum to 100. Distances are normalised by the voxel size so that descriptors do not depend on

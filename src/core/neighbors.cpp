@@ -5,6 +5,14 @@
 
 #include "radix_sort.hpp"
 
+// SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
+#if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
+#define KISSM_NEIGHBORS_SSE2 1
+#include <emmintrin.h>
+#else
+#define KISSM_NEIGHBORS_SSE2 0
+#endif
+
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
 inline namespace v0_1 {
@@ -17,6 +25,36 @@ constexpr std::uint64_t kBits = 21;
 constexpr std::uint64_t kMask = (std::uint64_t(1) << kBits) - 1;
 
 std::uint64_t pack(std::uint64_t x, std::uint64_t y, std::uint64_t z) { return (x << (2 * kBits)) | (y << kBits) | z; }
+
+// Appends the indices of the points within the run that are strictly closer than sqrt(r2) to q, in run
+// order; returns how many. The distance is evaluated as (dx^2 + dy^2) + dz^2 in every path, so the
+// vector and scalar tests agree bit for bit (and the lists stay symmetric: the same test both ways).
+std::size_t append_within(const float *px, const float *py, const float *pz, const std::uint32_t *index,
+                          std::size_t len, const Vec3f &q, float r2, std::uint32_t *out) {
+    const float qx = q.x(), qy = q.y(), qz = q.z();
+    std::size_t count = 0, s = 0;
+#if KISSM_NEIGHBORS_SSE2
+    const __m128 vx = _mm_set1_ps(qx), vy = _mm_set1_ps(qy), vz = _mm_set1_ps(qz), vr2 = _mm_set1_ps(r2);
+    for (; s + 4 <= len; s += 4) {
+        const __m128 dx = _mm_sub_ps(_mm_loadu_ps(px + s), vx);
+        const __m128 dy = _mm_sub_ps(_mm_loadu_ps(py + s), vy);
+        const __m128 dz = _mm_sub_ps(_mm_loadu_ps(pz + s), vz);
+        const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+        unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmplt_ps(d2, vr2)));
+        while (mask != 0) {
+            const unsigned lane = static_cast<unsigned>(__builtin_ctz(mask));
+            out[count++] = index[s + lane];
+            mask &= mask - 1;
+        }
+    }
+#endif
+    for (; s < len; ++s) {
+        const float dx = px[s] - qx, dy = py[s] - qy, dz = pz[s] - qz;
+        out[count] = index[s];
+        count += dx * dx + dy * dy + dz * dz < r2;
+    }
+    return count;
+}
 
 } // namespace
 
@@ -55,13 +93,43 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
         }
     }
     cell_start.push_back(static_cast<std::uint32_t>(n));
+    const std::size_t num_cells = cell_keys.size();
     // Points in cell order, as structure of arrays: a run of three z-adjacent cells is one contiguous
-    // stretch, scanned by a loop the compiler vectorises.
+    // stretch, scanned four points at a time.
     std::vector<float> sx(n), sy(n), sz(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3f &p = points[entries[i].index];
-        sx[i] = p.x(), sy[i] = p.y(), sz[i] = p.z();
+    std::vector<std::uint32_t> sorted_index(n), cell_of_point(n);
+    for (std::size_t c = 0; c < num_cells; ++c) {
+        for (std::uint32_t s = cell_start[c]; s < cell_start[c + 1]; ++s) {
+            const std::uint32_t i = entries[s].index;
+            const Vec3f &p = points[i];
+            sx[s] = p.x(), sy[s] = p.y(), sz[s] = p.z();
+            sorted_index[s] = i;
+            cell_of_point[i] = static_cast<std::uint32_t>(c);
+        }
     }
+    std::vector<KeyIndex>().swap(entries);
+
+    // The 9 runs of a cell's 3 x 3 x 3 neighbourhood (ranges of sorted positions), found once per occupied
+    // cell rather than once per point: all points of a cell scan the same runs.
+    constexpr int kRuns = 9;
+    std::vector<std::uint32_t> runs(num_cells * kRuns * 2);
+    ctx.parallel_for(num_cells, 1024, [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) {
+            const std::uint64_t key = cell_keys[c];
+            const std::uint64_t cx = key >> (2 * kBits), cy = (key >> kBits) & kMask, cz = key & kMask;
+            std::uint32_t *r = &runs[c * kRuns * 2];
+            for (std::uint64_t dx = cx - 1; dx <= cx + 1; ++dx) {
+                for (std::uint64_t dy = cy - 1; dy <= cy + 1; ++dy) {
+                    // z is the fastest-varying part of the key: the three z cells are one contiguous run.
+                    const std::uint64_t first = pack(dx, dy, cz - 1), last = pack(dx, dy, cz + 1);
+                    auto lo_it = std::lower_bound(cell_keys.begin(), cell_keys.end(), first);
+                    auto hi_it = std::upper_bound(lo_it, cell_keys.end(), last);
+                    *r++ = cell_start[static_cast<std::size_t>(lo_it - cell_keys.begin())];
+                    *r++ = cell_start[static_cast<std::size_t>(hi_it - cell_keys.begin())];
+                }
+            }
+        }
+    });
 
     const float r2 = radius * radius;
     constexpr std::size_t kChunk = 1024;
@@ -71,35 +139,22 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
 
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
         auto &idx = chunk_index[b / kChunk];
-        std::vector<unsigned char> inside;
+        std::size_t used = 0;
         for (std::size_t i = b; i < e; ++i) {
             const Vec3f &q = points[i];
-            const float qx = q.x(), qy = q.y(), qz = q.z();
-            std::uint64_t c[3];
-            cell_of(q, c);
-            const std::size_t before = idx.size();
-            for (std::uint64_t dx = c[0] - 1; dx <= c[0] + 1; ++dx) {
-                for (std::uint64_t dy = c[1] - 1; dy <= c[1] + 1; ++dy) {
-                    // z is the fastest-varying part of the key: the three z cells are one contiguous run.
-                    const std::uint64_t first = pack(dx, dy, c[2] - 1), last = pack(dx, dy, c[2] + 1);
-                    auto lo_it = std::lower_bound(cell_keys.begin(), cell_keys.end(), first);
-                    auto hi_it = std::upper_bound(lo_it, cell_keys.end(), last);
-                    if (lo_it == hi_it) continue;
-                    const std::uint32_t s0 = cell_start[static_cast<std::size_t>(lo_it - cell_keys.begin())];
-                    const std::uint32_t s1 = cell_start[static_cast<std::size_t>(hi_it - cell_keys.begin())];
-                    const std::size_t len = s1 - s0;
-                    inside.resize(len);
-                    const float *px = &sx[s0], *py = &sy[s0], *pz = &sz[s0];
-                    for (std::size_t s = 0; s < len; ++s) {
-                        const float ddx = px[s] - qx, ddy = py[s] - qy, ddz = pz[s] - qz;
-                        inside[s] = ddx * ddx + ddy * ddy + ddz * ddz < r2;
-                    }
-                    for (std::size_t s = 0; s < len; ++s)
-                        if (inside[s]) idx.push_back(entries[s0 + s].index);
-                }
+            const std::uint32_t *r = &runs[static_cast<std::size_t>(cell_of_point[i]) * kRuns * 2];
+            std::size_t candidates = 0;
+            for (int k = 0; k < kRuns; ++k) candidates += r[2 * k + 1] - r[2 * k];
+            if (idx.size() < used + candidates) idx.resize(std::max(2 * idx.size(), used + candidates));
+            const std::size_t before = used;
+            for (int k = 0; k < kRuns; ++k) {
+                const std::uint32_t s0 = r[2 * k], s1 = r[2 * k + 1];
+                used += append_within(sx.data() + s0, sy.data() + s0, sz.data() + s0, sorted_index.data() + s0, s1 - s0, q,
+                                      r2, idx.data() + used);
             }
-            counts[i] = static_cast<std::uint32_t>(idx.size() - before);
+            counts[i] = static_cast<std::uint32_t>(used - before);
         }
+        idx.resize(used);
     });
 
     for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + counts[i];
