@@ -45,11 +45,16 @@ int32_t status_of(ErrorKind kind) {
     return KISSM_ERR_INTERNAL;
 }
 
-int32_t set_error(int32_t status, const std::string &message) noexcept {
+// The message is built inside the try: when memory has run out, composing it may fail too, and the status
+// must still get through.
+int32_t set_error(int32_t status, const char *function, const char *what, const char *detail = nullptr) noexcept {
     try {
-        t_last_error = message;
+        t_last_error = function;
+        t_last_error += ": ";
+        t_last_error += what;
+        if (detail != nullptr) t_last_error += detail;
     } catch (...) {
-        t_last_error.clear(); // out of memory for the message itself: the status still tells
+        t_last_error.clear(); // clear() never allocates
     }
     return status;
 }
@@ -65,15 +70,15 @@ int32_t guarded(const char *function, Body &&body) noexcept {
     try {
         return body();
     } catch (const Failure &f) {
-        return set_error(status_of(f.kind()), std::string(function) + ": " + f.what());
+        return set_error(status_of(f.kind()), function, f.what());
     } catch (const std::bad_alloc &) {
-        return set_error(KISSM_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory");
+        return set_error(KISSM_ERR_OUT_OF_MEMORY, function, "out of memory");
     } catch (const std::length_error &) {
-        return set_error(KISSM_ERR_OUT_OF_MEMORY, std::string(function) + ": out of memory (allocation too large)");
+        return set_error(KISSM_ERR_OUT_OF_MEMORY, function, "out of memory (allocation too large)");
     } catch (const std::exception &e) {
-        return set_error(KISSM_ERR_INTERNAL, std::string(function) + ": internal error: " + e.what());
+        return set_error(KISSM_ERR_INTERNAL, function, "internal error: ", e.what());
     } catch (...) {
-        return set_error(KISSM_ERR_INTERNAL, std::string(function) + ": internal error (unknown exception)");
+        return set_error(KISSM_ERR_INTERNAL, function, "internal error (unknown exception)");
     }
 }
 
