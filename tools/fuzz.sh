@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang, ASan + UBSan; CMakePresets.json "fuzz") and runs each for a while,
+# starting from the committed seed corpus. Not part of CI (minutes per target); the seed corpus and the
+# regressions are replayed by normal CTest instead.
+#   bash tools/fuzz.sh [SECONDS_PER_TARGET=600] [TARGET...]      (targets: ply pcd npy xyz kitti_bin
+#                                                                  bin_xyz register stateful)
+# Findings land in build-fuzz/findings/<target>/; copy a crasher to tests/fuzz/regressions/<target>/ once
+# fixed. The grown corpus stays in build-fuzz/corpus/<target>/.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+seconds=${1:-600}
+shift || true
+targets=("$@")
+[[ ${#targets[@]} -gt 0 ]] || targets=(ply pcd npy xyz kitti_bin bin_xyz register stateful)
+
+if ! command -v clang++ >/dev/null; then
+  if [[ $(id -u) == 0 ]] && command -v apt-get >/dev/null; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -q clang >/dev/null
+  else
+    echo "fuzz.sh: clang is needed (apt-get install clang)" >&2
+    exit 2
+  fi
+fi
+cd "$here"
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz --target $(printf 'fuzz_%s ' "${targets[@]}")
+
+for t in "${targets[@]}"; do
+  corpus=build-fuzz/corpus/$t findings=build-fuzz/findings/$t
+  mkdir -p "$corpus" "$findings"
+  cp -n tests/fuzz/corpus/"$t"/* "$corpus"/ 2>/dev/null || true
+  [[ -d tests/fuzz/regressions/$t ]] && cp -n tests/fuzz/regressions/"$t"/* "$corpus"/ 2>/dev/null || true
+  echo "== fuzz_$t for ${seconds}s =="
+  # 64 KiB inputs, 2 GiB RSS, 30 s per input; ASan/UBSan findings abort the run.
+  ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    build-fuzz/tests/fuzz/fuzz_"$t" "$corpus" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 \
+    -timeout=30 -print_final_stats=1 -artifact_prefix="$findings/" 2>&1 | tee build-fuzz/fuzz_"$t".log |
+    grep -E "^(#[0-9]+ *DONE|stat::number_of_executed_units|==[0-9]+==ERROR|SUMMARY|INFO: Running with)" || true
+  if ls "$findings"/* >/dev/null 2>&1; then
+    echo "fuzz_$t: FINDINGS in $findings" >&2
+  fi
+done

@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""Writes the fuzz targets' seed corpus (tests/fuzz/corpus/<target>/): small valid files for every reader
+and byte strings for the pipeline targets that decode (tests/fuzz/fuzz_input.hpp) into a registrable pair.
+Deterministic (fixed seeds); standard library only. Run from anywhere:  python3 tools/make_fuzz_seeds.py"""
+import math
+import random
+import struct
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parent.parent / "tests" / "fuzz" / "corpus"
+
+
+def write(target, name, data):
+    d = OUT / target
+    d.mkdir(parents=True, exist_ok=True)
+    (d / name).write_bytes(data if isinstance(data, bytes) else data.encode())
+
+
+PTS = [(0.0, 0.0, 0.0), (1.0, 0.5, -0.25), (2.5, -1.0, 0.75), (-3.0, 4.0, 1.5), (0.125, 0.25, 8.0)]
+
+
+def readers():
+    v = "".join(f"{x} {y} {z}\n" for x, y, z in PTS)
+    write("ply", "ascii.ply", f"ply\nformat ascii 1.0\nelement vertex {len(PTS)}\nproperty float x\n"
+          f"property float y\nproperty float z\nend_header\n{v}")
+    body = b"".join(struct.pack("<dddB", x, y, z, 7) for x, y, z in PTS)
+    write("ply", "binary_le_double.ply", (f"ply\nformat binary_little_endian 1.0\ncomment seed\n"
+          f"element vertex {len(PTS)}\nproperty double x\nproperty double y\nproperty double z\n"
+          f"property uchar intensity\nelement face 1\nproperty list uchar int vertex_indices\n"
+          f"end_header\n").encode() + body + struct.pack("<Biii", 3, 0, 1, 2))
+    body = b"".join(struct.pack(">fff", x, y, z) for x, y, z in PTS)
+    write("ply", "binary_be_float.ply", (f"ply\nformat binary_big_endian 1.0\nelement vertex {len(PTS)}\n"
+          f"property float32 x\nproperty float32 y\nproperty float32 z\nend_header\n").encode() + body)
+
+    head = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            f"WIDTH {len(PTS)}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {len(PTS)}\n")
+    write("pcd", "ascii.pcd", head + "DATA ascii\n" + v)
+    head4 = ("VERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+             f"WIDTH {len(PTS)}\nHEIGHT 1\nPOINTS {len(PTS)}\nDATA binary\n")
+    write("pcd", "binary.pcd", head4.encode() + b"".join(struct.pack("<ffff", x, y, z, 1.0) for x, y, z in PTS))
+
+    def npy(descr, shape, values, fmt):
+        header = f"{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}"
+        header += " " * ((64 - (10 + len(header) + 1) % 64) % 64) + "\n"
+        return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(header)) + header.encode() + struct.pack(fmt, *values)
+
+    flat = [c for p in PTS for c in p]
+    write("npy", "f4_n3.npy", npy("<f4", (len(PTS), 3), flat, f"<{len(flat)}f"))
+    wide = [c for p in PTS for c in (*p, 9.0)]
+    write("npy", "f8_n4.npy", npy("<f8", (len(PTS), 4), wide, f"<{len(wide)}d"))
+
+    write("xyz", "plain.xyz", v)
+    write("xyz", "commented.xyz", "# x y z r g b\n" + "".join(f"{x},{y},{z},1,2,3\n" for x, y, z in PTS))
+    write("kitti_bin", "four.bin", b"".join(struct.pack("<ffff", x, y, z, 0.5) for x, y, z in PTS))
+    write("bin_xyz", "four.bin", b"".join(struct.pack("<fff", x, y, z) for x, y, z in PTS))
+
+
+def scene(rng, n):
+    """Points on a floor, two walls and some boxes of a 30 m x 30 m yard."""
+    pts = []
+    for _ in range(n):
+        k = rng.random()
+        if k < 0.4:
+            pts.append((rng.uniform(-15, 15), rng.uniform(-15, 15), -1.7))
+        elif k < 0.6:
+            pts.append((rng.uniform(-15, 15), 15.0, rng.uniform(-1.7, 2)))
+        elif k < 0.75:
+            pts.append((-15.0, rng.uniform(-15, 15), rng.uniform(-1.7, 3)))
+        else:
+            cx, cy = rng.choice([(3, 4), (-6, 2), (5, -7), (-4, -8)])
+            f = rng.randrange(5)
+            a, b = rng.uniform(-1, 1), rng.uniform(-1.7, 0.5)
+            pts.append([(cx + a, cy - 1, b), (cx + a, cy + 1, b), (cx - 1, cy + a, b), (cx + 1, cy + a, b),
+                        (cx + a, cy + rng.uniform(-1, 1), 0.5)][f])
+    return pts
+
+
+def encode_cloud(pts, head=0x00, scale=1e-3):
+    """The fuzz_input.hpp cloud encoding: head byte (bit 0 float64; bit 1 set: 1 mm steps), uint16 count,
+    uint16 coordinates offset by 32768."""
+    out = bytearray([head | 0x02]) + struct.pack("<H", len(pts))
+    for p in pts:
+        for c in p:
+            q = int(round(c / scale)) + 32768
+            out += struct.pack("<H", min(max(q, 0), 0xFFFA))
+    return bytes(out)
+
+
+def pipeline():
+    rng = random.Random(7)
+    base = scene(rng, 1500)
+    ang = math.radians(25.0)
+    ca, sa = math.cos(ang), math.sin(ang)
+    moved = [(ca * x - sa * y + 1.5, sa * x + ca * y - 0.5, z + 0.1) for x, y, z in scene(rng, 1500)]
+    config = bytes([3, 0x20, 0xC5])  # voxel 0.5, 1 thread, reject non-finite, min_inliers 5, gains 3.5/5, 903 matches
+    pair = encode_cloud(base) + encode_cloud(moved)
+    write("register", "yard_pair", config + pair)
+    write("register", "yard_pair_two_threads_f64", bytes([3, 0x21, 0xC5]) + encode_cloud(base, 0x01) + encode_cloud(moved))
+    write("register", "tiny_clouds", config + encode_cloud(base[:4]) + encode_cloud(base[:5], 0x01))
+    nan = bytearray(config[:1] + bytes([0x22]) + config[2:] + encode_cloud(base[:600]) + encode_cloud(moved[:600]))
+    nan[3 + 3 + 6 * 10:3 + 3 + 6 * 10 + 2] = b"\xff\xff"  # one NaN x, dropped by the policy
+    write("register", "nan_dropped", bytes(nan))
+    small = scene(random.Random(3), 500)
+    three = encode_cloud(base[:500]) + encode_cloud(moved[:500]) + encode_cloud(small)
+    ops = bytes([0x01, 0x01, 0x10, 0x11, 0x12, 0x21, 0x30, 0x01, 0x40, 0x05, 0x25, 0x01])
+    write("stateful", "register_features_cancel", config + three + ops)
+
+
+if __name__ == "__main__":
+    readers()
+    pipeline()
+    print(f"wrote {sum(1 for _ in OUT.rglob('*') if _.is_file())} seed files under {OUT}")
