@@ -6,7 +6,7 @@
 #include <limits>
 #include <memory>
 
-#include <nanoflann.hpp>
+#include "kdtree.hpp"
 
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
@@ -19,28 +19,16 @@ namespace {
 // backtracks into near brute force (full KITTI scan pair: 13.3 G instructions of matching); in 8-D it
 // takes 1.5 G and in 6-D 0.8 G (callgrind). The kCandidates nearest found there are re-ranked by exact
 // 33-D distances; success on ../shared/data is the same as the exact search's (docs/parameters.md).
-constexpr int kProjDim = 6;
+constexpr int kProjDim = ProjectedKdTree::kDim;
 constexpr int kCandidates = 16;
+static_assert(kCandidates <= ProjectedKdTree::kMaxK, "the tree returns at most kMaxK neighbours");
 
-struct ProjectedSet {
-    const std::vector<float> *values; // n * kProjDim
-    std::size_t kdtree_get_point_count() const { return values->size() / kProjDim; }
-    float kdtree_get_pt(std::size_t i, std::size_t d) const { return (*values)[i * kProjDim + d]; }
-    template <class BBox>
-    bool kdtree_get_bbox(BBox &) const {
-        return false;
-    }
-};
-
-using Metric = nanoflann::L2_Simple_Adaptor<float, ProjectedSet, float, std::uint32_t>;
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, ProjectedSet, kProjDim, std::uint32_t>;
-
-// The k nearest, ties broken by the lower index so that the answer is a function of the data alone.
-// nanoflann only offers a candidate strictly closer than worstDist(), hence the nextafter.
+// The k nearest by exact 33-D distance among the projected search's candidates, ties by the lower index
+// so that the answer is a function of the data alone.
 class NearestK {
 public:
     explicit NearestK(int k) : k_(k) {}
-    bool addPoint(float dist, std::uint32_t index) {
+    void add(float dist, std::uint32_t index) {
         int i = count_;
         while (i > 0 && (dist < dist_[i - 1] || (dist == dist_[i - 1] && index < index_[i - 1]))) {
             if (i < k_) {
@@ -49,27 +37,20 @@ public:
             }
             --i;
         }
-        if (i < k_) {
-            dist_[i] = dist;
-            index_[i] = index;
-            if (count_ < k_) ++count_;
-            if (count_ == k_) worst_ = std::nextafter(dist_[k_ - 1], std::numeric_limits<float>::max());
-        }
-        return true;
+        if (i >= k_) return;
+        dist_[i] = dist;
+        index_[i] = index;
+        if (count_ < k_) ++count_;
     }
-    // Asked at every tree node: cached, recomputed only when the k-th distance changes.
-    float worstDist() const { return worst_; }
-    bool full() const { return count_ == k_; }
     int found() const { return count_; }
     std::uint32_t index(int i) const { return index_[i]; }
     float dist(int i) const { return dist_[i]; }
 
 private:
-    static constexpr int kCap = kCandidates;
+    static constexpr int kCap = 2;
     int k_, count_ = 0;
     std::uint32_t index_[kCap] = {};
     float dist_[kCap] = {};
-    float worst_ = std::numeric_limits<float>::max();
 };
 
 float exact_dist2(const float *a, const float *b) {
@@ -130,15 +111,14 @@ std::vector<float> project(const Descriptors &d, const Projection &p, RunContext
 }
 
 // The two exact nearest among the projected search's candidates, ties by index.
-NearestK nearest(const Tree &tree, const std::vector<float> &proj_q, std::size_t q, const float *query,
+NearestK nearest(const ProjectedKdTree &tree, const std::vector<float> &proj_q, std::size_t q, const float *query,
                  const Descriptors &ref, int k) {
-    NearestK cand(kCandidates);
-    tree.findNeighbors(cand, &proj_q[q * kProjDim], nanoflann::SearchParams(0, 0.0f, false));
+    std::uint32_t cand[kCandidates];
+    float cand_dist[kCandidates];
+    const int found = tree.nearest(&proj_q[q * kProjDim], kCandidates, cand, cand_dist);
     NearestK best(k);
-    for (int i = 0; i < cand.found(); ++i) {
-        const std::uint32_t r = cand.index(i);
-        best.addPoint(exact_dist2(query, &ref.values[static_cast<std::size_t>(r) * kDescriptorDim]), r);
-    }
+    for (int i = 0; i < found; ++i)
+        best.add(exact_dist2(query, &ref.values[static_cast<std::size_t>(cand[i]) * kDescriptorDim]), cand[i]);
     return best;
 }
 
@@ -155,10 +135,8 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
 
     const Projection pca = principal_axes(Q, R);
     const std::vector<float> qproj = project(Q, pca, ctx), rproj = project(R, pca, ctx);
-    ProjectedSet qset{&qproj}, rset{&rproj};
-    const nanoflann::KDTreeSingleIndexAdaptorParams tree_params(16);
-    Tree rtree(kProjDim, rset, tree_params);
-    Tree qtree(kProjDim, qset, tree_params);
+    const ProjectedKdTree rtree(rproj.data(), R.keypoint.size());
+    const ProjectedKdTree qtree(qproj.data(), Q.keypoint.size());
 
     const std::size_t nq = Q.keypoint.size();
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
