@@ -164,8 +164,14 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
 
     const Projection pca = principal_axes(Q, R, ctx);
     const std::vector<float> qproj = project(Q, pca, ctx), rproj = project(R, pca, ctx);
-    const ProjectedKdTree rtree(rproj.data(), R.keypoint.size());
-    const ProjectedKdTree qtree(qproj.data(), Q.keypoint.size());
+    // The two trees are independent: built side by side when there are threads.
+    std::unique_ptr<ProjectedKdTree> trees[2];
+    ctx.parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t t = b; t < e; ++t)
+            trees[t] = t == 0 ? std::make_unique<ProjectedKdTree>(rproj.data(), R.keypoint.size())
+                              : std::make_unique<ProjectedKdTree>(qproj.data(), Q.keypoint.size());
+    });
+    const ProjectedKdTree &rtree = *trees[0], &qtree = *trees[1];
 
     const std::size_t nq = Q.keypoint.size();
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
