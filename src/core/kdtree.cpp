@@ -24,10 +24,17 @@ bool leaf_distances(const float *__restrict q, const float *__restrict x, std::s
                     float *__restrict out) {
     int hit[Lane] = {};
     for (std::size_t b = 0; b < blocks; ++b, x += Dim * Lane, out += Lane) {
-        float acc[Lane] = {};
-        for (int d = 0; d < Dim; ++d)
+        // x - q rather than q - x: the same square (rounding is symmetric in sign) and the broadcast
+        // query survives the subtraction, saving a register copy per dimension. Starting from the first
+        // square equals starting from 0 + it: a square is never -0.
+        float acc[Lane];
+        for (int j = 0; j < Lane; ++j) {
+            const float t = x[j] - q[0];
+            acc[j] = t * t;
+        }
+        for (int d = 1; d < Dim; ++d)
             for (int j = 0; j < Lane; ++j) {
-                const float t = q[d] - x[d * Lane + j];
+                const float t = x[d * Lane + j] - q[d];
                 acc[j] += t * t;
             }
         for (int j = 0; j < Lane; ++j) {
@@ -141,7 +148,7 @@ std::uint32_t ProjectedKdTree::build(std::uint32_t *begin, std::uint32_t *end, c
         if (hi[d] - lo[d] > hi[dim] - lo[dim]) dim = d;
     const std::size_t left = (count / 2 + kLane - 1) / kLane * kLane;
     std::uint32_t *mid = begin + left;
-    // (coordinate, index) is a total order, so the tree is the same on every platform and run.
+    // (coordinate, index) is a total order, so which points go to which side depends on the data alone.
     std::nth_element(begin, mid, end, [&](std::uint32_t a, std::uint32_t b) {
         const float ca = coord(a, dim), cb = coord(b, dim);
         return ca < cb || (ca == cb && a < b);
@@ -156,46 +163,63 @@ std::uint32_t ProjectedKdTree::build(std::uint32_t *begin, std::uint32_t *end, c
     return id;
 }
 
-void ProjectedKdTree::descend(std::uint32_t n, Search &s) const {
-    const Node &node = nodes_[n];
-    if (node.info & kLeafBit) {
-        const std::size_t first = node.link, count = node.info & ~kLeafBit;
+void ProjectedKdTree::descend(Search &s) const {
+    // Depth first, nearer child first, without recursion: the far children still worth a visit wait on a
+    // stack with their lower bound and per-dimension gaps. Median splits keep the depth below 64 for any
+    // 32-bit point count.
+    struct Pending {
+        std::uint32_t node;
+        float bound;
+        float gap2[kDim];
+    };
+    Pending stack[64];
+    int top = 0;
+    std::uint32_t n = 0;
+    float gap2[kDim];
+    for (int i = 0; i < kDim; ++i) gap2[i] = s.gap2[i];
+    for (;;) {
+        const Node *node = &nodes_[n];
+        while (!(node->info & kLeafBit)) {
+            const int d = static_cast<int>(node->info);
+            const float q = s.query[d];
+            const bool low_first = (q - node->low_max) + (q - node->high_min) < 0.0f;
+            // The far child lies beyond its boundary along d: max(0, boundary - query) bounds every
+            // coordinate difference there from below, also after rounding (subtraction rounds
+            // monotonically), and the sum in dimension order bounds the rounded distances.
+            float gap = low_first ? node->high_min - q : q - node->low_max;
+            if (!(gap > 0.0f)) gap = 0.0f;
+            Pending &far = stack[top];
+            for (int i = 0; i < kDim; ++i) far.gap2[i] = gap2[i];
+            far.gap2[d] = std::max(gap2[d], gap * gap);
+            float bound = 0.0f;
+            for (int i = 0; i < kDim; ++i) bound += far.gap2[i];
+            far.bound = bound;
+            far.node = low_first ? node->link : n + 1;
+            if (bound <= s.limit) ++top;
+            n = low_first ? n + 1 : node->link;
+            node = &nodes_[n];
+        }
+
+        const std::size_t first = node->link, count = node->info & ~kLeafBit;
         const std::size_t blocks = (count + kLane - 1) / kLane;
         float dist[kLeafPoints];
-        if (!leaf_distances<kDim, kLane>(s.query, &blocks_[first * kDim * kLane], blocks, s.limit, dist)) return;
-        const std::uint32_t *id = &index_[first * kLane];
-        for (std::size_t i = 0; i < blocks * kLane; ++i)
-            if (dist[i] <= s.limit) s.add(dist[i], id[i]);
-        return;
+        if (leaf_distances<kDim, kLane>(s.query, &blocks_[first * kDim * kLane], blocks, s.limit, dist)) {
+            const std::uint32_t *id = &index_[first * kLane];
+            float limit = s.limit; // kept in a register between insertions
+            for (std::size_t i = 0; i < blocks * kLane; ++i)
+                if (dist[i] <= limit) {
+                    s.add(dist[i], id[i]);
+                    limit = s.limit;
+                }
+        }
+
+        do {
+            if (top == 0) return;
+            --top;
+        } while (!(stack[top].bound <= s.limit));
+        n = stack[top].node;
+        for (int i = 0; i < kDim; ++i) gap2[i] = stack[top].gap2[i];
     }
-
-    const int d = static_cast<int>(node.info);
-    const float q = s.query[d];
-    const bool low_first = (q - node.low_max) + (q - node.high_min) < 0.0f;
-    descend(low_first ? n + 1 : node.link, s);
-
-    // The far child lies beyond its boundary along d: max(0, boundary - query) bounds every coordinate
-    // difference there from below, also after rounding (subtraction rounds monotonically).
-    float gap = low_first ? node.high_min - q : q - node.low_max;
-    if (!(gap > 0.0f)) gap = 0.0f;
-    const float saved = s.gap2[d];
-    s.gap2[d] = std::max(saved, gap * gap);
-    float bound = 0.0f;
-    for (int i = 0; i < kDim; ++i) bound += s.gap2[i];
-    if (bound <= s.limit) descend(low_first ? node.link : n + 1, s);
-    s.gap2[d] = saved;
-}
-
-std::vector<std::uint32_t> ProjectedKdTree::leaf_order() const {
-    std::vector<std::uint32_t> order;
-    order.reserve(index_.size());
-    for (const Node &node : nodes_) {
-        if (!(node.info & kLeafBit)) continue;
-        const std::size_t first = static_cast<std::size_t>(node.link) * kLane, count = node.info & ~kLeafBit;
-        order.insert(order.end(), index_.begin() + static_cast<std::ptrdiff_t>(first),
-                     index_.begin() + static_cast<std::ptrdiff_t>(first + count));
-    }
-    return order;
 }
 
 int ProjectedKdTree::nearest(const float *query, int k, std::uint32_t *index, float *dist2) const {
@@ -211,7 +235,7 @@ int ProjectedKdTree::nearest(const float *query, int k, std::uint32_t *index, fl
         else if (q > box_hi_[d]) gap = q - box_hi_[d];
         s.gap2[d] = gap * gap;
     }
-    descend(0, s);
+    descend(s);
     std::sort(s.heap, s.heap + s.count);
     for (int i = 0; i < s.count; ++i) {
         index[i] = static_cast<std::uint32_t>(s.heap[i]);

@@ -32,10 +32,6 @@ public:
     // returns how many. k must be in [1, kMaxK]. A distance that overflows to infinity never counts as found.
     int nearest(const float *query, int k, std::uint32_t *index, float *dist2) const;
 
-    // The finite points' indices in leaf order, where neighbours are close in space: queries made in this
-    // order walk the same parts of another tree one after the other, which keeps them in cache.
-    std::vector<std::uint32_t> leaf_order() const;
-
 private:
     static constexpr int kLane = 4;          // points per block: one SSE2 register per dimension
     // Leaves hold at most this many points (a multiple of kLane), at least half as many. Callgrind over
@@ -54,7 +50,7 @@ private:
     struct Search;
 
     std::uint32_t build(std::uint32_t *begin, std::uint32_t *end, const float *points);
-    void descend(std::uint32_t node, Search &s) const;
+    void descend(Search &s) const;
 
     std::vector<Node> nodes_;
     std::vector<float> blocks_;          // per block: kDim rows of kLane coordinates
