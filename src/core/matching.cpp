@@ -5,8 +5,9 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <utility>
 
-#include <nanoflann.hpp>
+#include "kdtree.hpp"
 
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
@@ -19,28 +20,16 @@ namespace {
 // backtracks into near brute force (full KITTI scan pair: 13.3 G instructions of matching); in 8-D it
 // takes 1.5 G and in 6-D 0.8 G (callgrind). The kCandidates nearest found there are re-ranked by exact
 // 33-D distances; success on ../shared/data is the same as the exact search's (docs/parameters.md).
-constexpr int kProjDim = 6;
+constexpr int kProjDim = ProjectedKdTree::kDim;
 constexpr int kCandidates = 16;
+static_assert(kCandidates <= ProjectedKdTree::kMaxK, "the tree returns at most kMaxK neighbours");
 
-struct ProjectedSet {
-    const std::vector<float> *values; // n * kProjDim
-    std::size_t kdtree_get_point_count() const { return values->size() / kProjDim; }
-    float kdtree_get_pt(std::size_t i, std::size_t d) const { return (*values)[i * kProjDim + d]; }
-    template <class BBox>
-    bool kdtree_get_bbox(BBox &) const {
-        return false;
-    }
-};
-
-using Metric = nanoflann::L2_Simple_Adaptor<float, ProjectedSet, float, std::uint32_t>;
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<Metric, ProjectedSet, kProjDim, std::uint32_t>;
-
-// The k nearest, ties broken by the lower index so that the answer is a function of the data alone.
-// nanoflann only offers a candidate strictly closer than worstDist(), hence the nextafter.
+// The k nearest by exact 33-D distance among the projected search's candidates, ties by the lower index
+// so that the answer is a function of the data alone.
 class NearestK {
 public:
     explicit NearestK(int k) : k_(k) {}
-    bool addPoint(float dist, std::uint32_t index) {
+    void add(float dist, std::uint32_t index) {
         int i = count_;
         while (i > 0 && (dist < dist_[i - 1] || (dist == dist_[i - 1] && index < index_[i - 1]))) {
             if (i < k_) {
@@ -49,27 +38,20 @@ public:
             }
             --i;
         }
-        if (i < k_) {
-            dist_[i] = dist;
-            index_[i] = index;
-            if (count_ < k_) ++count_;
-            if (count_ == k_) worst_ = std::nextafter(dist_[k_ - 1], std::numeric_limits<float>::max());
-        }
-        return true;
+        if (i >= k_) return;
+        dist_[i] = dist;
+        index_[i] = index;
+        if (count_ < k_) ++count_;
     }
-    // Asked at every tree node: cached, recomputed only when the k-th distance changes.
-    float worstDist() const { return worst_; }
-    bool full() const { return count_ == k_; }
     int found() const { return count_; }
     std::uint32_t index(int i) const { return index_[i]; }
     float dist(int i) const { return dist_[i]; }
 
 private:
-    static constexpr int kCap = kCandidates;
+    static constexpr int kCap = 2;
     int k_, count_ = 0;
     std::uint32_t index_[kCap] = {};
     float dist_[kCap] = {};
-    float worst_ = std::numeric_limits<float>::max();
 };
 
 float exact_dist2(const float *a, const float *b) {
@@ -91,7 +73,7 @@ struct Projection {
 
 // Principal axes of both clouds' descriptors, from a fixed subsample (cost independent of cloud size; a
 // function of the data alone, so the same for every thread count).
-Projection principal_axes(const Descriptors &a, const Descriptors &b) {
+Projection principal_axes(const Descriptors &a, const Descriptors &b, RunContext &ctx) {
     constexpr std::size_t kSample = 4096;
     std::vector<const float *> rows;
     for (const Descriptors *d : {&a, &b}) {
@@ -103,12 +85,40 @@ Projection principal_axes(const Descriptors &a, const Descriptors &b) {
     for (const float *r : rows)
         for (int c = 0; c < kDescriptorDim; ++c) mean[c] += static_cast<double>(r[c]);
     mean /= static_cast<double>(rows.size());
+    // Only the lower triangle: the eigen solver reads nothing else. Every element is still the sum over
+    // rows, in row order, of x_j * x_i, so the axes are bit for bit those of per-row outer products. The
+    // rows go by chunks through 4 x 4 tiles of accumulators that the compiler keeps in SSE2 registers;
+    // threads share out tiles (disjoint elements, each summed whole by one thread), never rows.
+    constexpr int kPad = 36; // columns (and rows) padded with zeros to whole tiles
+    constexpr std::size_t kChunk = 64;
+    std::vector<std::pair<int, int>> tiles;
+    for (int i0 = 0; i0 < kDescriptorDim; i0 += 4)
+        for (int j0 = 0; j0 <= i0; j0 += 4) tiles.emplace_back(i0, j0);
+    std::vector<double> tri(kPad * kPad, 0.0);
+    ctx.parallel_for(tiles.size(), (tiles.size() + 1) / 2, [&](std::size_t t0, std::size_t t1) {
+        std::vector<double> xs(kChunk * kPad, 0.0);
+        for (std::size_t r0 = 0; r0 < rows.size(); r0 += kChunk) {
+            const std::size_t nr = std::min(kChunk, rows.size() - r0);
+            for (std::size_t r = 0; r < nr; ++r)
+                for (int c = 0; c < kDescriptorDim; ++c) xs[r * kPad + c] = static_cast<double>(rows[r0 + r][c]) - mean[c];
+            for (std::size_t t = t0; t < t1; ++t) {
+                const int i0 = tiles[t].first, j0 = tiles[t].second;
+                double acc[4][4];
+                for (int i = 0; i < 4; ++i)
+                    for (int j = 0; j < 4; ++j) acc[i][j] = tri[(i0 + i) * kPad + j0 + j];
+                for (std::size_t r = 0; r < nr; ++r) {
+                    const double *xr = &xs[r * kPad];
+                    for (int i = 0; i < 4; ++i)
+                        for (int j = 0; j < 4; ++j) acc[i][j] += xr[j0 + j] * xr[i0 + i];
+                }
+                for (int i = 0; i < 4; ++i)
+                    for (int j = 0; j < 4; ++j) tri[(i0 + i) * kPad + j0 + j] = acc[i][j];
+            }
+        }
+    });
     Eigen::Matrix<double, kDescriptorDim, kDescriptorDim> cov = Eigen::Matrix<double, kDescriptorDim, kDescriptorDim>::Zero();
-    for (const float *r : rows) {
-        DescVec x;
-        for (int c = 0; c < kDescriptorDim; ++c) x[c] = static_cast<double>(r[c]) - mean[c];
-        cov.noalias() += x * x.transpose();
-    }
+    for (int i = 0; i < kDescriptorDim; ++i)
+        for (int j = 0; j <= i; ++j) cov(i, j) = tri[i * kPad + j];
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kDescriptorDim, kDescriptorDim>> es(cov);
     Projection p;
     p.mean = mean.cast<float>();
@@ -130,15 +140,14 @@ std::vector<float> project(const Descriptors &d, const Projection &p, RunContext
 }
 
 // The two exact nearest among the projected search's candidates, ties by index.
-NearestK nearest(const Tree &tree, const std::vector<float> &proj_q, std::size_t q, const float *query,
+NearestK nearest(const ProjectedKdTree &tree, const std::vector<float> &proj_q, std::size_t q, const float *query,
                  const Descriptors &ref, int k) {
-    NearestK cand(kCandidates);
-    tree.findNeighbors(cand, &proj_q[q * kProjDim], nanoflann::SearchParams(0, 0.0f, false));
+    std::uint32_t cand[kCandidates];
+    float cand_dist[kCandidates];
+    const int found = tree.nearest(&proj_q[q * kProjDim], kCandidates, cand, cand_dist);
     NearestK best(k);
-    for (int i = 0; i < cand.found(); ++i) {
-        const std::uint32_t r = cand.index(i);
-        best.addPoint(exact_dist2(query, &ref.values[static_cast<std::size_t>(r) * kDescriptorDim]), r);
-    }
+    for (int i = 0; i < found; ++i)
+        best.add(exact_dist2(query, &ref.values[static_cast<std::size_t>(cand[i]) * kDescriptorDim]), cand[i]);
     return best;
 }
 
@@ -153,12 +162,16 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
     const Descriptors &R = source_queries ? target : source;
     const bool use_ratio = params.ratio_test < 1.0;
 
-    const Projection pca = principal_axes(Q, R);
+    const Projection pca = principal_axes(Q, R, ctx);
     const std::vector<float> qproj = project(Q, pca, ctx), rproj = project(R, pca, ctx);
-    ProjectedSet qset{&qproj}, rset{&rproj};
-    const nanoflann::KDTreeSingleIndexAdaptorParams tree_params(16);
-    Tree rtree(kProjDim, rset, tree_params);
-    Tree qtree(kProjDim, qset, tree_params);
+    // The two trees are independent: built side by side when there are threads.
+    std::unique_ptr<ProjectedKdTree> trees[2];
+    ctx.parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t t = b; t < e; ++t)
+            trees[t] = t == 0 ? std::make_unique<ProjectedKdTree>(rproj.data(), R.keypoint.size())
+                              : std::make_unique<ProjectedKdTree>(qproj.data(), Q.keypoint.size());
+    });
+    const ProjectedKdTree &rtree = *trees[0], &qtree = *trees[1];
 
     const std::size_t nq = Q.keypoint.size();
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();

@@ -1,0 +1,126 @@
+// The projected-descriptor kd-tree against brute force: the same k nearest, in the same order, with the
+// same float distances, ties (duplicate points, equal distances) broken by the lower index.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "core/kdtree.hpp"
+#include "harness.h"
+#include "test_rng.hpp"
+
+using namespace kissm::detail;
+
+namespace {
+
+constexpr int kDim = ProjectedKdTree::kDim;
+
+struct Hit {
+    float dist;
+    std::uint32_t index;
+};
+
+// The definition the tree must meet: squared distance summed in dimension order, finite distances only
+// (strictly below FLT_MAX), ordered by (distance, index).
+std::vector<Hit> brute_force(const std::vector<float> &points, const float *q, int k) {
+    std::vector<Hit> all;
+    for (std::size_t i = 0; i < points.size() / kDim; ++i) {
+        float dist = 0.0f;
+        for (int d = 0; d < kDim; ++d) {
+            const float t = q[d] - points[i * kDim + d];
+            dist += t * t;
+        }
+        if (dist < std::numeric_limits<float>::max()) all.push_back(Hit{dist, static_cast<std::uint32_t>(i)});
+    }
+    std::sort(all.begin(), all.end(), [](const Hit &a, const Hit &b) {
+        return a.dist != b.dist ? a.dist < b.dist : a.index < b.index;
+    });
+    if (all.size() > static_cast<std::size_t>(k)) all.resize(static_cast<std::size_t>(k));
+    return all;
+}
+
+// Number of queries whose answer differs from brute force in count, index or distance bits.
+std::size_t mismatches(const std::vector<float> &points, const std::vector<float> &queries, int k) {
+    const ProjectedKdTree tree(points.data(), points.size() / kDim);
+    std::size_t bad = 0;
+    for (std::size_t q = 0; q < queries.size() / kDim; ++q) {
+        std::uint32_t index[ProjectedKdTree::kMaxK];
+        float dist[ProjectedKdTree::kMaxK];
+        const int found = tree.nearest(&queries[q * kDim], k, index, dist);
+        const std::vector<Hit> want = brute_force(points, &queries[q * kDim], k);
+        bool same = found == static_cast<int>(want.size());
+        for (int i = 0; same && i < found; ++i)
+            same = index[i] == want[static_cast<std::size_t>(i)].index &&
+                   std::memcmp(&dist[i], &want[static_cast<std::size_t>(i)].dist, sizeof(float)) == 0;
+        bad += !same;
+    }
+    return bad;
+}
+
+std::vector<float> gaussian(TestRng &rng, std::size_t n, double scale) {
+    std::vector<float> v(n * kDim);
+    for (float &x : v) x = static_cast<float>(scale * rng.normal());
+    return v;
+}
+
+} // namespace
+
+static void test_random_points_match_brute_force() {
+    TestRng rng(31);
+    // Anisotropic like projected descriptors: the leading axes spread most.
+    std::vector<float> points = gaussian(rng, 3000, 1.0);
+    for (std::size_t i = 0; i < 3000; ++i)
+        for (int d = 0; d < kDim; ++d) points[i * kDim + d] *= static_cast<float>(8 - d);
+    std::vector<float> queries = gaussian(rng, 200, 6.0);
+    queries.insert(queries.end(), points.begin(), points.begin() + 100 * kDim); // queries on data points
+    for (int d = 0; d < kDim; ++d) queries.push_back(1000.0f);                   // far outside the box
+    for (const int k : {1, 2, 7, 16}) CHECK_EQ_INT(mismatches(points, queries, k), 0);
+}
+
+static void test_duplicates_and_equal_distances() {
+    TestRng rng(32);
+    // Coordinates on a 3-value grid: most points have duplicates and most distances tie.
+    std::vector<float> points(2000 * kDim);
+    for (float &x : points) x = static_cast<float>(static_cast<int>(rng.uniform(0.0, 3.0)));
+    std::vector<float> queries(300 * kDim);
+    for (float &x : queries) x = static_cast<float>(static_cast<int>(rng.uniform(0.0, 7.0))) * 0.5f - 0.5f;
+    for (const int k : {1, 2, 16}) CHECK_EQ_INT(mismatches(points, queries, k), 0);
+
+    // All points identical: the lowest indices win.
+    const std::vector<float> same(100 * kDim, 0.25f);
+    CHECK_EQ_INT(mismatches(same, queries, 16), 0);
+    const ProjectedKdTree tree(same.data(), 100);
+    std::uint32_t index[16];
+    float dist[16];
+    REQUIRE(tree.nearest(&queries[0], 16, index, dist) == 16);
+    for (int i = 0; i < 16; ++i) CHECK_EQ_INT(index[i], i);
+}
+
+static void test_small_and_degenerate_sets() {
+    TestRng rng(33);
+    const std::vector<float> queries = gaussian(rng, 50, 2.0);
+    for (const std::size_t n : {0, 1, 3, 15, 16, 17, 33, 65})
+        for (const int k : {1, 16}) CHECK_EQ_INT(mismatches(gaussian(rng, n, 1.0), queries, k), 0);
+
+    // Non-finite points are never returned; distances that overflow never count as found.
+    std::vector<float> points = gaussian(rng, 500, 1.0);
+    for (std::size_t i = 0; i < 500; i += 7) points[i * kDim + i % kDim] = std::numeric_limits<float>::quiet_NaN();
+    for (std::size_t i = 3; i < 500; i += 11) points[i * kDim] = std::numeric_limits<float>::infinity();
+    for (std::size_t i = 5; i < 500; i += 13) points[i * kDim + 1] = 3e19f;
+    CHECK_EQ_INT(mismatches(points, queries, 16), 0);
+
+    const ProjectedKdTree tree(points.data(), 500);
+    std::uint32_t index[16];
+    float dist[16];
+    float nan_query[kDim];
+    for (float &x : nan_query) x = std::numeric_limits<float>::quiet_NaN();
+    CHECK_EQ_INT(tree.nearest(nan_query, 16, index, dist), 0);
+}
+
+int main() {
+    RUN_TEST(test_random_points_match_brute_force);
+    RUN_TEST(test_duplicates_and_equal_distances);
+    RUN_TEST(test_small_and_degenerate_sets);
+    return TEST_SUMMARY();
+}
