@@ -23,58 +23,91 @@ Eigen::Matrix3d rotation_from_correlation(const Eigen::Matrix3d &H) {
 }
 
 // One GNC pass: residuals under R, weights under the current mu, the weighted correlation sum and cost.
-// Fixed chunks with partial sums added in chunk order: the same numbers for any thread count.
-struct GncPass {
+// Fixed chunks with partial sums added in chunk order: the same numbers for any thread count. The
+// measurements are kept as structure of arrays and each chunk runs three plain loops (residuals, which
+// the compiler vectorises; weights; sums), which is faster than one loop doing everything.
+class GncPass {
+public:
     static constexpr std::size_t kChunk = 2048;
     struct Partial {
-        Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+        double H[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}; // row-major sum of w a b^T
         double cost = 0.0;
         double max_r2 = 0.0;
         bool binary = true;
     };
 
-    const std::vector<Eigen::Vector3d> &a, &b;
-    std::vector<double> &r2, &w;
-    std::vector<Partial> partial;
+    GncPass(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b)
+        : n_(a.size()), ax_(n_), ay_(n_), az_(n_), bx_(n_), by_(n_), bz_(n_), r2_(n_), w_(n_, 1.0),
+          partial_((n_ + kChunk - 1) / kChunk) {
+        for (std::size_t k = 0; k < n_; ++k) {
+            ax_[k] = a[k].x(), ay_[k] = a[k].y(), az_[k] = a[k].z();
+            bx_[k] = b[k].x(), by_[k] = b[k].y(), bz_[k] = b[k].z();
+        }
+    }
 
-    GncPass(const std::vector<Eigen::Vector3d> &a_, const std::vector<Eigen::Vector3d> &b_, std::vector<double> &r2_,
-            std::vector<double> &w_)
-        : a(a_), b(b_), r2(r2_), w(w_), partial((a_.size() + kChunk - 1) / kChunk) {}
+    const std::vector<double> &residuals() const { return r2_; }
 
-    // mu <= 0: residuals only (weights untouched). Otherwise the GNC-TLS weights for c2 and mu.
+    // mu <= 0: residuals (and their maximum) only. Otherwise also the GNC-TLS weights for c2 and mu.
     Partial run(const Eigen::Matrix3d &R, double c2, double mu, RunContext &ctx) {
-        const std::size_t n = a.size();
-        const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2;
-        ctx.parallel_for(n, kChunk, [&](std::size_t begin, std::size_t end) {
+        const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2, scale = c2 * mu * (mu + 1.0);
+        const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2),
+                     r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+        ctx.parallel_for(n_, kChunk, [&](std::size_t begin, std::size_t end) {
             Partial p;
+            const double *ax = ax_.data(), *ay = ay_.data(), *az = az_.data();
+            const double *bx = bx_.data(), *by = by_.data(), *bz = bz_.data();
+            double *r2 = r2_.data(), *w = w_.data();
             for (std::size_t k = begin; k < end; ++k) {
-                const double e = (b[k] - R * a[k]).squaredNorm();
-                r2[k] = e;
-                p.max_r2 = std::max(p.max_r2, e);
-                if (mu <= 0.0) continue;
-                double wk;
-                if (e >= hi)
-                    wk = 0.0;
-                else if (e <= lo)
-                    wk = 1.0;
-                else
-                    wk = std::sqrt(c2 * mu * (mu + 1.0) / e) - mu;
-                w[k] = wk;
-                p.cost += wk * e;
-                p.binary = p.binary && (wk == 0.0 || wk == 1.0);
-                if (wk > 0.0) p.H.noalias() += wk * a[k] * b[k].transpose();
+                const double ex = bx[k] - (r00 * ax[k] + r01 * ay[k] + r02 * az[k]);
+                const double ey = by[k] - (r10 * ax[k] + r11 * ay[k] + r12 * az[k]);
+                const double ez = bz[k] - (r20 * ax[k] + r21 * ay[k] + r22 * az[k]);
+                r2[k] = ex * ex + ey * ey + ez * ez;
             }
-            partial[begin / kChunk] = p;
+            if (mu <= 0.0) {
+                for (std::size_t k = begin; k < end; ++k) p.max_r2 = std::max(p.max_r2, r2[k]);
+                partial_[begin / kChunk] = p;
+                return;
+            }
+            bool binary = true;
+            for (std::size_t k = begin; k < end; ++k) {
+                const double e = r2[k];
+                double wk = e >= hi ? 0.0 : 1.0;
+                if (e > lo && e < hi) { // the few measurements inside the band: a sqrt each
+                    wk = std::sqrt(scale / e) - mu;
+                    binary = false;
+                }
+                w[k] = wk;
+            }
+            // Outliers add exact zeros, so no test is needed.
+            double cost = 0.0, h00 = 0, h01 = 0, h02 = 0, h10 = 0, h11 = 0, h12 = 0, h20 = 0, h21 = 0, h22 = 0;
+            for (std::size_t k = begin; k < end; ++k) {
+                const double wk = w[k];
+                cost += wk * r2[k];
+                const double wx = wk * ax[k], wy = wk * ay[k], wz = wk * az[k];
+                h00 += wx * bx[k], h01 += wx * by[k], h02 += wx * bz[k];
+                h10 += wy * bx[k], h11 += wy * by[k], h12 += wy * bz[k];
+                h20 += wz * bx[k], h21 += wz * by[k], h22 += wz * bz[k];
+            }
+            const double H[9] = {h00, h01, h02, h10, h11, h12, h20, h21, h22};
+            std::copy(H, H + 9, p.H);
+            p.cost = cost;
+            p.binary = binary;
+            partial_[begin / kChunk] = p;
         });
         Partial total;
-        for (const Partial &p : partial) {
-            total.H += p.H;
+        for (const Partial &p : partial_) {
+            for (int i = 0; i < 9; ++i) total.H[i] += p.H[i];
             total.cost += p.cost;
             total.max_r2 = std::max(total.max_r2, p.max_r2);
             total.binary = total.binary && p.binary;
         }
         return total;
     }
+
+private:
+    std::size_t n_;
+    std::vector<double> ax_, ay_, az_, bx_, by_, bz_, r2_, w_;
+    std::vector<Partial> partial_;
 };
 
 } // namespace
@@ -95,8 +128,7 @@ bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<E
     iterations = 0;
     if (n < 2) return false;
     const double c2 = std::max(bound * bound, 1e-12);
-    std::vector<double> r2(n);
-    GncPass pass(a, b, r2, weights);
+    GncPass pass(a, b);
 
     rotation = weighted_rotation(a, b, weights);
     const double max_r2 = pass.run(rotation, c2, 0.0, ctx).max_r2;
@@ -108,7 +140,7 @@ bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<E
         for (int it = 0; it < params.max_iterations; ++it) {
             iterations = it + 1;
             const GncPass::Partial p = pass.run(rotation, c2, mu, ctx);
-            rotation = rotation_from_correlation(p.H);
+            rotation = rotation_from_correlation(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(p.H));
             if (std::fabs(p.cost - prev_cost) < 1e-12 * std::max(1.0, p.cost)) break;
             prev_cost = p.cost;
             if (p.binary && it > 0) break;
@@ -116,6 +148,7 @@ bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<E
         }
         pass.run(rotation, c2, 0.0, ctx);
     }
+    const std::vector<double> &r2 = pass.residuals();
     std::size_t inliers = 0;
     for (std::size_t k = 0; k < n; ++k) {
         weights[k] = r2[k] <= c2 ? 1.0 : 0.0;
