@@ -2,72 +2,15 @@
 // return KISSM_ERR_OUT_OF_MEMORY (or KISSM_OK when the library could do without that memory), leave no
 // allocation behind, and the next call must give exactly the reference result.
 //
-// The hook is this program's replacement of the global operator new (the library is linked statically, so
-// all of its C++ allocations come through here): counting is always on; failing is armed per call.
-#include <atomic>
-#include <cstddef>
+// The hook (alloc_hook.cpp) replaces the global operator new; the library is linked statically, so all of
+// its C++ allocations come through it. Counting is always on; failing is armed per call.
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
-#include <new>
 
+#include "alloc_hook.hpp"
 #include "capi/scenes.h"
 #include "harness.h"
 #include "kissm.h"
-
-namespace {
-
-std::atomic<long> g_count{0};    // allocations so far
-std::atomic<long> g_live{0};     // allocations not yet freed
-std::atomic<long> g_fail_at{-1}; // the g_count value whose allocation fails; -1: none
-std::atomic<long> g_failed{0};   // allocations refused
-
-void *allocate(std::size_t n, std::size_t align) {
-    const long k = ++g_count;
-    if (k == g_fail_at.load(std::memory_order_relaxed)) {
-        ++g_failed;
-        return nullptr;
-    }
-    void *p = nullptr;
-    if (align <= alignof(std::max_align_t)) {
-        p = std::malloc(n == 0 ? 1 : n);
-    } else if (posix_memalign(&p, align, n == 0 ? 1 : n) != 0) {
-        p = nullptr;
-    }
-    if (p != nullptr) ++g_live;
-    return p;
-}
-
-void release(void *p) {
-    if (p == nullptr) return;
-    --g_live;
-    std::free(p);
-}
-
-} // namespace
-
-void *operator new(std::size_t n) {
-    void *p = allocate(n, 0);
-    if (p == nullptr) throw std::bad_alloc();
-    return p;
-}
-void *operator new[](std::size_t n) { return operator new(n); }
-void *operator new(std::size_t n, const std::nothrow_t &) noexcept { return allocate(n, 0); }
-void *operator new[](std::size_t n, const std::nothrow_t &) noexcept { return allocate(n, 0); }
-void *operator new(std::size_t n, std::align_val_t a) {
-    void *p = allocate(n, static_cast<std::size_t>(a));
-    if (p == nullptr) throw std::bad_alloc();
-    return p;
-}
-void *operator new[](std::size_t n, std::align_val_t a) { return operator new(n, a); }
-void operator delete(void *p) noexcept { release(p); }
-void operator delete[](void *p) noexcept { release(p); }
-void operator delete(void *p, std::size_t) noexcept { release(p); }
-void operator delete[](void *p, std::size_t) noexcept { release(p); }
-void operator delete(void *p, std::align_val_t) noexcept { release(p); }
-void operator delete[](void *p, std::align_val_t) noexcept { release(p); }
-void operator delete(void *p, std::size_t, std::align_val_t) noexcept { release(p); }
-void operator delete[](void *p, std::size_t, std::align_val_t) noexcept { release(p); }
 
 namespace {
 
@@ -85,19 +28,19 @@ struct Sweep {
 template <class Call, class Release, class Same>
 Sweep sweep(const char *what, long every, Call call, Release release, Same same_as_reference) {
     Sweep s;
-    const long before = g_count.load();
+    const long before = alloc_hook::count();
     if (call() != KISSM_OK) {
         std::fprintf(stderr, "%s: the reference call failed: %s\n", what, kissm_last_error_message());
         s.other = 1;
         return s;
     }
-    s.allocations = g_count.load() - before;
+    s.allocations = alloc_hook::count() - before;
     release();
     for (long k = 1; k <= s.allocations; k += every) {
-        const long live = g_live.load();
-        g_fail_at.store(g_count.load() + k);
+        const long live = alloc_hook::live();
+        alloc_hook::fail_at(alloc_hook::count() + k);
         const int32_t st = call();
-        g_fail_at.store(-1);
+        alloc_hook::fail_at(-1);
         release();
         if (st == KISSM_ERR_OUT_OF_MEMORY) {
             ++s.out_of_memory;
@@ -107,9 +50,9 @@ Sweep sweep(const char *what, long every, Call call, Release release, Same same_
             ++s.other;
             std::fprintf(stderr, "%s: allocation %ld failed -> status %d (%s)\n", what, k, (int)st, kissm_last_error_message());
         }
-        if (g_live.load() != live) {
+        if (alloc_hook::live() != live) {
             ++s.leaks;
-            std::fprintf(stderr, "%s: allocation %ld failed -> %ld allocations left behind\n", what, k, g_live.load() - live);
+            std::fprintf(stderr, "%s: allocation %ld failed -> %ld allocations left behind\n", what, k, alloc_hook::live() - live);
         }
         const bool same = call() == KISSM_OK && same_as_reference();
         release();
