@@ -1,4 +1,12 @@
-/* Bitwise determinism: thread counts, reused and fresh handles, repeated calls, permuted input. C99. */
+/* Bitwise determinism: thread counts, reused and fresh handles, repeated calls, 50 runs, separate
+ * processes, permuted input. C99 (+ POSIX fork and pipe for the process test). */
+#if defined(__unix__) || defined(__APPLE__)
+#define _POSIX_C_SOURCE 200809L
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#define HAVE_FORK 1
+#endif
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,7 +100,8 @@ static void test_repeated_calls(void) {
     }
 }
 
-/* The points in another order: the library sorts points within voxels, so the result is identical. */
+/* The points in another order: voxel centroids are integer sums of fixed-point offsets and everything after
+ * works on voxels in key order, so the result is identical. */
 static void test_permutation(void) {
     scn_cloud s2, t2;
     kissm_points s, t;
@@ -159,10 +168,83 @@ static void test_features_thread_counts(void) {
     kissm_destroy(m4);
 }
 
+/* 50 runs cycling through 1, 2, 4 and 8 threads, alternating a fresh handle and one reused handle per
+ * thread count: all equal the reference bit for bit. */
+static void test_fifty_runs(void) {
+    const int32_t counts[] = {1, 2, 4, 8};
+    kissm_matcher *reused[4] = {NULL, NULL, NULL, NULL};
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    int i, equal = 0;
+    for (i = 0; i < 4; ++i) {
+        kissm_config c = scn_config(VOXEL);
+        c.num_threads = counts[i];
+        REQUIRE(kissm_create(&c, &reused[i]) == KISSM_OK);
+    }
+    for (i = 0; i < 50; ++i) {
+        kissm_result r;
+        int ok;
+        if (i % 2 == 0) {
+            ok = run_once(counts[i % 4], KISSM_VIEWPOINT_FIXED, &s, &t, &r);
+        } else {
+            scn_result_poison(&r);
+            ok = kissm_register(reused[i % 4], &s, &t, &r) == KISSM_OK;
+        }
+        equal += ok && scn_result_equal(&g_reference, &r);
+    }
+    CHECK_EQ_INT(equal, 50);
+    for (i = 0; i < 4; ++i) kissm_destroy(reused[i]);
+}
+
+#ifdef HAVE_FORK
+/* Separate processes (forked before any registration of theirs, 1 and 4 threads) send their results back
+ * through a pipe: all equal the parent's reference. */
+static void test_separate_processes(void) {
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    int k, equal = 0;
+    for (k = 0; k < 4; ++k) {
+        int fd[2];
+        pid_t child;
+        kissm_result r;
+        size_t got = 0;
+        int status = 0;
+        REQUIRE(pipe(fd) == 0);
+        fflush(NULL);
+        child = fork();
+        REQUIRE(child >= 0);
+        if (child == 0) {
+            kissm_result mine;
+            size_t sent = 0;
+            close(fd[0]);
+            if (!run_once(k % 2 ? 4 : 1, KISSM_VIEWPOINT_FIXED, &s, &t, &mine)) _exit(1);
+            while (sent < sizeof(mine)) {
+                const ssize_t n = write(fd[1], (const char *)&mine + sent, sizeof(mine) - sent);
+                if (n <= 0) _exit(1);
+                sent += (size_t)n;
+            }
+            _exit(0);
+        }
+        close(fd[1]);
+        while (got < sizeof(r)) {
+            const ssize_t n = read(fd[0], (char *)&r + got, sizeof(r) - got);
+            if (n <= 0) break;
+            got += (size_t)n;
+        }
+        close(fd[0]);
+        waitpid(child, &status, 0);
+        equal += got == sizeof(r) && WIFEXITED(status) && WEXITSTATUS(status) == 0 && scn_result_equal(&g_reference, &r);
+    }
+    CHECK_EQ_INT(equal, 4);
+}
+#endif
+
 int main(void) {
     scn_make_pair(&g_pair, 5, 15.0, 0.01);
     RUN_TEST(test_thread_counts);
     RUN_TEST(test_repeated_calls);
+    RUN_TEST(test_fifty_runs);
+#ifdef HAVE_FORK
+    RUN_TEST(test_separate_processes);
+#endif
     RUN_TEST(test_permutation);
     RUN_TEST(test_features_thread_counts);
     scn_pair_free(&g_pair);
