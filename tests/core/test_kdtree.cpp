@@ -6,6 +6,8 @@
 #include <limits>
 #include <vector>
 
+#include <nanoflann.hpp>
+
 #include "core/kdtree.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
@@ -78,6 +80,53 @@ static void test_random_points_match_brute_force() {
     for (const int k : {1, 2, 7, 16}) CHECK_EQ_INT(mismatches(points, queries, k), 0);
 }
 
+// nanoflann (vendored in third_party/, the index matching used before) as an independent oracle: its exact
+// k-nearest search, with ties broken by index, must give the same neighbours and distance bits.
+namespace {
+struct FlatSet {
+    const std::vector<float> *v;
+    std::size_t kdtree_get_point_count() const { return v->size() / kDim; }
+    float kdtree_get_pt(std::size_t i, std::size_t d) const { return (*v)[i * kDim + d]; }
+    template <class Box>
+    bool kdtree_get_bbox(Box &) const {
+        return false;
+    }
+};
+using FlannTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, FlatSet, float, std::uint32_t>,
+                                                      FlatSet, kDim, std::uint32_t>;
+} // namespace
+
+static void test_agrees_with_nanoflann() {
+    TestRng rng(37);
+    std::vector<float> points = gaussian(rng, 4000, 3.0);
+    const std::vector<float> queries = gaussian(rng, 300, 4.0);
+    const FlatSet set{&points};
+    FlannTree flann(kDim, set, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    const ProjectedKdTree tree(points.data(), 4000);
+    std::size_t bad = 0;
+    for (std::size_t q = 0; q < 300; ++q) {
+        constexpr int k = 16;
+        // nanoflann's own order among equal distances is not by index: ask for more and sort (distance, index).
+        std::vector<std::uint32_t> fi(k + 8);
+        std::vector<float> fd(k + 8);
+        const std::size_t got = flann.knnSearch(&queries[q * kDim], k + 8, fi.data(), fd.data());
+        std::vector<Hit> want;
+        for (std::size_t i = 0; i < got; ++i) want.push_back(Hit{fd[i], fi[i]});
+        std::sort(want.begin(), want.end(), [](const Hit &a, const Hit &b) {
+            return a.dist != b.dist ? a.dist < b.dist : a.index < b.index;
+        });
+        std::uint32_t index[k];
+        float dist[k];
+        const int found = tree.nearest(&queries[q * kDim], k, index, dist);
+        bool same = found == k;
+        for (int i = 0; same && i < k; ++i)
+            same = index[i] == want[static_cast<std::size_t>(i)].index &&
+                   std::memcmp(&dist[i], &want[static_cast<std::size_t>(i)].dist, sizeof(float)) == 0;
+        bad += !same;
+    }
+    CHECK_EQ_INT(bad, 0);
+}
+
 static void test_duplicates_and_equal_distances() {
     TestRng rng(32);
     // Coordinates on a 3-value grid: most points have duplicates and most distances tie.
@@ -120,6 +169,7 @@ static void test_small_and_degenerate_sets() {
 
 int main() {
     RUN_TEST(test_random_points_match_brute_force);
+    RUN_TEST(test_agrees_with_nanoflann);
     RUN_TEST(test_duplicates_and_equal_distances);
     RUN_TEST(test_small_and_degenerate_sets);
     return TEST_SUMMARY();
