@@ -22,8 +22,12 @@ if ! command -v clang++ >/dev/null; then
   fi
 fi
 cd "$here"
-cmake --preset fuzz >/dev/null
-cmake --build --preset fuzz --target $(printf 'fuzz_%s ' "${targets[@]}")
+# KISSM_FUZZ_NO_BUILD=1: use the binaries as built (several fuzz.sh running side by side must not
+# reconfigure one build tree at the same time: build once, then start them with this set).
+if [[ ${KISSM_FUZZ_NO_BUILD:-0} != 1 ]]; then
+  cmake --preset fuzz >/dev/null
+  cmake --build --preset fuzz --target $(printf 'fuzz_%s ' "${targets[@]}")
+fi
 
 for t in "${targets[@]}"; do
   corpus=build-fuzz/corpus/$t findings=build-fuzz/findings/$t
