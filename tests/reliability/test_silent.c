@@ -22,7 +22,7 @@ static void exercise(const scn_pair *pair) {
     r.struct_size = sizeof r;
     nothing.count = 0;
     (void)kissm_create(&bad, &m);  /* invalid config */
-    (void)kissm_create(NULL, &m);  /* NULL */
+    (void)kissm_create(&bad, NULL); /* NULL output */
     c.num_threads = 4;
     if (kissm_create(&c, &m) != KISSM_OK) return;
     (void)kissm_register(m, &s, &t, &r);         /* good, 4 threads */
