@@ -20,7 +20,11 @@ class Bytes {
 public:
     Bytes(const std::uint8_t *data, std::size_t size) : data_(data), size_(size) {}
     std::uint8_t u8() { return pos_ < size_ ? data_[pos_++] : 0; }
-    std::uint16_t u16() { return static_cast<std::uint16_t>(u8() | (u8() << 8)); }
+    std::uint16_t u16() { // two statements: the operands of | are unsequenced, and compilers differ
+        const unsigned lo = u8();
+        const unsigned hi = u8();
+        return static_cast<std::uint16_t>(lo | (hi << 8));
+    }
     std::size_t left() const { return size_ - pos_; }
 
 private:
