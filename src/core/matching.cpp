@@ -155,29 +155,31 @@ NearestK nearest(const ProjectedKdTree &tree, const std::vector<float> &proj_q, 
 // Visiting order for a batch of searches: by a Morton code of the first three projected coordinates, so
 // that consecutive searches land in the same part of the other cloud's tree and find it in cache. Only the
 // order changes; every search is independent, so the results are the same.
-std::vector<std::uint32_t> search_order(const std::vector<float> &proj, const std::vector<std::uint32_t> &items) {
+// point(k) gives the projection of search k (k < n); the result lists the positions 0..n-1 in visiting order.
+template <class Point>
+std::vector<std::uint32_t> search_order(std::size_t n, const Point &point) {
     float lo[3], hi[3];
     for (int d = 0; d < 3; ++d) lo[d] = std::numeric_limits<float>::max(), hi[d] = -std::numeric_limits<float>::max();
-    for (std::uint32_t i : items)
+    for (std::size_t k = 0; k < n; ++k)
         for (int d = 0; d < 3; ++d) {
-            const float v = proj[static_cast<std::size_t>(i) * kProjDim + d];
+            const float v = point(k)[d];
             if (std::isfinite(v)) lo[d] = std::min(lo[d], v), hi[d] = std::max(hi[d], v);
         }
-    std::vector<KeyIndex> keyed(items.size());
-    for (std::size_t k = 0; k < items.size(); ++k) {
+    std::vector<KeyIndex> keyed(n);
+    for (std::size_t k = 0; k < n; ++k) {
         std::uint64_t code = 0;
         for (int d = 0; d < 3; ++d) {
-            const float v = proj[static_cast<std::size_t>(items[k]) * kProjDim + d];
+            const float v = point(k)[d];
             const float span = hi[d] > lo[d] ? hi[d] - lo[d] : 1.0f;
             const float t = std::isfinite(v) ? (v - lo[d]) / span : 0.0f;
             const std::uint64_t cell = static_cast<std::uint64_t>(std::min(1023.0f, std::max(0.0f, t * 1024.0f)));
             for (int b = 0; b < 10; ++b) code |= ((cell >> b) & 1u) << (3 * b + d);
         }
-        keyed[k] = {code, items[k]};
+        keyed[k] = {code, static_cast<std::uint32_t>(k)};
     }
     radix_sort_by_key(keyed);
-    std::vector<std::uint32_t> order(items.size());
-    for (std::size_t k = 0; k < items.size(); ++k) order[k] = keyed[k].index;
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t k = 0; k < n; ++k) order[k] = keyed[k].index;
     return order;
 }
 
@@ -207,9 +209,7 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> forward(nq, kNone);
     std::vector<float> ratio(nq, 0.0f);
-    std::vector<std::uint32_t> all_queries(nq);
-    for (std::size_t q = 0; q < nq; ++q) all_queries[q] = static_cast<std::uint32_t>(q);
-    const std::vector<std::uint32_t> query_order = search_order(qproj, all_queries);
+    const std::vector<std::uint32_t> query_order = search_order(nq, [&](std::size_t q) { return &qproj[q * kProjDim]; });
     ctx.parallel_for(nq, 256, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
             const std::size_t q = query_order[i];
@@ -232,17 +232,8 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
     std::sort(picked.begin(), picked.end());
     picked.erase(std::unique(picked.begin(), picked.end()), picked.end());
     std::vector<std::uint32_t> backward(picked.size(), kNone);
-    std::vector<std::uint32_t> slots(picked.size());
-    for (std::size_t k = 0; k < picked.size(); ++k) slots[k] = static_cast<std::uint32_t>(k);
-    std::vector<std::uint32_t> picked_proj_order;
-    {
-        // Order the backward searches by their own projections: positions in `picked`, sorted by where the
-        // picked points lie.
-        std::vector<float> pproj(picked.size() * kProjDim);
-        for (std::size_t k = 0; k < picked.size(); ++k)
-            std::copy_n(&rproj[static_cast<std::size_t>(picked[k]) * kProjDim], kProjDim, &pproj[k * kProjDim]);
-        picked_proj_order = search_order(pproj, slots);
-    }
+    const std::vector<std::uint32_t> picked_proj_order = search_order(
+        picked.size(), [&](std::size_t k) { return &rproj[static_cast<std::size_t>(picked[k]) * kProjDim]; });
     ctx.parallel_for(picked.size(), 256, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
             const std::size_t k = picked_proj_order[i];
