@@ -55,17 +55,11 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
+from report import METHOD_LABEL, STAGE_ORDER as STAGES  # noqa: E402  (one definition, shared with the report)
 
 METHODS = ("kissm", "reference", "o3d_ransac", "o3d_fgr")
-METHOD_LABEL = {
-    "kissm": "kissm",
-    "reference": "KISS-Matcher (reference)",
-    "o3d_ransac": "Open3D FPFH+RANSAC",
-    "o3d_fgr": "Open3D FPFH+FGR",
-}
 # The Python module each method needs (checked before a run).
 METHOD_MODULE = {"kissm": "kissm", "reference": "kiss_matcher", "o3d_ransac": "open3d", "o3d_fgr": "open3d"}
-STAGES = ("input", "voxelize", "features", "matching", "pruning", "solver", "registration")
 
 # Voxel size and success thresholds per kind of data (SPEC §7; docs/accuracy.md).
 KIND_SETTINGS = {
