@@ -47,14 +47,15 @@ std::size_t mismatches(const std::vector<float> &points, const std::vector<float
     const ProjectedKdTree tree(points.data(), points.size() / kDim);
     std::size_t bad = 0;
     for (std::size_t q = 0; q < queries.size() / kDim; ++q) {
-        std::uint32_t index[ProjectedKdTree::kMaxK];
+        std::uint32_t index[ProjectedKdTree::kMaxK], slot[ProjectedKdTree::kMaxK];
         float dist[ProjectedKdTree::kMaxK];
-        const int found = tree.nearest(&queries[q * kDim], k, index, dist);
+        const int found = tree.nearest(&queries[q * kDim], k, index, dist, slot);
         const std::vector<Hit> want = brute_force(points, &queries[q * kDim], k);
         bool same = found == static_cast<int>(want.size());
         for (int i = 0; same && i < found; ++i)
             same = index[i] == want[static_cast<std::size_t>(i)].index &&
-                   std::memcmp(&dist[i], &want[static_cast<std::size_t>(i)].dist, sizeof(float)) == 0;
+                   std::memcmp(&dist[i], &want[static_cast<std::size_t>(i)].dist, sizeof(float)) == 0 &&
+                   slot[i] < tree.num_slots() && tree.slot_index(slot[i]) == index[i];
         bad += !same;
     }
     return bad;
@@ -167,10 +168,43 @@ static void test_small_and_degenerate_sets() {
     CHECK_EQ_INT(tree.nearest(nan_query, 16, index, dist), 0);
 }
 
+static void test_slots_hold_every_finite_point_once() {
+    TestRng rng(38);
+    for (const std::size_t n : {1, 4, 47, 48, 49, 97, 1000, 4099}) {
+        std::vector<float> points = gaussian(rng, n, 2.0);
+        std::size_t finite = n;
+        if (n > 10) {
+            points[3 * kDim + 2] = std::numeric_limits<float>::quiet_NaN();
+            points[7 * kDim] = -std::numeric_limits<float>::infinity();
+            finite -= 2;
+        }
+        const ProjectedKdTree tree(points.data(), n);
+        // Leaves are full but the last, so padding fills less than one block of 4.
+        CHECK_MSG(tree.num_slots() >= finite && tree.num_slots() < finite + 4, "n %zu: %zu slots for %zu points", n,
+                  tree.num_slots(), finite);
+        std::vector<int> seen(n, 0);
+        std::size_t wrong_coords = 0;
+        for (std::size_t s = 0; s < tree.num_slots(); ++s) {
+            const std::uint32_t i = tree.slot_index(s);
+            if (i == ProjectedKdTree::kNoPoint) continue;
+            REQUIRE(i < n);
+            ++seen[i];
+            float p[kDim];
+            tree.slot_point(s, p);
+            wrong_coords += std::memcmp(p, &points[i * kDim], sizeof p) != 0;
+        }
+        CHECK_EQ_INT(wrong_coords, 0);
+        std::size_t once = 0;
+        for (std::size_t i = 0; i < n; ++i) once += seen[i] == 1;
+        CHECK_EQ_INT(once, finite);
+    }
+}
+
 int main() {
     RUN_TEST(test_random_points_match_brute_force);
     RUN_TEST(test_agrees_with_nanoflann);
     RUN_TEST(test_duplicates_and_equal_distances);
     RUN_TEST(test_small_and_degenerate_sets);
+    RUN_TEST(test_slots_hold_every_finite_point_once);
     return TEST_SUMMARY();
 }
