@@ -238,9 +238,7 @@ std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbor
     // float distance test both ways), and counted for both points. Before the final scaling the histograms
     // hold exact small integers, so the order in which counts arrive does not matter: results are those of
     // the per-direction loop, for any thread count. A chunk owns the histograms of its rows; a pair whose
-    // second point lies in a later chunk leaves its code in the edge slot, and the later chunk collects it in
-    // a second pass. Neighbours are spatially local and points are in voxel order, so the rows a chunk has to
-    // scan for its codes are few.
+    // second point lies in a later chunk leaves its code in the edge slot, and a second pass collects it.
     constexpr std::size_t kChunk = 1024;
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
     std::vector<std::uint16_t> code(nb.index.size(), 0);
@@ -291,9 +289,19 @@ std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbor
         first_source[b / kChunk] = lowest;
     });
 
-    ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
-        // Rows before this chunk that have a neighbour in it: codes of pairs whose second point is here.
-        for (std::size_t i = first_source[b / kChunk]; i < b; ++i) {
+    // The second pass works in spans of whole chunks, each at least as long as the reach: how far before a
+    // chunk its rows' lowest neighbour lies. A span collects the codes of the rows from its lowest neighbour
+    // up to its end (rows inside it too: their codes for later chunks of the same span), so it rescans at
+    // most about its own length. With one chunk per span a large scene rescanned far more: points are in
+    // voxel (x-major) order, so a neighbour can lie a few x-slices of the whole scene back (12K rows per
+    // 1K-row chunk at 3M voxels, a second pass 13x the first and growing with the scene's width).
+    std::size_t reach = kChunk;
+    for (std::size_t c = 0; c < num_chunks; ++c) reach = std::max<std::size_t>(reach, c * kChunk - first_source[c]);
+    const std::size_t span = (reach + kChunk - 1) / kChunk * kChunk;
+    ctx.parallel_for(n, span, [&](std::size_t b, std::size_t e) {
+        std::size_t first = b;
+        for (std::size_t c = b / kChunk; c * kChunk < e; ++c) first = std::min<std::size_t>(first, first_source[c]);
+        for (std::size_t i = first; i < e; ++i) {
             for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
                 const std::uint32_t j = nb.index[k];
                 if (j >= b && j < e && code[k] != 0) add_code(&spfh[static_cast<std::size_t>(j) * D], code[k]);
