@@ -49,26 +49,21 @@ public:
         ++e.count;
     }
 
-    void merge(const VoxelTable &other) {
-        for (const Entry &o : other.slots_) {
-            if (o.key == kEmpty) continue;
-            grow_for_one_more();
-            Entry &e = find(o.key);
-            if (e.key == kEmpty) e.key = o.key, ++used_;
-            for (int a = 0; a < 3; ++a) e.sum[a] += o.sum[a];
-            e.count += o.count;
-        }
+    void add(const Entry &o) {
+        grow_for_one_more();
+        Entry &e = find(o.key);
+        if (e.key == kEmpty) e.key = o.key, ++used_;
+        for (int a = 0; a < 3; ++a) e.sum[a] += o.sum[a];
+        e.count += o.count;
     }
 
-    // (key, slot) of every occupied slot.
-    void collect(std::vector<KeyIndex> &out) const {
-        out.clear();
-        out.reserve(used_);
-        for (std::size_t i = 0; i < slots_.size(); ++i)
-            if (slots_[i].key != kEmpty) out.push_back({slots_[i].key, static_cast<std::uint32_t>(i)});
-    }
+    std::size_t size() const { return used_; }
 
-    const Entry &entry(std::size_t slot) const { return slots_[slot]; }
+    template <class F>
+    void for_each(F &&f) const {
+        for (const Entry &e : slots_)
+            if (e.key != kEmpty) f(e);
+    }
 
     void release() {
         std::vector<Entry>().swap(slots_);
@@ -148,28 +143,70 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
             table.add((c[0] * cells[1] + c[1]) * cells[2] + c[2], q);
         }
     });
-    VoxelTable &all = partial[0];
-    for (std::size_t k = 1; k < num_chunks; ++k) {
-        all.merge(partial[k]);
-        partial[k].release();
-    }
+    // Merge by key range: keys are x-major, so a range is a slab of the scene. Each range is merged on its
+    // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
+    // key order, so the output is in key order (the table's slot order depends on its growth history, the
+    // key order does not). One table for the whole cloud was merged serially, by random probes far out of
+    // cache (1.0 s of 1.9 s at 3M voxels).
+    constexpr std::size_t kRanges = 256;
+    const std::uint64_t width = cells[0] * cells[1] * cells[2] / kRanges + 1; // keys < 2^63 (extent check)
+    std::vector<std::vector<VoxelTable::Entry>> by_range(num_chunks);
+    std::vector<std::size_t> range_begin(num_chunks * (kRanges + 1));
+    ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) {
+            std::size_t *begin = &range_begin[c * (kRanges + 1)];
+            std::fill(begin, begin + kRanges + 1, 0);
+            partial[c].for_each([&](const VoxelTable::Entry &x) { ++begin[x.key / width + 1]; });
+            for (std::size_t r = 0; r < kRanges; ++r) begin[r + 1] += begin[r];
+            std::vector<std::size_t> next(begin, begin + kRanges);
+            by_range[c].resize(partial[c].size());
+            partial[c].for_each([&](const VoxelTable::Entry &x) { by_range[c][next[x.key / width]++] = x; });
+            partial[c].release();
+        }
+    });
+    std::vector<std::vector<VoxelTable::Entry>> merged(kRanges);
+    ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t r = b; r < e; ++r) {
+            std::size_t entries = 0;
+            for (std::size_t c = 0; c < num_chunks; ++c)
+                entries += range_begin[c * (kRanges + 1) + r + 1] - range_begin[c * (kRanges + 1) + r];
+            if (entries == 0) continue;
+            VoxelTable table;
+            table.reserve(entries);
+            for (std::size_t c = 0; c < num_chunks; ++c)
+                for (std::size_t k = range_begin[c * (kRanges + 1) + r]; k < range_begin[c * (kRanges + 1) + r + 1]; ++k)
+                    table.add(by_range[c][k]);
+            std::vector<VoxelTable::Entry> voxels;
+            voxels.reserve(table.size());
+            table.for_each([&](const VoxelTable::Entry &x) { voxels.push_back(x); });
+            table.release();
+            // Keys relative to the range's first key: fewer radix passes.
+            std::vector<KeyIndex> order(voxels.size());
+            for (std::size_t v = 0; v < voxels.size(); ++v) order[v] = {voxels[v].key - r * width, static_cast<std::uint32_t>(v)};
+            radix_sort_by_key(order);
+            merged[r].resize(voxels.size());
+            for (std::size_t v = 0; v < voxels.size(); ++v) merged[r][v] = voxels[order[v].index];
+        }
+    });
+    std::vector<std::vector<VoxelTable::Entry>>().swap(by_range);
 
-    // Output in key order: the table's slot order depends on its growth history, the key order does not.
-    std::vector<KeyIndex> order;
-    all.collect(order);
-    radix_sort_by_key(order);
-    out.points.resize(order.size());
+    std::vector<std::size_t> first_voxel(kRanges + 1, 0);
+    for (std::size_t r = 0; r < kRanges; ++r) first_voxel[r + 1] = first_voxel[r] + merged[r].size();
+    out.points.resize(first_voxel[kRanges]);
     const Vec3d corner = input.min - out.origin;
-    ctx.parallel_for(order.size(), 4096, [&](std::size_t b, std::size_t e) {
-        for (std::size_t v = b; v < e; ++v) {
-            const VoxelTable::Entry &s = all.entry(order[v].index);
-            const std::uint64_t key = order[v].key;
-            const std::uint64_t c[3] = {key / (cells[1] * cells[2]), (key / cells[2]) % cells[1], key % cells[2]};
-            const double count = static_cast<double>(s.count);
-            Vec3d centroid;
-            for (int a = 0; a < 3; ++a)
-                centroid[a] = corner[a] + (static_cast<double>(c[a]) + static_cast<double>(s.sum[a]) / kFixedScale / count) * voxel_size;
-            out.points[v] = centroid.cast<float>();
+    ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t r = b; r < e; ++r) {
+            for (std::size_t v = 0; v < merged[r].size(); ++v) {
+                const VoxelTable::Entry &s = merged[r][v];
+                const std::uint64_t key = s.key;
+                const std::uint64_t c[3] = {key / (cells[1] * cells[2]), (key / cells[2]) % cells[1], key % cells[2]};
+                const double count = static_cast<double>(s.count);
+                Vec3d centroid;
+                for (int a = 0; a < 3; ++a)
+                    centroid[a] = corner[a] + (static_cast<double>(c[a]) + static_cast<double>(s.sum[a]) / kFixedScale / count) * voxel_size;
+                out.points[first_voxel[r] + v] = centroid.cast<float>();
+            }
+            std::vector<VoxelTable::Entry>().swap(merged[r]);
         }
     });
     return out;
