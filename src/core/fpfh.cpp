@@ -241,7 +241,7 @@ std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbor
     // second point lies in a later chunk leaves its code in the edge slot, and a second pass collects it.
     constexpr std::size_t kChunk = 1024;
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
-    std::vector<std::uint16_t> code(nb.index.size(), 0);
+    std::vector<std::uint16_t> code(nb.num_entries(), 0);
     std::vector<std::uint32_t> first_source(num_chunks);
 
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
@@ -250,11 +250,14 @@ std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbor
         int rev[3];
         for (std::size_t i = b; i < e; ++i) {
             if (!normals.valid[i]) continue;
-            const std::uint64_t begin = nb.offsets[i], end = nb.offsets[i + 1];
-            batch.reserve(static_cast<std::size_t>(end - begin));
+            const std::uint64_t begin = nb.offsets[i];
+            const std::uint32_t *row = nb.row(i);
+            const std::size_t count = nb.count(i);
+            batch.reserve(count);
             std::size_t size = 0;
-            for (std::uint64_t k = begin; k < end; ++k) {
-                const std::uint32_t j = nb.index[k];
+            for (std::size_t t = 0; t < count; ++t) {
+                const std::uint64_t k = begin + t;
+                const std::uint32_t j = row[t];
                 if (!normals.valid[j]) continue;
                 if (j <= i) { // evaluated by row j (or the point itself)
                     lowest = std::min(lowest, j);
@@ -302,9 +305,11 @@ std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbor
         std::size_t first = b;
         for (std::size_t c = b / kChunk; c * kChunk < e; ++c) first = std::min<std::size_t>(first, first_source[c]);
         for (std::size_t i = first; i < e; ++i) {
-            for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
-                const std::uint32_t j = nb.index[k];
-                if (j >= b && j < e && code[k] != 0) add_code(&spfh[static_cast<std::size_t>(j) * D], code[k]);
+            const std::uint32_t *row = nb.row(i);
+            const std::uint16_t *row_code = &code[nb.offsets[i]];
+            for (std::size_t t = 0, count = nb.count(i); t < count; ++t) {
+                const std::uint32_t j = row[t];
+                if (j >= b && j < e && row_code[t] != 0) add_code(&spfh[static_cast<std::size_t>(j) * D], row_code[t]);
             }
         }
         for (std::size_t i = b; i < e; ++i) {
@@ -343,8 +348,9 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
             const std::uint32_t i = out.keypoint[q];
             std::fill(acc, acc + D, 0.0f);
             int count = 0;
-            for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
-                const std::uint32_t j = nb.index[k];
+            const std::uint32_t *row = nb.row(i);
+            for (std::size_t t = 0, size = nb.count(i); t < size; ++t) {
+                const std::uint32_t j = row[t];
                 if (j == i || !normals.valid[j]) continue;
                 const float w2 = v2 / (points[j] - points[i]).squaredNorm();
                 const float w = weight_power == 2 ? w2 : std::sqrt(w2);

@@ -132,13 +132,15 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
     });
 
     const float r2 = radius * radius;
-    constexpr std::size_t kChunk = 1024;
+    constexpr std::size_t kChunk = Neighborhoods::kBlockRows;
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
-    std::vector<std::vector<std::uint32_t>> chunk_index(num_chunks);
+    nb.blocks.resize(num_chunks);
     std::vector<std::uint32_t> counts(n, 0);
 
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
-        auto &idx = chunk_index[b / kChunk];
+        // The chunk's rows go to a scratch list first (its final length is known only at the end), then
+        // into the block at its exact size; the scratch is freed, and malloc hands it to the next chunk.
+        std::vector<std::uint32_t> idx;
         std::size_t used = 0;
         for (std::size_t i = b; i < e; ++i) {
             const Vec3f &q = points[i];
@@ -154,18 +156,10 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
             }
             counts[i] = static_cast<std::uint32_t>(used - before);
         }
-        idx.resize(used);
+        nb.blocks[b / kChunk].assign(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(used));
     });
 
     for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + counts[i];
-    nb.index.resize(nb.offsets[n]);
-    ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
-        for (std::size_t c = b; c < e; ++c) {
-            const std::size_t start = nb.offsets[c * kChunk];
-            std::copy(chunk_index[c].begin(), chunk_index[c].end(), nb.index.begin() + static_cast<std::ptrdiff_t>(start));
-            std::vector<std::uint32_t>().swap(chunk_index[c]);
-        }
-    });
     return nb;
 }
 

@@ -27,13 +27,14 @@ Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &
     ctx.parallel_for(n, 2048, [&](std::size_t b, std::size_t e) {
         std::vector<std::uint32_t> near; // neighbours within the normal radius, reused across points
         for (std::size_t i = b; i < e; ++i) {
-            const std::uint64_t begin = nb.offsets[i], end = nb.offsets[i + 1];
-            if (end - begin < tau) continue;
+            const std::size_t size = nb.count(i);
+            if (size < tau) continue;
             // Covariance about the mean, in double: centred sums avoid cancellation.
             near.clear();
             Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-            for (std::uint64_t k = begin; k < end; ++k) {
-                const std::uint32_t j = nb.index[k];
+            const std::uint32_t *row = nb.row(i);
+            for (std::size_t t = 0; t < size; ++t) {
+                const std::uint32_t j = row[t];
                 if ((points[j] - points[i]).squaredNorm() < rn2) {
                     near.push_back(j);
                     mean += points[j].cast<double>();
@@ -71,8 +72,9 @@ std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Norma
     for (std::size_t i = 0; i < n; ++i) {
         if (!normals.valid[i]) continue;
         int valid_neighbors = 0;
-        for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1] && valid_neighbors < min_neighbors; ++k)
-            valid_neighbors += normals.valid[nb.index[k]];
+        const std::uint32_t *row = nb.row(i);
+        for (std::size_t t = 0, size = nb.count(i); t < size && valid_neighbors < min_neighbors; ++t)
+            valid_neighbors += normals.valid[row[t]];
         if (valid_neighbors >= min_neighbors) keypoints.push_back(static_cast<std::uint32_t>(i));
     }
     return keypoints;

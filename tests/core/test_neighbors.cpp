@@ -36,8 +36,7 @@ static void check(std::uint64_t seed, std::size_t n, float radius) {
     const float r2 = radius * radius;
     std::size_t wrong = 0, asymmetric = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        std::vector<std::uint32_t> got(nb.index.begin() + static_cast<std::ptrdiff_t>(nb.offsets[i]),
-                                       nb.index.begin() + static_cast<std::ptrdiff_t>(nb.offsets[i + 1]));
+        std::vector<std::uint32_t> got(nb.row(i), nb.row(i) + nb.count(i));
         std::sort(got.begin(), got.end());
         std::vector<std::uint32_t> want;
         for (std::size_t j = 0; j < n; ++j) {
@@ -46,8 +45,7 @@ static void check(std::uint64_t seed, std::size_t n, float radius) {
         }
         wrong += got != want;
         for (const std::uint32_t j : got) {
-            const auto first = nb.index.begin() + static_cast<std::ptrdiff_t>(nb.offsets[j]);
-            const auto last = nb.index.begin() + static_cast<std::ptrdiff_t>(nb.offsets[j + 1]);
+            const std::uint32_t *first = nb.row(j), *last = nb.row(j) + nb.count(j);
             asymmetric += std::find(first, last, static_cast<std::uint32_t>(i)) == last;
         }
     }
@@ -57,7 +55,7 @@ static void check(std::uint64_t seed, std::size_t n, float radius) {
         RunContext ctx(threads, nullptr, Hooks());
         const Neighborhoods other = radius_neighbors(pts, radius, ctx);
         CHECK(other.offsets == nb.offsets);
-        CHECK(other.index == nb.index);
+        CHECK(other.blocks == nb.blocks);
     }
 }
 
@@ -70,7 +68,7 @@ static void test_matches_brute_force() {
 static void test_single_point() {
     RunContext ctx(1, nullptr, Hooks());
     const Neighborhoods nb = radius_neighbors({Vec3f(1, 2, 3)}, 1.0f, ctx);
-    CHECK(nb.offsets.size() == 2 && nb.index.size() == 1 && nb.index[0] == 0);
+    CHECK(nb.offsets.size() == 2 && nb.num_entries() == 1 && nb.count(0) == 1 && nb.row(0)[0] == 0);
 }
 
 int main() {

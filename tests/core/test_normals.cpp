@@ -80,8 +80,7 @@ static void test_neighbors_match_brute_force() {
     const Neighborhoods nb = radius_neighbors(pts, r, ctx);
     bool same = true;
     for (std::size_t i = 0; i < pts.size() && same; ++i) {
-        std::vector<std::uint32_t> brute, grid(nb.index.begin() + static_cast<std::ptrdiff_t>(nb.offsets[i]),
-                                                nb.index.begin() + static_cast<std::ptrdiff_t>(nb.offsets[i + 1]));
+        std::vector<std::uint32_t> brute, grid(nb.row(i), nb.row(i) + nb.count(i));
         for (std::size_t j = 0; j < pts.size(); ++j)
             if ((pts[j] - pts[i]).squaredNorm() < r * r) brute.push_back(static_cast<std::uint32_t>(j));
         std::sort(grid.begin(), grid.end());

@@ -21,8 +21,8 @@ static std::vector<float> reference_spfh(const std::vector<Vec3f> &points, const
         if (!normals.valid[i]) continue;
         float *h = &spfh[i * kDescriptorDim];
         int pairs = 0;
-        for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
-            const std::uint32_t j = nb.index[k];
+        for (std::size_t t = 0; t < nb.count(i); ++t) {
+            const std::uint32_t j = nb.row(i)[t];
             if (j == i || !normals.valid[j]) continue;
             if (!pair_feature_bins(points[i], normals.normal[i], points[j], normals.normal[j], bins)) continue;
             h[bins[0]] += 1.0f;
@@ -90,8 +90,8 @@ static void check_scene(std::uint64_t seed, std::size_t n, bool spatial_order) {
     std::size_t ties = 0, frameless = 0;
     int a[3], b[3];
     for (std::size_t i = 0; i < n; ++i)
-        for (std::uint64_t k = nb.offsets[i]; k < nb.offsets[i + 1]; ++k) {
-            const std::uint32_t j = nb.index[k];
+        for (std::size_t t = 0; t < nb.count(i); ++t) {
+            const std::uint32_t j = nb.row(i)[t];
             if (j <= i || !s.normals.valid[i] || !s.normals.valid[j]) continue;
             const bool da = pair_feature_bins(s.points[i], s.normals.normal[i], s.points[j], s.normals.normal[j], a);
             const bool db = pair_feature_bins(s.points[j], s.normals.normal[j], s.points[i], s.normals.normal[i], b);
