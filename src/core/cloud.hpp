@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "uninitialized.hpp"
+
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
 inline namespace v0_1 {
@@ -66,7 +68,7 @@ constexpr int kDescriptorDim = 33;
 // A cloud's keypoints (indices into the voxel cloud) and their FPFH descriptors, row-major.
 struct Descriptors {
     std::vector<std::uint32_t> keypoint;
-    std::vector<float> values; // keypoint.size() * kDescriptorDim
+    UninitVector<float> values; // keypoint.size() * kDescriptorDim
 };
 
 struct Correspondence {

@@ -227,11 +227,12 @@ bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const 
     return pair_bins(p1, n1, p2, n2, bins, order_matters);
 }
 
-std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                                RunContext &ctx) {
+UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
+                                 RunContext &ctx) {
     const std::size_t n = points.size();
     constexpr int D = kDescriptorDim;
-    std::vector<float> spfh(n * D, 0.0f);
+    UninitVector<float> spfh;
+    spfh.resize(n * D); // zeroed chunk by chunk in the first pass, by the chunk that owns the rows
     if (n == 0) return spfh;
 
     // Each unordered pair is evaluated once, by the lower index (neighbour lists are symmetric: the same
@@ -241,10 +242,13 @@ std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbor
     // second point lies in a later chunk leaves its code in the edge slot, and a second pass collects it.
     constexpr std::size_t kChunk = 1024;
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
-    std::vector<std::uint16_t> code(nb.num_entries(), 0);
+    UninitVector<std::uint16_t> code;
+    code.resize(nb.num_entries()); // likewise
     std::vector<std::uint32_t> first_source(num_chunks);
 
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
+        std::fill(&spfh[b * D], &spfh[0] + e * D, 0.0f);
+        std::fill(&code[0] + nb.offsets[b], &code[0] + nb.offsets[e], std::uint16_t(0));
         std::uint32_t lowest = static_cast<std::uint32_t>(b);
         PairBatch batch;
         int rev[3];
@@ -333,12 +337,12 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
 
     // SPFH is needed for every point that has a normal and neighbours a keypoint; computing it for all
     // points with a normal keeps the loops simple and costs little (almost all of them qualify).
-    const std::vector<float> spfh = compute_spfh(points, nb, normals, ctx);
+    const UninitVector<float> spfh = compute_spfh(points, nb, normals, ctx);
 
     Descriptors out;
     out.keypoint = std::move(keypoints);
     const std::size_t m = out.keypoint.size();
-    out.values.assign(m * D, 0.0f);
+    out.values.resize(m * D); // every row is written below
     const float v2 = voxel_size * voxel_size;
     ctx.parallel_for(m, 512, [&](std::size_t b, std::size_t e) {
         // Single precision: at most a few hundred terms of size <= 100 with weights <= 1, summed in a fixed

@@ -20,7 +20,7 @@ bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const 
 // SPFH (n x 33, row-major) of every point with a normal: the bins of its pairs with each neighbour that has a
 // normal, each block scaled by 100 / (number of pairs with a frame); zero rows for points without a normal.
 // Bitwise identical to evaluating every ordered pair with pair_feature_bins, for any thread count.
-std::vector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
+UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
                                 RunContext &ctx);
 
 // SPFH of every point with a normal (neighbours without a normal are skipped), then FPFH of each keypoint:

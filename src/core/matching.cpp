@@ -142,13 +142,16 @@ std::vector<float> project(const Descriptors &d, const Projection &p, RunContext
 // A cloud's descriptors laid out by its tree's slots. A search's candidates sit in a few neighbouring
 // leaves, and the searches run in slot order, so the exact re-ranking reads neighbouring memory instead of
 // 16 scattered rows per search (at a million descriptors per cloud the rows are far out of cache).
-std::vector<float> by_slot(const Descriptors &d, const ProjectedKdTree &tree, RunContext &ctx) {
-    std::vector<float> out(tree.num_slots() * kDescriptorDim, 0.0f); // padding slots stay unread zeros
+UninitVector<float> by_slot(const Descriptors &d, const ProjectedKdTree &tree, RunContext &ctx) {
+    UninitVector<float> out;
+    out.resize(tree.num_slots() * kDescriptorDim);
     ctx.parallel_for(tree.num_slots(), 4096, [&](std::size_t b, std::size_t e) {
         for (std::size_t s = b; s < e; ++s) {
             const std::uint32_t i = tree.slot_index(s);
-            if (i == ProjectedKdTree::kNoPoint) continue;
-            std::copy_n(&d.values[static_cast<std::size_t>(i) * kDescriptorDim], kDescriptorDim, &out[s * kDescriptorDim]);
+            if (i == ProjectedKdTree::kNoPoint)
+                std::fill_n(&out[s * kDescriptorDim], kDescriptorDim, 0.0f); // padding: never read
+            else
+                std::copy_n(&d.values[static_cast<std::size_t>(i) * kDescriptorDim], kDescriptorDim, &out[s * kDescriptorDim]);
         }
     });
     return out;
@@ -157,7 +160,7 @@ std::vector<float> by_slot(const Descriptors &d, const ProjectedKdTree &tree, Ru
 // The two exact nearest among the projected search's candidates, ties by index. `ref` is the searched
 // cloud's descriptors by slot.
 NearestK nearest(const ProjectedKdTree &tree, const float *projected_query, const float *query,
-                 const std::vector<float> &ref, int k) {
+                 const UninitVector<float> &ref, int k) {
     std::uint32_t cand[kCandidates], cand_slot[kCandidates];
     float cand_dist[kCandidates];
     const int found = tree.nearest(projected_query, kCandidates, cand, cand_dist, cand_slot);
@@ -191,7 +194,7 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
         });
     }
     const ProjectedKdTree &rtree = *trees[0], &qtree = *trees[1];
-    const std::vector<float> rdesc = by_slot(R, rtree, ctx), qdesc = by_slot(Q, qtree, ctx);
+    const UninitVector<float> rdesc = by_slot(R, rtree, ctx), qdesc = by_slot(Q, qtree, ctx);
 
     // Every search is independent and writes only its own query's entries, so the order (slot order:
     // consecutive searches start in neighbouring leaves of the other tree, which stay cached) changes
