@@ -2,6 +2,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <vector>
 
@@ -23,12 +25,30 @@ struct PointsView {
 using Vec3f = Eigen::Vector3f;
 using Vec3d = Eigen::Vector3d;
 
-// The finite points of one input cloud, still in the caller's frame (double).
+// One input cloud, still in the caller's array and frame: what the voxel stage must know before it reads
+// the points. Nothing is copied: a copy in double cost 24 bytes per point and, being fresh memory every
+// call, its page faults (0.6 ms of a 70K-point scan's 2 ms here).
 struct InputCloud {
-    std::vector<Vec3d> points;
+    PointsView view;
+    bool skip_nonfinite = false; // some points are not finite and the policy drops them: readers skip them
     std::uint64_t num_given = 0;
     std::uint64_t num_nonfinite = 0;
-    Vec3d min = Vec3d::Zero(), max = Vec3d::Zero();
+    Vec3d min = Vec3d::Zero(), max = Vec3d::Zero(); // of the finite points
+
+    std::uint64_t num_finite() const { return num_given - num_nonfinite; }
+    // Point i of the caller's array, converted to double (strides need not be aligned).
+    Vec3d point(std::uint64_t i) const {
+        const unsigned char *p = static_cast<const unsigned char *>(view.data) + i * view.stride_bytes;
+        if (view.is_double) {
+            double xyz[3];
+            std::memcpy(xyz, p, sizeof xyz);
+            return Vec3d(xyz[0], xyz[1], xyz[2]);
+        }
+        float xyz[3];
+        std::memcpy(xyz, p, sizeof xyz);
+        return Vec3d(static_cast<double>(xyz[0]), static_cast<double>(xyz[1]), static_cast<double>(xyz[2]));
+    }
+    static bool finite(const Vec3d &v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 };
 
 // Voxel centroids in a local frame: p_local = p_input - origin. Single precision is safe after recentring.

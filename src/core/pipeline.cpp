@@ -64,10 +64,10 @@ void voxelize_cloud(const PointsView &view, const Params &params, const std::str
     InputCloud input = gather_points(view, params.nonfinite, name, ctx);
     f.num_points = input.num_given;
     f.num_nonfinite = input.num_nonfinite;
-    if (input.points.empty())
+    if (input.num_finite() == 0)
         fail(ErrorKind::EmptyInput, name + " has no finite points (" + std::to_string(input.num_given) + " given)");
-    if (input.points.size() < 4)
-        fail(ErrorKind::TooFewPoints, name + " has " + std::to_string(input.points.size()) +
+    if (input.num_finite() < 4)
+        fail(ErrorKind::TooFewPoints, name + " has " + std::to_string(input.num_finite()) +
                                           " finite points; at least 4 are needed");
     f.voxels = voxelize(input, params.voxel_size, name, ctx);
     f.time_voxelize_ms = clock.lap();

@@ -100,8 +100,8 @@ private:
 
 VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx) {
     VoxelCloud out;
-    const std::size_t n = input.points.size();
-    if (n == 0) return out;
+    const std::size_t n = static_cast<std::size_t>(input.num_given);
+    if (input.num_finite() == 0) return out;
     out.origin = 0.5 * (input.min + input.max);
 
     const Vec3d extent = input.max - input.min;
@@ -119,17 +119,19 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
         }
     }
 
-    const auto &pts = input.points;
     const double inv = 1.0 / voxel_size;
-    // Fixed-chunk partial sums (a function of the input, not of the thread count), merged in chunk order.
-    constexpr std::size_t kChunk = 65536;
+    // Fixed-chunk partial sums (a function of the input, not of the thread count), merged afterwards. A
+    // chunk is small enough that a 70K-point scan still splits over a few threads.
+    constexpr std::size_t kChunk = 16384;
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
     std::vector<VoxelTable> partial(num_chunks);
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
         VoxelTable &table = partial[b / kChunk];
         table.reserve(std::min<std::size_t>(e - b, 4096));
         for (std::size_t i = b; i < e; ++i) {
-            const Vec3d rel = (pts[i] - input.min) * inv;
+            const Vec3d p = input.point(i);
+            if (input.skip_nonfinite && !InputCloud::finite(p)) continue;
+            const Vec3d rel = (p - input.min) * inv;
             std::uint64_t c[3];
             std::int64_t q[3];
             for (int a = 0; a < 3; ++a) {
@@ -148,7 +150,10 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     // key order, so the output is in key order (the table's slot order depends on its growth history, the
     // key order does not). One table for the whole cloud was merged serially, by random probes far out of
     // cache (1.0 s of 1.9 s at 3M voxels).
-    constexpr std::size_t kRanges = 256;
+    // About 8K entries per range (a function of the data alone), at most 256 ranges.
+    std::size_t all_entries = 0;
+    for (const VoxelTable &t : partial) all_entries += t.size();
+    const std::size_t kRanges = std::min<std::size_t>(256, all_entries / 8192 + 1);
     const std::uint64_t width = cells[0] * cells[1] * cells[2] / kRanges + 1; // keys < 2^63 (extent check)
     std::vector<std::vector<VoxelTable::Entry>> by_range(num_chunks);
     std::vector<std::size_t> range_begin(num_chunks * (kRanges + 1));
