@@ -29,7 +29,7 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
     const std::size_t num_chunks = (n + kRows - 1) / kRows;
     std::vector<std::vector<std::uint32_t>> edges(num_chunks);
     ctx.parallel_for(n, kRows, [&](std::size_t begin, std::size_t end) {
-        auto &out = edges[begin / kRows];
+        std::vector<std::uint32_t> out; // moved into place at the end: neighbouring vectors share cache lines
         std::vector<unsigned char> ok(n);
         for (std::size_t i = begin; i < end; ++i) {
             const float pax = ax[i], pay = ay[i], paz = az[i], pbx = bx[i], pby = by[i], pbz = bz[i];
@@ -50,6 +50,7 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
                 }
             }
         }
+        edges[begin / kRows] = std::move(out);
     });
 
     std::vector<std::uint64_t> degree(n, 0);

@@ -33,7 +33,9 @@ InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const s
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
     std::vector<ChunkSummary> summary(num_chunks);
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
-        ChunkSummary &s = summary[b / kChunk];
+        // Accumulated locally and stored once: neighbouring summaries share cache lines, and updating them
+        // in place from two threads made this loop slower on two threads than on one.
+        ChunkSummary s;
         for (std::size_t i = b; i < e; ++i) {
             const Vec3d v = cloud.point(i);
             if (!InputCloud::finite(v)) {
@@ -44,6 +46,7 @@ InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const s
             s.max = s.max.cwiseMax(v);
             ++s.finite;
         }
+        summary[b / kChunk] = s;
     });
 
     std::size_t finite = 0;

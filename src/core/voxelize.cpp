@@ -126,7 +126,7 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
     std::vector<VoxelTable> partial(num_chunks);
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
-        VoxelTable &table = partial[b / kChunk];
+        VoxelTable table; // moved into place at the end: neighbouring tables' counters share cache lines
         table.reserve(std::min<std::size_t>(e - b, 4096));
         for (std::size_t i = b; i < e; ++i) {
             const Vec3d p = input.point(i);
@@ -144,6 +144,7 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
             }
             table.add((c[0] * cells[1] + c[1]) * cells[2] + c[2], q);
         }
+        partial[b / kChunk] = std::move(table);
     });
     // Merge by key range: keys are x-major, so a range is a slab of the scene. Each range is merged on its
     // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
