@@ -4,6 +4,14 @@
 #include <cmath>
 #include <cstring>
 
+// SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
+#if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
+#define KISSM_KDTREE_SSE2 1
+#include <emmintrin.h>
+#else
+#define KISSM_KDTREE_SSE2 0
+#endif
+
 namespace kissm {
 // Versioned so that two kissm versions linked statically into one program never share a symbol.
 inline namespace v0_1 {
@@ -15,18 +23,44 @@ namespace {
 // FLT_MAX, as in nanoflann, so "at most this" is the one comparison used throughout.
 constexpr float kNotFull = 0x1.fffffcp+127f;
 
-// Squared distances from q to a leaf's points, block by block, and whether any is <= limit (so that a
-// whole leaf is usually dismissed with one test). Kept apart from the result bookkeeping, with restrict
-// pointers and branch-free lanes, so that the compiler vectorises it: lane by lane it performs the same
-// operations in the same order as a scalar loop over the dimensions.
+inline std::size_t lowest_bit(std::uint64_t m) {
+#if defined(__GNUC__) || defined(__clang__)
+    return static_cast<std::size_t>(__builtin_ctzll(m));
+#else
+    std::size_t i = 0;
+    for (; !(m & 1u); m >>= 1) ++i;
+    return i;
+#endif
+}
+
+// Squared distances from q to a leaf's points, block by block, and a bit mask of the slots whose distance
+// is <= limit (bit i for slot i of the leaf), so that the caller visits only those: a whole leaf is usually
+// dismissed with one test, and the few candidates of the others are found without a pass over every slot
+// (that pass was an eighth of the search's time). Lane by lane the vector code performs the same operations
+// in the same order as the scalar loop over the dimensions. x - q rather than q - x: the same square
+// (rounding is symmetric in sign). Starting from the first square equals starting from 0 + it: a square is
+// never -0.
 template <int Dim, int Lane>
-bool leaf_distances(const float *__restrict q, const float *__restrict x, std::size_t blocks, float limit,
-                    float *__restrict out) {
-    int hit[Lane] = {};
+std::uint64_t leaf_distances(const float *__restrict q, const float *__restrict x, std::size_t blocks, float limit,
+                             float *__restrict out) {
+    std::uint64_t mask = 0;
+#if KISSM_KDTREE_SSE2
+    static_assert(Lane == 4, "one SSE2 register per dimension and block");
+    __m128 vq[Dim];
+    for (int d = 0; d < Dim; ++d) vq[d] = _mm_set1_ps(q[d]);
+    const __m128 vlimit = _mm_set1_ps(limit);
     for (std::size_t b = 0; b < blocks; ++b, x += Dim * Lane, out += Lane) {
-        // x - q rather than q - x: the same square (rounding is symmetric in sign) and the broadcast
-        // query survives the subtraction, saving a register copy per dimension. Starting from the first
-        // square equals starting from 0 + it: a square is never -0.
+        __m128 t = _mm_sub_ps(_mm_loadu_ps(x), vq[0]);
+        __m128 acc = _mm_mul_ps(t, t);
+        for (int d = 1; d < Dim; ++d) {
+            t = _mm_sub_ps(_mm_loadu_ps(x + d * Lane), vq[d]);
+            acc = _mm_add_ps(acc, _mm_mul_ps(t, t));
+        }
+        _mm_storeu_ps(out, acc);
+        mask |= static_cast<std::uint64_t>(_mm_movemask_ps(_mm_cmple_ps(acc, vlimit))) << (b * Lane);
+    }
+#else
+    for (std::size_t b = 0; b < blocks; ++b, x += Dim * Lane, out += Lane) {
         float acc[Lane];
         for (int j = 0; j < Lane; ++j) {
             const float t = x[j] - q[0];
@@ -39,12 +73,11 @@ bool leaf_distances(const float *__restrict q, const float *__restrict x, std::s
             }
         for (int j = 0; j < Lane; ++j) {
             out[j] = acc[j];
-            hit[j] |= acc[j] <= limit ? -1 : 0;
+            mask |= static_cast<std::uint64_t>(acc[j] <= limit) << (b * Lane + static_cast<std::size_t>(j));
         }
     }
-    int any = 0;
-    for (int j = 0; j < Lane; ++j) any |= hit[j];
-    return any != 0;
+#endif
+    return mask;
 }
 
 } // namespace
@@ -213,14 +246,19 @@ void ProjectedKdTree::descend(Search &s) const {
         const std::size_t first = node->link, count = node->info & ~kLeafBit;
         const std::size_t blocks = (count + kLane - 1) / kLane;
         float dist[kLeafPoints];
-        if (leaf_distances<kDim, kLane>(s.query, &blocks_[first * kDim * kLane], blocks, s.limit, dist)) {
+        std::uint64_t hits = leaf_distances<kDim, kLane>(s.query, &blocks_[first * kDim * kLane], blocks, s.limit, dist);
+        if (hits != 0) {
             const std::uint32_t *id = &index_[first * kLane];
             float limit = s.limit; // kept in a register between insertions
-            for (std::size_t i = 0; i < blocks * kLane; ++i)
+            // Slots in ascending order, each tested against the limit as it stands then (it only shrinks).
+            while (hits != 0) {
+                const std::size_t i = lowest_bit(hits);
+                hits &= hits - 1;
                 if (dist[i] <= limit) {
                     s.add(dist[i], id[i], static_cast<std::uint32_t>(first * kLane + i));
                     limit = s.limit;
                 }
+            }
         }
 
         do {

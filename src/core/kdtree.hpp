@@ -52,6 +52,7 @@ private:
     // full leaves of 24 / 32 / 48 points: small_gicp 15.1 / 15.3 / 15.0 ms, KITTI keyframes 53.5 / 52.2 /
     // 52.3 ms, full KITTI scans 69.6 / 68.1 / 66.7 ms, 3M synthetic descriptors per cloud - / 23.3 / 21.9 s.
     static constexpr int kLeafPoints = 48;
+    static_assert(kLeafPoints % kLane == 0 && kLeafPoints <= 64, "a leaf's hits fit one 64-bit mask");
 
     struct Node {
         float low_max;       // internal: largest coordinate of the low child along `dim`
