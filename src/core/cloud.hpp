@@ -36,19 +36,29 @@ struct InputCloud {
     Vec3d min = Vec3d::Zero(), max = Vec3d::Zero(); // of the finite points
 
     std::uint64_t num_finite() const { return num_given - num_nonfinite; }
-    // Point i of the caller's array, converted to double (strides need not be aligned).
-    Vec3d point(std::uint64_t i) const {
-        const unsigned char *p = static_cast<const unsigned char *>(view.data) + i * view.stride_bytes;
-        if (view.is_double) {
-            double xyz[3];
-            std::memcpy(xyz, p, sizeof xyz);
-            return Vec3d(xyz[0], xyz[1], xyz[2]);
-        }
-        float xyz[3];
-        std::memcpy(xyz, p, sizeof xyz);
-        return Vec3d(static_cast<double>(xyz[0]), static_cast<double>(xyz[1]), static_cast<double>(xyz[2]));
+    // Calls f(i, point i converted to double) for the points [begin, end) of the caller's array, finite or
+    // not. The scalar type is chosen once per call, not per point (a test per point made voxelisation
+    // take 70% longer); strides need not be aligned.
+    template <class F>
+    void for_each_point(std::size_t begin, std::size_t end, F &&f) const {
+        if (view.is_double)
+            for_each_point_as<double>(begin, end, f);
+        else
+            for_each_point_as<float>(begin, end, f);
     }
     static bool finite(const Vec3d &v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+private:
+    template <class T, class F>
+    void for_each_point_as(std::size_t begin, std::size_t end, F &f) const {
+        const unsigned char *base = static_cast<const unsigned char *>(view.data);
+        const std::size_t stride = static_cast<std::size_t>(view.stride_bytes);
+        for (std::size_t i = begin; i < end; ++i) {
+            T xyz[3];
+            std::memcpy(xyz, base + i * stride, sizeof xyz);
+            f(i, Vec3d(static_cast<double>(xyz[0]), static_cast<double>(xyz[1]), static_cast<double>(xyz[2])));
+        }
+    }
 };
 
 // Voxel centroids in a local frame: p_local = p_input - origin. Single precision is safe after recentring.

@@ -36,16 +36,15 @@ InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const s
         // Accumulated locally and stored once: neighbouring summaries share cache lines, and updating them
         // in place from two threads made this loop slower on two threads than on one.
         ChunkSummary s;
-        for (std::size_t i = b; i < e; ++i) {
-            const Vec3d v = cloud.point(i);
+        cloud.for_each_point(b, e, [&s](std::size_t i, const Vec3d &v) {
             if (!InputCloud::finite(v)) {
                 if (s.first_nonfinite == std::numeric_limits<std::uint64_t>::max()) s.first_nonfinite = i;
-                continue;
+                return;
             }
             s.min = s.min.cwiseMin(v);
             s.max = s.max.cwiseMax(v);
             ++s.finite;
-        }
+        });
         summary[b / kChunk] = s;
     });
 

@@ -64,6 +64,12 @@ public:
         for (const Entry &e : slots_)
             if (e.key != kEmpty) f(e);
     }
+    template <class F>
+    void for_each_slot(F &&f) const {
+        for (std::size_t i = 0; i < slots_.size(); ++i)
+            if (slots_[i].key != kEmpty) f(i, slots_[i]);
+    }
+    const Entry &entry(std::size_t slot) const { return slots_[slot]; }
 
     void release() {
         std::vector<Entry>().swap(slots_);
@@ -95,6 +101,25 @@ private:
     std::vector<Entry> slots_;
     std::size_t used_ = 0;
 };
+
+// A merged table and its occupied slots in key order.
+struct SortedTable {
+    VoxelTable table;
+    std::vector<std::uint32_t> slots;
+};
+
+// Sorts the table's occupied slots by key; keys minus `base` are sorted (fewer radix passes).
+SortedTable in_key_order(VoxelTable &&table, std::uint64_t base) {
+    std::vector<KeyIndex> order;
+    order.reserve(table.size());
+    table.for_each_slot([&](std::size_t slot, const VoxelTable::Entry &x) {
+        order.push_back({x.key - base, static_cast<std::uint32_t>(slot)});
+    });
+    radix_sort_by_key(order);
+    SortedTable out{std::move(table), std::vector<std::uint32_t>(order.size())};
+    for (std::size_t v = 0; v < order.size(); ++v) out.slots[v] = order[v].index;
+    return out;
+}
 
 } // namespace
 
@@ -128,9 +153,9 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
         VoxelTable table; // moved into place at the end: neighbouring tables' counters share cache lines
         table.reserve(std::min<std::size_t>(e - b, 4096));
-        for (std::size_t i = b; i < e; ++i) {
-            const Vec3d p = input.point(i);
-            if (input.skip_nonfinite && !InputCloud::finite(p)) continue;
+        const bool skip = input.skip_nonfinite;
+        input.for_each_point(b, e, [&](std::size_t, const Vec3d &p) {
+            if (skip && !InputCloud::finite(p)) return;
             const Vec3d rel = (p - input.min) * inv;
             std::uint64_t c[3];
             std::int64_t q[3];
@@ -143,67 +168,68 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
                 q[a] = static_cast<std::int64_t>(f * kFixedScale + 0.5);
             }
             table.add((c[0] * cells[1] + c[1]) * cells[2] + c[2], q);
-        }
+        });
         partial[b / kChunk] = std::move(table);
     });
     // Merge by key range: keys are x-major, so a range is a slab of the scene. Each range is merged on its
     // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
     // key order, so the output is in key order (the table's slot order depends on its growth history, the
     // key order does not). One table for the whole cloud was merged serially, by random probes far out of
-    // cache (1.0 s of 1.9 s at 3M voxels).
-    // About 8K entries per range (a function of the data alone), at most 256 ranges.
+    // cache (1.0 s of 1.9 s at 3M voxels). About 8K entries per range (a function of the data alone), at
+    // most 256 ranges; a small cloud is one range, merged straight from the chunks' tables.
     std::size_t all_entries = 0;
     for (const VoxelTable &t : partial) all_entries += t.size();
     const std::size_t kRanges = std::min<std::size_t>(256, all_entries / 8192 + 1);
-    const std::uint64_t width = cells[0] * cells[1] * cells[2] / kRanges + 1; // keys < 2^63 (extent check)
-    std::vector<std::vector<VoxelTable::Entry>> by_range(num_chunks);
-    std::vector<std::size_t> range_begin(num_chunks * (kRanges + 1));
-    ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
-        for (std::size_t c = b; c < e; ++c) {
-            std::size_t *begin = &range_begin[c * (kRanges + 1)];
-            std::fill(begin, begin + kRanges + 1, 0);
-            partial[c].for_each([&](const VoxelTable::Entry &x) { ++begin[x.key / width + 1]; });
-            for (std::size_t r = 0; r < kRanges; ++r) begin[r + 1] += begin[r];
-            std::vector<std::size_t> next(begin, begin + kRanges);
-            by_range[c].resize(partial[c].size());
-            partial[c].for_each([&](const VoxelTable::Entry &x) { by_range[c][next[x.key / width]++] = x; });
+    std::vector<SortedTable> merged(kRanges);
+    if (kRanges == 1) {
+        VoxelTable &all = partial[0];
+        for (std::size_t c = 1; c < num_chunks; ++c) {
+            partial[c].for_each([&all](const VoxelTable::Entry &x) { all.add(x); });
             partial[c].release();
         }
-    });
-    std::vector<std::vector<VoxelTable::Entry>> merged(kRanges);
-    ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
-        for (std::size_t r = b; r < e; ++r) {
-            std::size_t entries = 0;
-            for (std::size_t c = 0; c < num_chunks; ++c)
-                entries += range_begin[c * (kRanges + 1) + r + 1] - range_begin[c * (kRanges + 1) + r];
-            if (entries == 0) continue;
-            VoxelTable table;
-            table.reserve(entries);
-            for (std::size_t c = 0; c < num_chunks; ++c)
-                for (std::size_t k = range_begin[c * (kRanges + 1) + r]; k < range_begin[c * (kRanges + 1) + r + 1]; ++k)
-                    table.add(by_range[c][k]);
-            std::vector<VoxelTable::Entry> voxels;
-            voxels.reserve(table.size());
-            table.for_each([&](const VoxelTable::Entry &x) { voxels.push_back(x); });
-            table.release();
-            // Keys relative to the range's first key: fewer radix passes.
-            std::vector<KeyIndex> order(voxels.size());
-            for (std::size_t v = 0; v < voxels.size(); ++v) order[v] = {voxels[v].key - r * width, static_cast<std::uint32_t>(v)};
-            radix_sort_by_key(order);
-            merged[r].resize(voxels.size());
-            for (std::size_t v = 0; v < voxels.size(); ++v) merged[r][v] = voxels[order[v].index];
-        }
-    });
-    std::vector<std::vector<VoxelTable::Entry>>().swap(by_range);
+        merged[0] = in_key_order(std::move(all), 0);
+    } else {
+        const std::uint64_t width = cells[0] * cells[1] * cells[2] / kRanges + 1; // keys < 2^63 (extent check)
+        std::vector<std::vector<VoxelTable::Entry>> by_range(num_chunks);
+        std::vector<std::size_t> range_begin(num_chunks * (kRanges + 1));
+        ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
+            for (std::size_t c = b; c < e; ++c) {
+                std::vector<std::size_t> begin(kRanges + 1, 0);
+                partial[c].for_each([&](const VoxelTable::Entry &x) { ++begin[x.key / width + 1]; });
+                for (std::size_t r = 0; r < kRanges; ++r) begin[r + 1] += begin[r];
+                std::vector<std::size_t> next(begin.begin(), begin.end() - 1);
+                std::vector<VoxelTable::Entry> grouped(partial[c].size());
+                partial[c].for_each([&](const VoxelTable::Entry &x) { grouped[next[x.key / width]++] = x; });
+                partial[c].release();
+                std::copy(begin.begin(), begin.end(), &range_begin[c * (kRanges + 1)]);
+                by_range[c] = std::move(grouped);
+            }
+        });
+        ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
+            for (std::size_t r = b; r < e; ++r) {
+                std::size_t entries = 0;
+                for (std::size_t c = 0; c < num_chunks; ++c)
+                    entries += range_begin[c * (kRanges + 1) + r + 1] - range_begin[c * (kRanges + 1) + r];
+                if (entries == 0) continue;
+                VoxelTable table;
+                table.reserve(entries);
+                for (std::size_t c = 0; c < num_chunks; ++c)
+                    for (std::size_t k = range_begin[c * (kRanges + 1) + r]; k < range_begin[c * (kRanges + 1) + r + 1]; ++k)
+                        table.add(by_range[c][k]);
+                merged[r] = in_key_order(std::move(table), r * width); // keys relative to the range's first key
+            }
+        });
+    }
 
     std::vector<std::size_t> first_voxel(kRanges + 1, 0);
-    for (std::size_t r = 0; r < kRanges; ++r) first_voxel[r + 1] = first_voxel[r] + merged[r].size();
+    for (std::size_t r = 0; r < kRanges; ++r) first_voxel[r + 1] = first_voxel[r] + merged[r].slots.size();
     out.points.resize(first_voxel[kRanges]);
     const Vec3d corner = input.min - out.origin;
     ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t r = b; r < e; ++r) {
-            for (std::size_t v = 0; v < merged[r].size(); ++v) {
-                const VoxelTable::Entry &s = merged[r][v];
+            const SortedTable &m = merged[r];
+            for (std::size_t v = 0; v < m.slots.size(); ++v) {
+                const VoxelTable::Entry &s = m.table.entry(m.slots[v]);
                 const std::uint64_t key = s.key;
                 const std::uint64_t c[3] = {key / (cells[1] * cells[2]), (key / cells[2]) % cells[1], key % cells[2]};
                 const double count = static_cast<double>(s.count);
@@ -212,7 +238,6 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
                     centroid[a] = corner[a] + (static_cast<double>(c[a]) + static_cast<double>(s.sum[a]) / kFixedScale / count) * voxel_size;
                 out.points[first_voxel[r] + v] = centroid.cast<float>();
             }
-            std::vector<VoxelTable::Entry>().swap(merged[r]);
         }
     });
     return out;
