@@ -653,7 +653,7 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     L.append("## Reproduce")
     L.append("")
     L.append("```sh")
-    L.append("bash bench/run.sh            # the full run (about 40 minutes on 2 cores); see bench/README.md")
+    L.append("bash bench/run.sh            # the full run (about 45 minutes on 2 cores); see bench/README.md")
     L.append("bash bench/run.sh --smoke    # seconds: a check of the harness")
     L.append("```")
     L.append("")
