@@ -27,7 +27,7 @@ using Vec3d = Eigen::Vector3d;
 
 // One input cloud, still in the caller's array and frame: what the voxel stage must know before it reads
 // the points. Nothing is copied: a copy in double cost 24 bytes per point and, being fresh memory every
-// call, its page faults (0.6 ms of a 70K-point scan's 2 ms here).
+// call, its page faults (the copy took 0.6 ms of the 1.5 ms of input + voxelisation of a 70K-point scan).
 struct InputCloud {
     PointsView view;
     bool skip_nonfinite = false; // some points are not finite and the policy drops them: readers skip them

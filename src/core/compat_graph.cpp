@@ -100,7 +100,7 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const 
         }
     }
     // Sorted (smaller, larger) pairs without repeats: a radix sort of the pairs as 64-bit keys gives the
-    // order std::sort did, at a tenth of the time (1.8 ms for 18K pairs before).
+    // order std::sort did; with it this function took 0.86 ms instead of 1.8 ms for 18K pairs.
     radix_sort_by_key(keys);
     for (std::size_t i = 0; i < keys.size(); ++i)
         if (i == 0 || keys[i].key != keys[i - 1].key)

@@ -1,8 +1,6 @@
 #include "input.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "failure.hpp"

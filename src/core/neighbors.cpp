@@ -139,7 +139,7 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
 
     ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
         // The chunk's rows go to a scratch list first (its final length is known only at the end), then
-        // into the block at its exact size; the scratch is freed, and malloc hands it to the next chunk.
+        // into the block at its exact size.
         std::vector<std::uint32_t> idx;
         std::size_t used = 0;
         for (std::size_t i = b; i < e; ++i) {

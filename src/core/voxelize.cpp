@@ -42,11 +42,11 @@ public:
     }
 
     void add(std::uint64_t key, const std::int64_t q[3]) {
-        grow_for_one_more();
-        Entry &e = find(key);
-        if (e.key == kEmpty) e.key = key, ++used_;
-        for (int a = 0; a < 3; ++a) e.sum[a] += static_cast<std::uint64_t>(q[a]);
-        ++e.count;
+        Entry one;
+        one.key = key;
+        for (int a = 0; a < 3; ++a) one.sum[a] = static_cast<std::uint64_t>(q[a]);
+        one.count = 1;
+        add(one);
     }
 
     void add(const Entry &o) {
@@ -60,14 +60,13 @@ public:
     std::size_t size() const { return used_; }
 
     template <class F>
-    void for_each(F &&f) const {
-        for (const Entry &e : slots_)
-            if (e.key != kEmpty) f(e);
-    }
-    template <class F>
     void for_each_slot(F &&f) const {
         for (std::size_t i = 0; i < slots_.size(); ++i)
             if (slots_[i].key != kEmpty) f(i, slots_[i]);
+    }
+    template <class F>
+    void for_each(F &&f) const {
+        for_each_slot([&f](std::size_t, const Entry &e) { f(e); });
     }
     const Entry &entry(std::size_t slot) const { return slots_[slot]; }
 
@@ -190,8 +189,9 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
         merged[0] = in_key_order(std::move(all), 0);
     } else {
         const std::uint64_t width = cells[0] * cells[1] * cells[2] / kRanges + 1; // keys < 2^63 (extent check)
+        // Per chunk: its entries grouped by range, and where each range starts among them.
         std::vector<std::vector<VoxelTable::Entry>> by_range(num_chunks);
-        std::vector<std::size_t> range_begin(num_chunks * (kRanges + 1));
+        std::vector<std::vector<std::size_t>> range_begin(num_chunks);
         ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
             for (std::size_t c = b; c < e; ++c) {
                 std::vector<std::size_t> begin(kRanges + 1, 0);
@@ -201,21 +201,19 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
                 std::vector<VoxelTable::Entry> grouped(partial[c].size());
                 partial[c].for_each([&](const VoxelTable::Entry &x) { grouped[next[x.key / width]++] = x; });
                 partial[c].release();
-                std::copy(begin.begin(), begin.end(), &range_begin[c * (kRanges + 1)]);
+                range_begin[c] = std::move(begin);
                 by_range[c] = std::move(grouped);
             }
         });
         ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
             for (std::size_t r = b; r < e; ++r) {
                 std::size_t entries = 0;
-                for (std::size_t c = 0; c < num_chunks; ++c)
-                    entries += range_begin[c * (kRanges + 1) + r + 1] - range_begin[c * (kRanges + 1) + r];
+                for (std::size_t c = 0; c < num_chunks; ++c) entries += range_begin[c][r + 1] - range_begin[c][r];
                 if (entries == 0) continue;
                 VoxelTable table;
                 table.reserve(entries);
                 for (std::size_t c = 0; c < num_chunks; ++c)
-                    for (std::size_t k = range_begin[c * (kRanges + 1) + r]; k < range_begin[c * (kRanges + 1) + r + 1]; ++k)
-                        table.add(by_range[c][k]);
+                    for (std::size_t k = range_begin[c][r]; k < range_begin[c][r + 1]; ++k) table.add(by_range[c][k]);
                 merged[r] = in_key_order(std::move(table), r * width); // keys relative to the range's first key
             }
         });
