@@ -61,20 +61,20 @@ KISSM_API uint32_t kissm_abi_version(void);
 /* ------------------------------------------------------------------------------------------------ */
 
 #define KISSM_OK 0
-#define KISSM_ERR_INVALID_ARGUMENT -1  /* a config value or argument is out of its documented range */
-#define KISSM_ERR_NULL_ARGUMENT -2     /* a required pointer is NULL */
-#define KISSM_ERR_EMPTY_INPUT -3       /* a cloud has no points (or none left after dropping non-finite ones) */
-#define KISSM_ERR_TOO_FEW_POINTS -4    /* a cloud has fewer than KISSM_MIN_POINTS points */
-#define KISSM_ERR_NONFINITE -5         /* a NaN or infinite coordinate under KISSM_NONFINITE_REJECT */
-#define KISSM_ERR_VOXEL_RANGE -6       /* the voxel size is too small for the cloud's extent */
-#define KISSM_ERR_STRUCT_SIZE -7       /* struct_size too small, above 65536, or with a non-zero unknown tail */
-#define KISSM_ERR_OUT_OF_MEMORY -8     /* an allocation failed; nothing was changed */
-#define KISSM_ERR_CANCELLED -9         /* kissm_cancel() or the progress callback stopped the call */
-#define KISSM_ERR_FEATURES_MISMATCH -10 /* features computed under a different configuration */
-#define KISSM_ERR_IO -11               /* a file could not be opened or read */
-#define KISSM_ERR_PARSE -12            /* a file is malformed, truncated or of an unsupported layout */
+#define KISSM_ERR_INVALID_ARGUMENT -1    /* a config value or argument is out of its documented range */
+#define KISSM_ERR_NULL_ARGUMENT -2       /* a required pointer is NULL */
+#define KISSM_ERR_EMPTY_INPUT -3         /* a cloud has no points (or none left after dropping non-finite ones) */
+#define KISSM_ERR_TOO_FEW_POINTS -4      /* a cloud has fewer than KISSM_MIN_POINTS points */
+#define KISSM_ERR_NONFINITE -5           /* a NaN or infinite coordinate under KISSM_NONFINITE_REJECT */
+#define KISSM_ERR_VOXEL_RANGE -6         /* the voxel size is too small for the cloud's extent */
+#define KISSM_ERR_STRUCT_SIZE -7         /* struct_size too small, above 65536, or with a non-zero unknown tail */
+#define KISSM_ERR_OUT_OF_MEMORY -8       /* an allocation failed; nothing was changed */
+#define KISSM_ERR_CANCELLED -9           /* kissm_cancel() or the progress callback stopped the call */
+#define KISSM_ERR_FEATURES_MISMATCH -10  /* features computed under a different configuration */
+#define KISSM_ERR_IO -11                 /* a file could not be opened or read */
+#define KISSM_ERR_PARSE -12              /* a file is malformed, truncated or of an unsupported layout */
 #define KISSM_ERR_UNSUPPORTED_FORMAT -13 /* a file's format is not recognised */
-#define KISSM_ERR_INTERNAL -14         /* a bug in kissm: please report it with the message */
+#define KISSM_ERR_INTERNAL -14           /* a bug in kissm: please report it with the message */
 
 /* Static, never-NULL description of a status code ("unknown status" for unknown values). */
 KISSM_API const char *kissm_status_string(int32_t status);
@@ -89,13 +89,13 @@ KISSM_API const char *kissm_last_error_message(void);
 /* Reasons for valid = 0 (a well-formed input that gives no trustworthy pose is not an error)       */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_REASON_NONE 0                 /* valid = 1, or the call failed (see its status) */
-#define KISSM_REASON_TOO_FEW_VOXELS 1       /* a cloud has too few occupied voxels to describe */
-#define KISSM_REASON_TOO_FEW_FEATURES 2     /* a cloud has too few points with a reliable descriptor */
+#define KISSM_REASON_NONE 0                    /* valid = 1, or the call failed (see its status) */
+#define KISSM_REASON_TOO_FEW_VOXELS 1          /* a cloud has too few occupied voxels to describe */
+#define KISSM_REASON_TOO_FEW_FEATURES 2        /* a cloud has too few points with a reliable descriptor */
 #define KISSM_REASON_TOO_FEW_CORRESPONDENCES 3 /* matching or pruning left too few correspondences */
-#define KISSM_REASON_SOLVER_FAILED 4        /* the robust solver found no consistent rotation */
-#define KISSM_REASON_TOO_FEW_INLIERS 5      /* final inliers below config.min_inliers */
-#define KISSM_REASON_DEGENERATE 6           /* the inliers are collinear or planar: the pose is ambiguous */
+#define KISSM_REASON_SOLVER_FAILED 4           /* the robust solver found no consistent rotation */
+#define KISSM_REASON_TOO_FEW_INLIERS 5         /* final inliers below config.min_inliers */
+#define KISSM_REASON_DEGENERATE 6              /* the inliers are collinear or planar: the pose is ambiguous */
 
 KISSM_API const char *kissm_reason_string(int32_t reason);
 
@@ -132,27 +132,27 @@ typedef void (*kissm_log_fn)(void *user_data, int32_t level, const char *message
 typedef int32_t (*kissm_progress_fn)(void *user_data, int32_t stage, double fraction);
 
 typedef struct kissm_config {
-    uint32_t struct_size;        /* sizeof(kissm_config) as the caller knows it; set by kissm_config_init */
-    int32_t num_threads;         /* worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. */
+    uint32_t struct_size; /* sizeof(kissm_config) as the caller knows it; set by kissm_config_init */
+    int32_t num_threads;  /* worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. */
 
-    double voxel_size;           /* metres (or the cloud's unit); > 0. Every length below scales with it. 0.3 */
-    double normal_radius_gain;   /* normal radius = gain * voxel_size; in (0, fpfh_radius_gain]; 3.5 (paper) */
-    double fpfh_radius_gain;     /* FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain; 5.0 */
-    double max_linearity;        /* tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]; 0.99 */
-    double ratio_test;           /* Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off; 0.9 */
-    double prune_noise_bound_gain; /* graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]; 1.0 */
+    double voxel_size;              /* metres (or the cloud's unit); > 0. Every length below scales with it. 0.3 */
+    double normal_radius_gain;      /* normal radius = gain * voxel_size; in (0, fpfh_radius_gain]; 3.5 (paper) */
+    double fpfh_radius_gain;        /* FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain; 5.0 */
+    double max_linearity;           /* tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]; 0.99 */
+    double ratio_test;              /* Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off; 0.9 */
+    double prune_noise_bound_gain;  /* graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]; 1.0 */
     double solver_noise_bound_gain; /* solver inlier bound = gain * voxel_size; in (0, 1e6]; 0.75 */
-    double noise_bound_max;      /* cap on both noise bounds in metres, finite; 0 = no cap; 0 */
-    double viewpoint[3];         /* for KISSM_VIEWPOINT_FIXED: the sensor position, finite; (0, 0, 0) */
+    double noise_bound_max;         /* cap on both noise bounds in metres, finite; 0 = no cap; 0 */
+    double viewpoint[3];            /* for KISSM_VIEWPOINT_FIXED: the sensor position, finite; (0, 0, 0) */
 
     int32_t min_normal_neighbors; /* tau_num: neighbours needed for a normal and a descriptor; 3..100000; 3 */
-    int32_t max_correspondences; /* cap on mutual matches kept (best ratio first); 3..100000; 5000 */
-    int32_t min_inliers;         /* valid needs at least this many final inliers; 3..100000; 15 */
-    int32_t nonfinite_policy;    /* KISSM_NONFINITE_*; KISSM_NONFINITE_REJECT */
-    int32_t viewpoint_mode;      /* KISSM_VIEWPOINT_*; KISSM_VIEWPOINT_FIXED */
-    int32_t log_level;           /* most verbose level passed to log_fn, 0 (none)..4; KISSM_LOG_WARN */
+    int32_t max_correspondences;  /* cap on mutual matches kept (best ratio first); 3..100000; 5000 */
+    int32_t min_inliers;          /* valid needs at least this many final inliers; 3..100000; 15 */
+    int32_t nonfinite_policy;     /* KISSM_NONFINITE_*; KISSM_NONFINITE_REJECT */
+    int32_t viewpoint_mode;       /* KISSM_VIEWPOINT_*; KISSM_VIEWPOINT_FIXED */
+    int32_t log_level;            /* most verbose level passed to log_fn, 0 (none)..4; KISSM_LOG_WARN */
 
-    kissm_log_fn log_fn;         /* NULL = silent */
+    kissm_log_fn log_fn; /* NULL = silent */
     void *log_user_data;
     kissm_progress_fn progress_fn; /* NULL = none */
     void *progress_user_data;
@@ -187,9 +187,9 @@ typedef struct kissm_points {
 /* ------------------------------------------------------------------------------------------------ */
 
 typedef struct kissm_result {
-    uint32_t struct_size;  /* set by the caller to sizeof(kissm_result) */
-    int32_t valid;         /* 1 when the pose can be trusted (see reason and the counts) */
-    int32_t reason;        /* KISSM_REASON_* when valid = 0 */
+    uint32_t struct_size; /* set by the caller to sizeof(kissm_result) */
+    int32_t valid;        /* 1 when the pose can be trusted (see reason and the counts) */
+    int32_t reason;       /* KISSM_REASON_* when valid = 0 */
     int32_t reserved0;
 
     /* Maps source points into the target frame: p_t = R p_s + t. Row-major. NaN when no pose was
@@ -198,32 +198,32 @@ typedef struct kissm_result {
     double rotation[9];
     double translation[3];
 
-    uint64_t num_source_points;     /* points given */
+    uint64_t num_source_points; /* points given */
     uint64_t num_target_points;
-    uint64_t num_source_nonfinite;  /* points dropped under KISSM_NONFINITE_DROP */
+    uint64_t num_source_nonfinite; /* points dropped under KISSM_NONFINITE_DROP */
     uint64_t num_target_nonfinite;
-    uint64_t num_source_voxels;     /* occupied voxels */
+    uint64_t num_source_voxels; /* occupied voxels */
     uint64_t num_target_voxels;
-    uint64_t num_source_keypoints;  /* voxels with a descriptor */
+    uint64_t num_source_keypoints; /* voxels with a descriptor */
     uint64_t num_target_keypoints;
     uint64_t num_initial_correspondences; /* mutual, ratio-tested, capped matches */
     uint64_t num_pruned_correspondences;  /* the maximum k-core */
-    uint64_t num_rotation_inliers;  /* pruned correspondences the rotation solver kept */
-    uint64_t num_final_inliers;     /* pruned correspondences within the solver bound after R, t */
-    uint64_t max_core_number;       /* k of the maximum k-core */
+    uint64_t num_rotation_inliers;        /* pruned correspondences the rotation solver kept */
+    uint64_t num_final_inliers;           /* pruned correspondences within the solver bound after R, t */
+    uint64_t max_core_number;             /* k of the maximum k-core */
 
-    double inlier_ratio;      /* num_final_inliers / num_initial_correspondences (0 when none) */
-    double residual_rms;      /* RMS of |R a + t - b| over final inliers, metres (NaN when none) */
-    double noise_bound;       /* solver inlier bound used, metres */
-    double inlier_extent[3];  /* sqrt of the eigenvalues (descending) of the inliers' source covariance */
+    double inlier_ratio;     /* num_final_inliers / num_initial_correspondences (0 when none) */
+    double residual_rms;     /* RMS of |R a + t - b| over final inliers, metres (NaN when none) */
+    double noise_bound;      /* solver inlier bound used, metres */
+    double inlier_extent[3]; /* sqrt of the eigenvalues (descending) of the inliers' source covariance */
 
     /* Wall-clock milliseconds per stage; time_total_ms is their sum. Stages not run are 0. Timings are
      * the only fields that differ between identical calls. */
-    double time_voxelize_ms;  /* input checks, recentring and voxelisation */
-    double time_features_ms;  /* neighbour search, normals, FPFH */
-    double time_matching_ms;  /* descriptor matching */
-    double time_pruning_ms;   /* compatibility graph and max k-core */
-    double time_solver_ms;    /* GNC-TLS rotation, translation, inliers, validity */
+    double time_voxelize_ms; /* input checks, recentring and voxelisation */
+    double time_features_ms; /* neighbour search, normals, FPFH */
+    double time_matching_ms; /* descriptor matching */
+    double time_pruning_ms;  /* compatibility graph and max k-core */
+    double time_solver_ms;   /* GNC-TLS rotation, translation, inliers, validity */
     double time_total_ms;
     /* New fields are only ever appended here. */
 } kissm_result;
@@ -243,8 +243,8 @@ KISSM_API int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *o
 
 /* Global registration of source against target. The result is always fully overwritten. Returns KISSM_OK
  * whenever the inputs were acceptable, including when result->valid is 0. */
-KISSM_API int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source,
-                                 const kissm_points *target, kissm_result *result);
+KISSM_API int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
+                                 kissm_result *result);
 
 /* Requests that the call running on matcher stop with KISSM_ERR_CANCELLED. Safe from any thread. A
  * request made while no call is running is cleared when the next call starts. */
@@ -259,7 +259,7 @@ typedef struct kissm_features kissm_features;
 
 KISSM_API int32_t kissm_features_compute(kissm_matcher *matcher, const kissm_points *cloud,
                                          kissm_features **out_features);
-KISSM_API void kissm_features_destroy(kissm_features *features); /* NULL is fine */
+KISSM_API void kissm_features_destroy(kissm_features *features);                 /* NULL is fine */
 KISSM_API uint64_t kissm_features_num_points(const kissm_features *features);    /* 0 for NULL */
 KISSM_API uint64_t kissm_features_num_voxels(const kissm_features *features);    /* 0 for NULL */
 KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features); /* 0 for NULL */
@@ -274,20 +274,20 @@ KISSM_API int32_t kissm_register_features(kissm_matcher *matcher, const kissm_fe
 /* float64, shape (N, 3) or (N, >=3)), whitespace xyz text (.xyz, .txt, .pts, .asc)                   */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_FORMAT_AUTO 0     /* by extension, then by content */
+#define KISSM_FORMAT_AUTO 0 /* by extension, then by content */
 #define KISSM_FORMAT_PLY 1
 #define KISSM_FORMAT_PCD 2
 #define KISSM_FORMAT_KITTI_BIN 3 /* float32 x y z intensity */
 #define KISSM_FORMAT_NPY 4
 #define KISSM_FORMAT_XYZ 5
-#define KISSM_FORMAT_BIN_XYZ 6  /* float32 x y z, no intensity */
+#define KISSM_FORMAT_BIN_XYZ 6 /* float32 x y z, no intensity */
 
 /* A cloud owned by the library, as read from a file: float64 xyz, packed. */
 typedef struct kissm_cloud kissm_cloud;
 
 /* path is UTF-8. Non-finite points are kept as they are (the registration policy decides). */
 KISSM_API int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);
-KISSM_API void kissm_cloud_destroy(kissm_cloud *cloud); /* NULL is fine */
+KISSM_API void kissm_cloud_destroy(kissm_cloud *cloud);         /* NULL is fine */
 KISSM_API uint64_t kissm_cloud_count(const kissm_cloud *cloud); /* 0 for NULL */
 /* Pointer to count * 3 doubles, valid until kissm_cloud_destroy(); NULL for NULL or an empty cloud. */
 KISSM_API const double *kissm_cloud_data(const kissm_cloud *cloud);

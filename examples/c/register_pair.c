@@ -59,8 +59,7 @@ int main(int argc, char **argv) {
     printf("kissm %s (header %s, ABI %u)\n", kissm_version_string(), KISSM_VERSION_STRING,
            (unsigned)kissm_abi_version());
 
-    if (read_cloud(argv[1], &source_cloud, &source) != 0 || read_cloud(argv[2], &target_cloud, &target) != 0)
-        goto done;
+    if (read_cloud(argv[1], &source_cloud, &source) != 0 || read_cloud(argv[2], &target_cloud, &target) != 0) goto done;
     printf("source: %llu points, target: %llu points, voxel size %g\n", (unsigned long long)source.count,
            (unsigned long long)target.count, voxel_size);
 

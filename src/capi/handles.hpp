@@ -9,8 +9,8 @@
 #include "kissm.h"
 
 struct kissm_matcher {
-    kissm_config config;                 // as given (validated), for kissm_get_config and the hooks
-    kissm::detail::Params params;        // the same, as the pipeline reads it
+    kissm_config config;                  // as given (validated), for kissm_get_config and the hooks
+    kissm::detail::Params params;         // the same, as the pipeline reads it
     std::atomic<int> cancel_requested{0}; // set by kissm_cancel from any thread
 };
 

@@ -111,10 +111,12 @@ constexpr uint32_t kMaxStructSize = 65536;
 void check_struct_size(const void *p, uint32_t given, std::size_t known, const char *what) {
     if (given > kMaxStructSize)
         arg_fail(ErrorKind::StructSize, std::string(what) + "->struct_size is " + std::to_string(given) +
-                                            ", larger than any kissm struct (was it initialised? set it to sizeof(" + what + "))");
+                                            ", larger than any kissm struct (was it initialised? set it to sizeof(" +
+                                            what + "))");
     if (given < known)
-        arg_fail(ErrorKind::StructSize, std::string(what) + "->struct_size is " + std::to_string(given) + "; this kissm needs at least " +
-                                            std::to_string(known) + " (set it to sizeof(" + what + "))");
+        arg_fail(ErrorKind::StructSize, std::string(what) + "->struct_size is " + std::to_string(given) +
+                                            "; this kissm needs at least " + std::to_string(known) +
+                                            " (set it to sizeof(" + what + "))");
     if (given > known && !tail_is_zero(p, known, given))
         arg_fail(ErrorKind::StructSize, std::string(what) + "->struct_size is " + std::to_string(given) +
                                             " with non-zero fields beyond the " + std::to_string(known) +
@@ -155,7 +157,8 @@ void require_range(double v, double lo, double hi, bool lo_open, const char *fie
 void require_int(int64_t v, int64_t lo, int64_t hi, const char *field) {
     if (v < lo || v > hi)
         arg_fail(ErrorKind::InvalidArgument, std::string("config.") + field + " is " + std::to_string(v) +
-                                                 "; it must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+                                                 "; it must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                                                 "]");
 }
 
 // Copies a validated config (of whatever size the caller has) into a full-size one.
@@ -169,7 +172,8 @@ kissm_config validated_config(const kissm_config *given) {
 
     require_int(c.num_threads, 0, kMaxThreads, "num_threads");
     if (!(std::isfinite(c.voxel_size) && c.voxel_size > 0.0))
-        arg_fail(ErrorKind::InvalidArgument, "config.voxel_size is " + num(c.voxel_size) + "; it must be a finite length > 0");
+        arg_fail(ErrorKind::InvalidArgument,
+                 "config.voxel_size is " + num(c.voxel_size) + "; it must be a finite length > 0");
     require_range(c.fpfh_radius_gain, 1.5, 50.0, false, "fpfh_radius_gain");
     require_range(c.normal_radius_gain, 0.0, c.fpfh_radius_gain, true, "normal_radius_gain");
     require_range(c.max_linearity, 0.0, 1.0, true, "max_linearity");
@@ -242,15 +246,16 @@ kissm::detail::PointsView points_view(const kissm_points *p, const char *name) {
     if (p->count == 0) arg_fail(ErrorKind::EmptyInput, std::string(name) + " has no points (count is 0)");
     if (p->data == nullptr) arg_fail(ErrorKind::NullArgument, std::string(name) + "->data is NULL");
     if (p->count < KISSM_MIN_POINTS)
-        arg_fail(ErrorKind::TooFewPoints, std::string(name) + " has " + std::to_string(p->count) + " points; at least " +
-                                              std::to_string(KISSM_MIN_POINTS) + " are needed");
+        arg_fail(ErrorKind::TooFewPoints, std::string(name) + " has " + std::to_string(p->count) +
+                                              " points; at least " + std::to_string(KISSM_MIN_POINTS) + " are needed");
     if (p->count > 0xFFFFFFFFull)
         arg_fail(ErrorKind::InvalidArgument, std::string(name) + "->count is " + std::to_string(p->count) +
                                                  "; at most 4294967295 points per cloud are supported");
     const uint64_t scalar = p->scalar_type == KISSM_SCALAR_FLOAT64 ? 8 : 4;
     const uint64_t stride = p->stride_bytes == 0 ? 3 * scalar : p->stride_bytes;
     if (stride < 3 * scalar)
-        arg_fail(ErrorKind::InvalidArgument, std::string(name) + "->stride_bytes is " + std::to_string(p->stride_bytes) +
+        arg_fail(ErrorKind::InvalidArgument, std::string(name) + "->stride_bytes is " +
+                                                 std::to_string(p->stride_bytes) +
                                                  "; it must be 0 (packed) or at least " + std::to_string(3 * scalar));
     if (stride > (UINT64_MAX / p->count))
         arg_fail(ErrorKind::InvalidArgument, std::string(name) + ": count * stride_bytes overflows");
@@ -265,8 +270,9 @@ kissm::detail::PointsView points_view(const kissm_points *p, const char *name) {
 void check_result(kissm_result *r) {
     if (r == nullptr) arg_fail(ErrorKind::NullArgument, "result is NULL");
     if (r->struct_size > kMaxStructSize)
-        arg_fail(ErrorKind::StructSize, "result->struct_size is " + std::to_string(r->struct_size) +
-                                            ", larger than any kissm struct (was it initialised? set it to sizeof(kissm_result))");
+        arg_fail(ErrorKind::StructSize,
+                 "result->struct_size is " + std::to_string(r->struct_size) +
+                     ", larger than any kissm struct (was it initialised? set it to sizeof(kissm_result))");
     if (r->struct_size < sizeof(kissm_result))
         arg_fail(ErrorKind::StructSize, "result->struct_size is " + std::to_string(r->struct_size) +
                                             "; this kissm needs at least " + std::to_string(sizeof(kissm_result)) +
@@ -325,7 +331,8 @@ void fill_result(const kissm::detail::Registration &g, kissm_result *r) {
     r->time_matching_ms = g.time_matching_ms;
     r->time_pruning_ms = g.time_pruning_ms;
     r->time_solver_ms = g.time_solver_ms;
-    r->time_total_ms = g.time_voxelize_ms + g.time_features_ms + g.time_matching_ms + g.time_pruning_ms + g.time_solver_ms;
+    r->time_total_ms =
+        g.time_voxelize_ms + g.time_features_ms + g.time_matching_ms + g.time_pruning_ms + g.time_solver_ms;
 }
 
 // Validates the result pointer first (so that it can be reset whatever else is wrong), then runs body.
@@ -395,9 +402,9 @@ int32_t kissm_config_init(kissm_config *config, uint32_t struct_size) {
     return guarded("kissm_config_init", [&] {
         if (config == nullptr) arg_fail(ErrorKind::NullArgument, "config is NULL");
         if (struct_size < sizeof(kissm_config) || struct_size > kMaxStructSize)
-            arg_fail(ErrorKind::StructSize, "struct_size is " + std::to_string(struct_size) + "; this kissm needs at least " +
-                                                std::to_string(sizeof(kissm_config)) + " (and at most " +
-                                                std::to_string(kMaxStructSize) + ")");
+            arg_fail(ErrorKind::StructSize, "struct_size is " + std::to_string(struct_size) +
+                                                "; this kissm needs at least " + std::to_string(sizeof(kissm_config)) +
+                                                " (and at most " + std::to_string(kMaxStructSize) + ")");
         kissm_config c;
         fill_defaults(c);
         std::memset(static_cast<void *>(config), 0, struct_size); // a newer caller's unknown tail: zero = default
@@ -438,8 +445,8 @@ int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *out_config)
             arg_fail(ErrorKind::StructSize, "out_config->struct_size is " + std::to_string(size) +
                                                 ", larger than any kissm struct (was it initialised?)");
         if (size < sizeof(kissm_config))
-            arg_fail(ErrorKind::StructSize, "out_config->struct_size is " + std::to_string(size) + "; this kissm needs at least " +
-                                                std::to_string(sizeof(kissm_config)));
+            arg_fail(ErrorKind::StructSize, "out_config->struct_size is " + std::to_string(size) +
+                                                "; this kissm needs at least " + std::to_string(sizeof(kissm_config)));
         std::memset(static_cast<void *>(out_config), 0, size);
         std::memcpy(static_cast<void *>(out_config), &matcher->config, sizeof(kissm_config));
         out_config->struct_size = size;
@@ -507,7 +514,8 @@ int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *so
                                                   "radii, tau, viewpoint) that differ from the matcher's");
         m->cancel_requested.store(0);
         kissm::detail::RunContext ctx(m->params.num_threads, &m->cancel_requested, hooks_of(m->config));
-        const kissm::detail::Registration g = kissm::detail::register_described(source->data, target->data, m->params, ctx);
+        const kissm::detail::Registration g =
+            kissm::detail::register_described(source->data, target->data, m->params, ctx);
         fill_result(g, result);
         return ok();
     });
@@ -518,7 +526,8 @@ int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cl
         if (path == nullptr) arg_fail(ErrorKind::NullArgument, "path is NULL");
         if (out_cloud == nullptr) arg_fail(ErrorKind::NullArgument, "out_cloud is NULL");
         if (format < KISSM_FORMAT_AUTO || format > KISSM_FORMAT_BIN_XYZ)
-            arg_fail(ErrorKind::InvalidArgument, "format is " + std::to_string(format) + "; use a KISSM_FORMAT_* value");
+            arg_fail(ErrorKind::InvalidArgument,
+                     "format is " + std::to_string(format) + "; use a KISSM_FORMAT_* value");
         auto *c = new kissm_cloud();
         try {
             c->xyz = kissm::detail::read_points_file(path, static_cast<kissm::detail::FileFormat>(format));

@@ -109,12 +109,12 @@ int32_t parse_format(const std::string &option, const std::string &text) {
         int32_t format;
     };
     static const Name kNames[] = {
-        {"auto", KISSM_FORMAT_AUTO},     {"ply", KISSM_FORMAT_PLY},
-        {"pcd", KISSM_FORMAT_PCD},       {"kitti_bin", KISSM_FORMAT_KITTI_BIN},
+        {"auto", KISSM_FORMAT_AUTO},       {"ply", KISSM_FORMAT_PLY},
+        {"pcd", KISSM_FORMAT_PCD},         {"kitti_bin", KISSM_FORMAT_KITTI_BIN},
         {"kitti", KISSM_FORMAT_KITTI_BIN}, {"kitti_bin_xyzi_f32", KISSM_FORMAT_KITTI_BIN},
         {"bin_xyz", KISSM_FORMAT_BIN_XYZ}, {"bin_xyz_f32", KISSM_FORMAT_BIN_XYZ},
-        {"npy", KISSM_FORMAT_NPY},       {"npy_xyz", KISSM_FORMAT_NPY},
-        {"xyz", KISSM_FORMAT_XYZ},       {"txt", KISSM_FORMAT_XYZ},
+        {"npy", KISSM_FORMAT_NPY},         {"npy_xyz", KISSM_FORMAT_NPY},
+        {"xyz", KISSM_FORMAT_XYZ},         {"txt", KISSM_FORMAT_XYZ},
     };
     for (const Name &n : kNames) {
         if (text == n.name) return n.format;

@@ -60,9 +60,7 @@ void print_two_matrices(const double A[16], const double B[16]) {
     }
 }
 
-std::string join_path(const std::string &dir, const char *name) {
-    return (std::filesystem::path(dir) / name).string();
-}
+std::string join_path(const std::string &dir, const char *name) { return (std::filesystem::path(dir) / name).string(); }
 
 } // namespace
 
@@ -103,7 +101,8 @@ int run_demo(const std::vector<std::string> &args) {
     while (cur.next()) {
         const std::string name = cur.current();
         if (!cur.is_option()) {
-            throw UsageError("demo takes no positional arguments, got '" + one_line(name) + "' (see 'kissm demo --help')");
+            throw UsageError("demo takes no positional arguments, got '" + one_line(name) +
+                             "' (see 'kissm demo --help')");
         } else if (name == "-h" || name == "--help") {
             print_demo_help(stdout);
             return kExitOk;
@@ -172,8 +171,10 @@ int run_demo(const std::vector<std::string> &args) {
     const std::string tag = std::string("kissm ") + kissm_version_string() + " demo, seed " + std::to_string(opt.seed);
     std::string error;
     const size_t ns = demo.source.xyz.size() / 3, nt = demo.target.xyz.size() / 3;
-    if (!write_ply_xyz(source_path, demo.source.xyz.data(), ns, nullptr, {tag + ": source scan, sensor frame"}, &error) ||
-        !write_ply_xyz(target_path, demo.target.xyz.data(), nt, nullptr, {tag + ": target scan, sensor frame"}, &error)) {
+    if (!write_ply_xyz(source_path, demo.source.xyz.data(), ns, nullptr, {tag + ": source scan, sensor frame"},
+                       &error) ||
+        !write_ply_xyz(target_path, demo.target.xyz.data(), nt, nullptr, {tag + ": target scan, sensor frame"},
+                       &error)) {
         throw UsageError(error);
     }
     if (have_pose) {
@@ -252,13 +253,15 @@ int run_demo(const std::vector<std::string> &args) {
         yaw_pitch_roll_deg(gt, &yaw, &pitch, &roll);
         std::printf("kissm %s demo: synthetic street scene, seed %llu\n", kissm_version_string(),
                     static_cast<unsigned long long>(opt.seed));
-        std::printf("  scene: %zu primitives on rough, undulating ground: %d building blocks (%d facade details),\n"
-                    "         %d walls and hedges, %d street lights, %d trees, %d parked vehicles, %d clutter objects,\n"
-                    "         %d vehicles and pedestrians seen in one scan only\n",
-                    s.primitives, s.buildings, s.details, s.walls, s.poles, s.trees, s.cars, s.clutter, s.movers);
-        std::printf("  sensor: %d-beam spinning LiDAR (%+.1f to %+.1f deg), %d columns, %.0f m range, %.1f cm range noise\n",
-                    scene_options.beams, scene_options.fov_up_deg, scene_options.fov_down_deg,
-                    scene_options.azimuth_steps, scene_options.max_range, 100.0 * scene_options.range_noise);
+        std::printf(
+            "  scene: %zu primitives on rough, undulating ground: %d building blocks (%d facade details),\n"
+            "         %d walls and hedges, %d street lights, %d trees, %d parked vehicles, %d clutter objects,\n"
+            "         %d vehicles and pedestrians seen in one scan only\n",
+            s.primitives, s.buildings, s.details, s.walls, s.poles, s.trees, s.cars, s.clutter, s.movers);
+        std::printf(
+            "  sensor: %d-beam spinning LiDAR (%+.1f to %+.1f deg), %d columns, %.0f m range, %.1f cm range noise\n",
+            scene_options.beams, scene_options.fov_up_deg, scene_options.fov_down_deg, scene_options.azimuth_steps,
+            scene_options.max_range, 100.0 * scene_options.range_noise);
         std::printf("  scans: source %zu points, target %zu points, each in its own sensor frame (%.0f ms)\n", ns, nt,
                     generate_ms);
         std::printf("  true motion: %.2f m, %.2f deg (yaw %.1f, pitch %.1f, roll %.1f deg)\n", translation_norm(gt),

@@ -50,8 +50,8 @@ struct Ground {
     static constexpr int kRoughWaves = 4;
     double rough_kx[kRoughWaves] = {}, rough_ky[kRoughWaves] = {}, rough_phase[kRoughWaves] = {};
     double rough_road = 0.0, rough_off_road = 0.0; // amplitude of each wave
-    double hmin = 0, hmax = 0;  // bounds of h within kSceneExtent
-    double max_gradient = 0;    // bound of |grad h| away from the kerbs (which add at most curb_height)
+    double hmin = 0, hmax = 0;                     // bounds of h within kSceneExtent
+    double max_gradient = 0; // bound of |grad h| away from the kerbs (which add at most curb_height)
 
     static constexpr double kKerbWidth = 0.08; // horizontal extent of the kerb's slope
 
@@ -61,7 +61,8 @@ struct Ground {
         constexpr double c = 1.0 / (2.0 * kPi); // radians to cycles
         const double base = a1 * wave(c * (k1x * x + p1)) * wave(c * (k1y * y + q1) + 0.25) +
                             a2 * wave(c * (k2x * x + k2y * y + p2)) + gx * x + gy * y;
-        const double off_road = std::min(kerb(std::max(road_lo - y, y - road_hi)), kerb(std::fabs(x - cross_x) - cross_half_width));
+        const double off_road =
+            std::min(kerb(std::max(road_lo - y, y - road_hi)), kerb(std::fabs(x - cross_x) - cross_half_width));
         double rough = 0.0;
         for (int i = 0; i < kRoughWaves; ++i) rough += wave(c * (rough_kx[i] * x + rough_ky[i] * y + rough_phase[i]));
         return base + curb_height * off_road + (rough_road + (rough_off_road - rough_road) * off_road) * rough;
@@ -69,8 +70,8 @@ struct Ground {
 };
 
 struct Box {
-    double c[3];  // centre
-    double h[3];  // half sizes along the box's own axes
+    double c[3];   // centre
+    double h[3];   // half sizes along the box's own axes
     double cs, sn; // cos and sin of the yaw
 };
 
@@ -254,20 +255,20 @@ double hit_prim(const Scene &s, const PrimRef &p, const Ray &r, Rng &rng) {
 // One side of the main street. Real streets are not symmetric, and neither is this one: each side has its
 // own sidewalk width, kerb position and furniture, so that a scan turned by 180 degrees does not fit itself.
 struct StreetSide {
-    double sign = 1.0;       // -1: y < 0, +1: y > 0
-    double kerb = 7.0;       // |y| of the kerb
-    double sidewalk = 3.5;   // width of the sidewalk behind the kerb
-    bool poles = true;       // street lights
+    double sign = 1.0;     // -1: y < 0, +1: y > 0
+    double kerb = 7.0;     // |y| of the kerb
+    double sidewalk = 3.5; // width of the sidewalk behind the kerb
+    bool poles = true;     // street lights
     bool trees = true;
-    double parking = 0.7;    // share of the kerb with parked cars
+    double parking = 0.7; // share of the kerb with parked cars
     std::vector<double> pole_x;
 };
 
 struct Layout {
-    StreetSide sides[2];  // [0]: y < 0, [1]: y > 0
+    StreetSide sides[2];   // [0]: y < 0, [1]: y > 0
     double cross_x = 30.0; // centre line of the cross street, along y
     double cross_half_width = 6.0;
-    double end_x = -45.0;  // the main street ends here (T-junction): a row of buildings closes it
+    double end_x = -45.0; // the main street ends here (T-junction): a row of buildings closes it
 
     double road_lo() const { return -sides[0].kerb; }
     double road_hi() const { return sides[1].kerb; }
@@ -333,8 +334,8 @@ void add_car(Scene &s, Rng &rng, double cx, double cy, double yaw, double length
     s.add_box(cx, cy, ground + 0.3, body_top, length, width, yaw);
     const double cabin = length * rng.uniform(0.45, 0.6);
     const double shift = length * rng.uniform(-0.12, 0.05);
-    s.add_box(cx + shift * std::cos(yaw), cy + shift * std::sin(yaw), body_top - 0.05,
-              ground + rng.uniform(1.4, 1.6), cabin, width - 0.15, yaw);
+    s.add_box(cx + shift * std::cos(yaw), cy + shift * std::sin(yaw), body_top - 0.05, ground + rng.uniform(1.4, 1.6),
+              cabin, width - 0.15, yaw);
 }
 
 void add_tree(Scene &s, Rng &rng, double x, double y) {
@@ -377,7 +378,7 @@ void add_clutter(Scene &s, Rng &rng, double x, double y) {
 int add_facade_details(Scene &s, Rng &rng, double cx, double cy, double g, double lx, double ly, double height,
                        double yaw, double nx, double ny) {
     const double cs = std::cos(yaw), sn = std::sin(yaw);
-    const double length = nx != 0.0 ? ly : lx;   // along the face
+    const double length = nx != 0.0 ? ly : lx; // along the face
     const double half_depth = nx != 0.0 ? 0.5 * lx : 0.5 * ly;
     int added = 0;
     // A box of width w along the face, sticking out by d, from z0 to z1, centred at u along the face.
@@ -400,14 +401,17 @@ int add_facade_details(Scene &s, Rng &rng, double cx, double cy, double g, doubl
         for (int f = 1; f <= floors; ++f) {
             const double z = g + 3.0 * f + 0.2;
             for (double u = -0.5 * length + 0.5 * bay; u < 0.5 * length - 0.5 * bay; u += bay) {
-                if (rng.chance(0.4)) place(u, rng.uniform(1.5, std::min(3.0, bay - 0.5)), rng.uniform(0.8, 1.4), z, z + rng.uniform(0.9, 1.1));
+                if (rng.chance(0.4))
+                    place(u, rng.uniform(1.5, std::min(3.0, bay - 0.5)), rng.uniform(0.8, 1.4), z,
+                          z + rng.uniform(0.9, 1.1));
             }
         }
     }
     if (length > 4.0 && rng.chance(0.6)) { // entrance steps and a canopy
         const double u = rng.uniform(-0.5 * length + 1.5, 0.5 * length - 1.5), w = rng.uniform(1.5, 3.0);
         place(u, w, rng.uniform(0.8, 1.5), g - 0.5, g + rng.uniform(0.2, 0.6));
-        if (rng.chance(0.5)) place(u, w + 0.4, rng.uniform(1.0, 1.6), g + rng.uniform(2.6, 3.2), g + rng.uniform(3.3, 3.5));
+        if (rng.chance(0.5))
+            place(u, w + 0.4, rng.uniform(1.0, 1.6), g + rng.uniform(2.6, 3.2), g + rng.uniform(3.3, 3.5));
     }
     return added;
 }
@@ -449,9 +453,11 @@ void add_street_buildings(Scene &s, Rng &rng, const Layout &lay, const StreetSid
             wx0 += ww;
         }
         if (setback > 2.0 && rng.chance(0.3)) { // a hedge in the front yard
-            const double hx = x + 0.5 * width + rng.uniform(-0.2, 0.2) * width, hy = side * (sidewalk_edge + 0.5 * setback);
+            const double hx = x + 0.5 * width + rng.uniform(-0.2, 0.2) * width,
+                         hy = side * (sidewalk_edge + 0.5 * setback);
             const double hg = s.ground.height(hx, hy);
-            s.add_box(hx, hy, hg - 0.3, hg + rng.uniform(0.8, 1.6), width * rng.uniform(0.4, 0.9), rng.uniform(0.6, 1.0), yaw);
+            s.add_box(hx, hy, hg - 0.3, hg + rng.uniform(0.8, 1.6), width * rng.uniform(0.4, 0.9),
+                      rng.uniform(0.6, 1.0), yaw);
             ++stats.walls;
         }
         if (setback > 2.5 && rng.chance(0.4)) { // a low shop front or porch in front of the facade
@@ -652,7 +658,8 @@ DemoScan cast_scan(const Scene &scene, const Pose &sensor, const DemoOptions &op
             last = static_cast<int>(std::floor((centre + half + kPi) / kSectorWidth));
         }
         const Candidate c{std::max(0.0, dist - p.radius), static_cast<uint32_t>(i)};
-        for (int k = first; k <= last; ++k) sectors[static_cast<size_t>(((k % kSectors) + kSectors) % kSectors)].push_back(c);
+        for (int k = first; k <= last; ++k)
+            sectors[static_cast<size_t>(((k % kSectors) + kSectors) % kSectors)].push_back(c);
     }
     for (std::vector<Candidate> &list : sectors) {
         std::sort(list.begin(), list.end(), [](const Candidate &a, const Candidate &b) {
@@ -667,7 +674,8 @@ DemoScan cast_scan(const Scene &scene, const Pose &sensor, const DemoOptions &op
         double deg = opt.fov_up_deg - (opt.fov_up_deg - opt.fov_down_deg) * b / (beams - 1);
         if (opt.dense_upper_block) {
             deg = b < upper ? opt.fov_up_deg + (opt.split_deg - opt.fov_up_deg) * b / (upper - 1)
-                            : opt.split_deg - 0.5 + (opt.fov_down_deg - opt.split_deg + 0.5) * (b - upper) / (beams - upper - 1);
+                            : opt.split_deg - 0.5 +
+                                  (opt.fov_down_deg - opt.split_deg + 0.5) * (b - upper) / (beams - upper - 1);
         }
         const double el = deg_to_rad(deg);
         sin_el[static_cast<size_t>(b)] = std::sin(el);
@@ -743,17 +751,16 @@ DemoData generate_demo(const DemoOptions &options) {
     const double lane_lo = lay.road_lo() + 2.8, lane_hi = lay.road_hi() - 2.8;
     const double xt = layout_rng.uniform(-4.0, 4.0), yt = layout_rng.uniform(lane_lo, lane_hi);
     const double yaw_t = layout_rng.uniform(-kPi, kPi);
-    const Pose target_pose =
-        pose_from_ypr(yaw_t, layout_rng.uniform(-tilt, tilt), layout_rng.uniform(-tilt, tilt), xt, yt,
-                      common.ground.height(xt, yt) + options.sensor_height);
+    const Pose target_pose = pose_from_ypr(yaw_t, layout_rng.uniform(-tilt, tilt), layout_rng.uniform(-tilt, tilt), xt,
+                                           yt, common.ground.height(xt, yt) + options.sensor_height);
     const double dist = layout_rng.uniform(options.min_distance, options.max_distance);
     const double ys = layout_rng.uniform(lane_lo, lane_hi);
     const double dy = std::min(std::fabs(ys - yt), dist);
     const double xs = xt + layout_rng.sign() * std::sqrt(dist * dist - dy * dy);
-    const double yaw_s = yaw_t + layout_rng.sign() * deg_to_rad(layout_rng.uniform(options.min_yaw_deg, options.max_yaw_deg));
-    const Pose source_pose =
-        pose_from_ypr(yaw_s, layout_rng.uniform(-tilt, tilt), layout_rng.uniform(-tilt, tilt), xs, ys,
-                      common.ground.height(xs, ys) + options.sensor_height);
+    const double yaw_s =
+        yaw_t + layout_rng.sign() * deg_to_rad(layout_rng.uniform(options.min_yaw_deg, options.max_yaw_deg));
+    const Pose source_pose = pose_from_ypr(yaw_s, layout_rng.uniform(-tilt, tilt), layout_rng.uniform(-tilt, tilt), xs,
+                                           ys, common.ground.height(xs, ys) + options.sensor_height);
 
     add_stopped_vehicles(common, layout_rng, lay, source_pose, target_pose, out.stats);
     Scene source_scene = common, target_scene = common;

@@ -28,7 +28,8 @@ public:
     void value(bool flag);
     void null();
 
-    template <typename T> void field(const std::string &name, const T &v) {
+    template <typename T>
+    void field(const std::string &name, const T &v) {
         key(name);
         value(v);
     }

@@ -19,9 +19,7 @@ struct Pose {
     double t[3];
 };
 
-inline Pose pose_identity() {
-    return Pose{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}};
-}
+inline Pose pose_identity() { return Pose{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 0}}; }
 
 // R = Rz(yaw) * Ry(pitch) * Rx(roll), angles in radians.
 inline Pose pose_from_ypr(double yaw, double pitch, double roll, double x, double y, double z) {
@@ -113,9 +111,7 @@ inline double translation_error(const double A[16], const double B[16]) {
     return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-inline double translation_norm(const double T[16]) {
-    return std::sqrt(T[3] * T[3] + T[7] * T[7] + T[11] * T[11]);
-}
+inline double translation_norm(const double T[16]) { return std::sqrt(T[3] * T[3] + T[7] * T[7] + T[11] * T[11]); }
 
 // Inverse of pose_from_ypr's rotation (Z-Y-X Euler angles), degrees.
 inline void yaw_pitch_roll_deg(const double T[16], double *yaw, double *pitch, double *roll) {

@@ -101,7 +101,8 @@ void Image::draw_text(int x, int y, const std::string &text, Rgb color, int scal
         if (const Glyph *g = find_glyph(ch)) {
             for (int row = 0; row < 7; ++row) {
                 for (int col = 0; col < 5; ++col) {
-                    if (g->rows[row] & (0x10 >> col)) fill_rect(pen + col * scale, y + row * scale, scale, scale, color);
+                    if (g->rows[row] & (0x10 >> col))
+                        fill_rect(pen + col * scale, y + row * scale, scale, scale, color);
                 }
             }
         }

@@ -45,7 +45,8 @@ CloudPtr read_cloud(const char *role, const std::string &path, int32_t format) {
     kissm_cloud *cloud = nullptr;
     const int32_t status = kissm_read_points(path.c_str(), format, &cloud);
     if (status != KISSM_OK) {
-        throw UsageError(std::string("cannot read ") + role + " '" + one_line(path) + "': " + library_error(status, path));
+        throw UsageError(std::string("cannot read ") + role + " '" + one_line(path) +
+                         "': " + library_error(status, path));
     }
     return CloudPtr(cloud);
 }
@@ -53,7 +54,8 @@ CloudPtr read_cloud(const char *role, const std::string &path, int32_t format) {
 kissm_points points_of(const kissm_cloud *cloud, const char *role) {
     kissm_points points{};
     const int32_t status = kissm_cloud_points(cloud, &points);
-    if (status != KISSM_OK) throw UsageError(std::string("cannot use the ") + role + " cloud: " + library_error(status));
+    if (status != KISSM_OK)
+        throw UsageError(std::string("cannot use the ") + role + " cloud: " + library_error(status));
     return points;
 }
 
@@ -236,7 +238,8 @@ int run_register(const std::vector<std::string> &args) {
         const CloudLayer aligned_layer{source_xyz, source_count, have_pose ? result.transform : nullptr, orange};
         TopViewFigure figure;
         figure.panels.push_back({"BEFORE: EACH CLOUD IN ITS OWN FRAME", {target_layer, source_layer}, {}});
-        TopViewPanel after{have_pose ? "AFTER: SOURCE ALIGNED BY KISSM" : "AFTER: NO POSE ESTIMATED", {target_layer}, {}};
+        TopViewPanel after{
+            have_pose ? "AFTER: SOURCE ALIGNED BY KISSM" : "AFTER: NO POSE ESTIMATED", {target_layer}, {}};
         if (have_pose) after.layers.push_back(aligned_layer);
         figure.panels.push_back(after);
         figure.legend = {{"SOURCE", orange}, {"TARGET", blue}};
@@ -264,8 +267,10 @@ int run_register(const std::vector<std::string> &args) {
         std::fputs(json.str().c_str(), stdout);
     } else {
         std::printf("kissm %s register\n", kissm_version_string());
-        std::printf("  source: %s (%llu points)\n", opt.files[0].c_str(), static_cast<unsigned long long>(source_count));
-        std::printf("  target: %s (%llu points)\n", opt.files[1].c_str(), static_cast<unsigned long long>(target_count));
+        std::printf("  source: %s (%llu points)\n", opt.files[0].c_str(),
+                    static_cast<unsigned long long>(source_count));
+        std::printf("  target: %s (%llu points)\n", opt.files[1].c_str(),
+                    static_cast<unsigned long long>(target_count));
         std::printf("  voxel %g, threads %d%s, files read in %.1f ms\n", opt.voxel, opt.threads,
                     opt.threads == 0 ? " (all)" : "", read_ms);
         std::printf("transform (maps source into target, row-major):\n");

@@ -3,8 +3,8 @@
 #include <cctype>
 #include <cerrno>
 #include <cinttypes>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "cli_args.hpp"
@@ -24,9 +24,7 @@ void row2(std::FILE *out, const char *label, uint64_t a, uint64_t b) {
     std::fprintf(out, "  %-22s%11" PRIu64 " %11" PRIu64 "\n", label, a, b);
 }
 
-void row1(std::FILE *out, const char *label, uint64_t a) {
-    std::fprintf(out, "  %-22s%11" PRIu64 "\n", label, a);
-}
+void row1(std::FILE *out, const char *label, uint64_t a) { std::fprintf(out, "  %-22s%11" PRIu64 "\n", label, a); }
 
 } // namespace
 
@@ -53,8 +51,7 @@ void print_result_summary(std::FILE *out, const kissm_result &r) {
     } else {
         std::fprintf(out, "residual rms: - (noise bound %.4g)\n", r.noise_bound);
     }
-    std::fprintf(out,
-                 "time (ms): voxelize %.1f, features %.1f, matching %.1f, pruning %.1f, solver %.1f, total %.1f\n",
+    std::fprintf(out, "time (ms): voxelize %.1f, features %.1f, matching %.1f, pruning %.1f, solver %.1f, total %.1f\n",
                  r.time_voxelize_ms, r.time_features_ms, r.time_matching_ms, r.time_pruning_ms, r.time_solver_ms,
                  r.time_total_ms);
 }

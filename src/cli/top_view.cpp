@@ -85,12 +85,14 @@ void draw_panel(Image &img, int x0, int y0, int size, const TopViewPanel &panel,
         }
         for (int py = 0; py < size; ++py) {
             for (int px = 0; px < size; ++px) {
-                const uint16_t c = counts[static_cast<size_t>(py) * static_cast<size_t>(size) + static_cast<size_t>(px)];
+                const uint16_t c =
+                    counts[static_cast<size_t>(py) * static_cast<size_t>(size) + static_cast<size_t>(px)];
                 if (c == 0) continue;
                 const double alpha = 0.92 * (1.0 - std::exp(-c / 1.5));
                 const Rgb old = img.get(x0 + px, y0 + py);
                 img.set(x0 + px, y0 + py,
-                        {mix(old.r, layer.color.r, alpha), mix(old.g, layer.color.g, alpha), mix(old.b, layer.color.b, alpha)});
+                        {mix(old.r, layer.color.r, alpha), mix(old.g, layer.color.g, alpha),
+                         mix(old.b, layer.color.b, alpha)});
             }
         }
     }
@@ -114,7 +116,8 @@ void draw_panel(Image &img, int x0, int y0, int size, const TopViewPanel &panel,
     // Scale bar (one grid spacing) in the bottom-left corner.
     const int bar = static_cast<int>(std::lround(spacing * scale));
     const int bx = x0 + 14, by = y0 + size - 16;
-    img.fill_rect(bx - 6, by - 22, std::max(bar, Image::text_width(format_length(spacing), kTextScale)) + 12, 32, kWhite);
+    img.fill_rect(bx - 6, by - 22, std::max(bar, Image::text_width(format_length(spacing), kTextScale)) + 12, 32,
+                  kWhite);
     img.fill_rect(bx, by, bar, 3, kText);
     img.fill_rect(bx, by - 5, 2, 8, kText);
     img.fill_rect(bx + bar - 2, by - 5, 2, 8, kText);

@@ -12,7 +12,7 @@
 namespace kissm_cli {
 
 struct CloudLayer {
-    const double *xyz = nullptr;       // packed x y z
+    const double *xyz = nullptr; // packed x y z
     size_t count = 0;
     const double *transform = nullptr; // optional row-major 4x4 applied before projecting
     Rgb color{0, 0, 0};

@@ -3,8 +3,8 @@
 
 #include <Eigen/Core>
 #include <cmath>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "uninitialized.hpp"
@@ -104,7 +104,7 @@ struct Descriptors {
 struct Correspondence {
     std::uint32_t source; // keypoint index in the source descriptors
     std::uint32_t target;
-    float score;          // ratio d0^2 / d1^2 (lower is more distinctive)
+    float score; // ratio d0^2 / d1^2 (lower is more distinctive)
 };
 
 } // namespace detail

@@ -77,9 +77,8 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
     return g;
 }
 
-std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const CsrGraph &g,
-                                                                          const std::vector<std::uint32_t> &vertices,
-                                                                          std::size_t max_pairs) {
+std::vector<std::pair<std::uint32_t, std::uint32_t>>
+sample_induced_edges(const CsrGraph &g, const std::vector<std::uint32_t> &vertices, std::size_t max_pairs) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
     const std::size_t m = vertices.size();
     if (m < 2) return out;

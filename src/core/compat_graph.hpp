@@ -28,9 +28,8 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
 // Edges of the subgraph induced by `vertices` (ascending), renumbered to positions in `vertices`, at most
 // about `max_pairs` of them: each vertex contributes up to max_pairs / |vertices| edges spread evenly over
 // its sorted neighbour list. Sorted and unique.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> sample_induced_edges(const CsrGraph &g,
-                                                                          const std::vector<std::uint32_t> &vertices,
-                                                                          std::size_t max_pairs);
+std::vector<std::pair<std::uint32_t, std::uint32_t>>
+sample_induced_edges(const CsrGraph &g, const std::vector<std::uint32_t> &vertices, std::size_t max_pairs);
 
 } // namespace detail
 } // namespace v0_1

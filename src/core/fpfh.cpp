@@ -8,10 +8,10 @@
 // SSE2 is part of every x86-64 target. (Not 32-bit x86: its scalar code may use x87 precision, and the
 // vector lanes must match the scalar pair feature bit for bit.)
 #if defined(__x86_64__) || defined(_M_X64)
-#define KISSM_FPFH_SSE2 1
-#include <emmintrin.h>
+#  define KISSM_FPFH_SSE2 1
+#  include <emmintrin.h>
 #else
-#define KISSM_FPFH_SSE2 0
+#  define KISSM_FPFH_SSE2 0
 #endif
 
 namespace kissm {
@@ -150,7 +150,9 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
     const __m128 top = _mm_set1_ps(static_cast<float>(kBinsPerFeature) - 0.5f);
     const __m128i five = _mm_set1_epi32(kBinsPerFeature / 2);
     const __m128i frame_bit = _mm_set1_epi32(kLaneFrame), tie_bit = _mm_set1_epi32(kLaneTie);
-    auto select = [](__m128 mask, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b)); };
+    auto select = [](__m128 mask, __m128 a, __m128 b) {
+        return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+    };
     auto dot = [](__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
         return _mm_add_ps(_mm_mul_ps(ax, bx), _mm_add_ps(_mm_mul_ps(ay, by), _mm_mul_ps(az, bz)));
     };
@@ -331,8 +333,7 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
 }
 
 Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power,
-                         RunContext &ctx) {
+                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power, RunContext &ctx) {
     constexpr int D = kDescriptorDim;
 
     // SPFH is needed for every point that has a normal and neighbours a keypoint; computing it for all

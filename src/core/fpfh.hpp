@@ -21,15 +21,14 @@ bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const 
 // normal, each block scaled by 100 / (number of pairs with a frame); zero rows for points without a normal.
 // Bitwise identical to evaluating every ordered pair with pair_feature_bins, for any thread count.
 UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                                RunContext &ctx);
+                                 RunContext &ctx);
 
 // SPFH of every point with a normal (neighbours without a normal are skipped), then FPFH of each keypoint:
 // its SPFH plus the mean of its neighbours' SPFH weighted by (voxel_size / distance)^weight_power, each 11-bin block
 // rescaled to sum to 100. Distances are normalised by the voxel size so that descriptors do not depend on
 // the unit of the coordinates.
 Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power,
-                         RunContext &ctx);
+                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power, RunContext &ctx);
 
 } // namespace detail
 } // namespace v0_1

@@ -237,7 +237,8 @@ std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs) {
     if (n < 2) return pairs;
     if (n * (n - 1) / 2 <= max_pairs) {
         for (std::size_t i = 0; i < n; ++i)
-            for (std::size_t j = i + 1; j < n; ++j) pairs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
+            for (std::size_t j = i + 1; j < n; ++j)
+                pairs.emplace_back(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
         return pairs;
     }
     const std::size_t strides = std::max<std::size_t>(1, max_pairs / n);

@@ -15,7 +15,7 @@ inline namespace v0_1 {
 namespace detail {
 
 struct SolverParams {
-    double noise_bound;     // inlier bound on one correspondence, metres
+    double noise_bound; // inlier bound on one correspondence, metres
     int max_iterations = 100;
     double gnc_factor = 1.4;
     std::size_t max_tims = 20000; // translation-invariant measurements used by the rotation solver

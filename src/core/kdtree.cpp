@@ -6,10 +6,10 @@
 
 // SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
-#define KISSM_KDTREE_SSE2 1
-#include <emmintrin.h>
+#  define KISSM_KDTREE_SSE2 1
+#  include <emmintrin.h>
 #else
-#define KISSM_KDTREE_SSE2 0
+#  define KISSM_KDTREE_SSE2 0
 #endif
 
 namespace kissm {
@@ -167,7 +167,8 @@ std::uint32_t ProjectedKdTree::build(std::uint32_t *begin, std::uint32_t *end, c
         index_.resize(index_.size() + nblocks * kLane, kNoPoint);
         for (std::size_t i = 0; i < count; ++i) {
             const std::size_t block = first + i / kLane, lane = i % kLane;
-            for (int d = 0; d < kDim; ++d) blocks_[(block * kDim + static_cast<std::size_t>(d)) * kLane + lane] = coord(begin[i], d);
+            for (int d = 0; d < kDim; ++d)
+                blocks_[(block * kDim + static_cast<std::size_t>(d)) * kLane + lane] = coord(begin[i], d);
             index_[block * kLane + lane] = begin[i];
         }
         nodes_[id] = Node{0.0f, 0.0f, static_cast<std::uint32_t>(first), kLeafBit | static_cast<std::uint32_t>(count)};
@@ -246,7 +247,8 @@ void ProjectedKdTree::descend(Search &s) const {
         const std::size_t first = node->link, count = node->info & ~kLeafBit;
         const std::size_t blocks = (count + kLane - 1) / kLane;
         float dist[kLeafPoints];
-        std::uint64_t hits = leaf_distances<kDim, kLane>(s.query, &blocks_[first * kDim * kLane], blocks, s.limit, dist);
+        std::uint64_t hits =
+            leaf_distances<kDim, kLane>(s.query, &blocks_[first * kDim * kLane], blocks, s.limit, dist);
         if (hits != 0) {
             const std::uint32_t *id = &index_[first * kLane];
             float limit = s.limit; // kept in a register between insertions
@@ -279,8 +281,10 @@ int ProjectedKdTree::nearest(const float *query, int k, std::uint32_t *index, fl
         const float q = query[d];
         s.query[d] = q;
         float gap = 0.0f;
-        if (q < box_lo_[d]) gap = box_lo_[d] - q;
-        else if (q > box_hi_[d]) gap = q - box_hi_[d];
+        if (q < box_lo_[d])
+            gap = box_lo_[d] - q;
+        else if (q > box_hi_[d])
+            gap = q - box_hi_[d];
         s.gap2[d] = gap * gap;
     }
     descend(s);

@@ -47,7 +47,7 @@ public:
     }
 
 private:
-    static constexpr int kLane = 4;          // points per block: one SSE2 register per dimension
+    static constexpr int kLane = 4; // points per block: one SSE2 register per dimension
     // Points per leaf (a multiple of kLane); every leaf is full but the last. Matching time at one thread,
     // full leaves of 24 / 32 / 48 points: small_gicp 15.1 / 15.3 / 15.0 ms, KITTI keyframes 53.5 / 52.2 /
     // 52.3 ms, full KITTI scans 69.6 / 68.1 / 66.7 ms, 3M synthetic descriptors per cloud - / 23.3 / 21.9 s.
@@ -55,10 +55,10 @@ private:
     static_assert(kLeafPoints % kLane == 0 && kLeafPoints <= 64, "a leaf's hits fit one 64-bit mask");
 
     struct Node {
-        float low_max;       // internal: largest coordinate of the low child along `dim`
-        float high_min;      // internal: smallest coordinate of the high child along `dim`
-        std::uint32_t link;  // internal: index of the high child (the low child follows its parent); leaf: first block
-        std::uint32_t info;  // internal: dim; leaf: kLeafBit | number of points
+        float low_max;      // internal: largest coordinate of the low child along `dim`
+        float high_min;     // internal: smallest coordinate of the high child along `dim`
+        std::uint32_t link; // internal: index of the high child (the low child follows its parent); leaf: first block
+        std::uint32_t info; // internal: dim; leaf: kLeafBit | number of points
     };
     static constexpr std::uint32_t kLeafBit = 0x80000000u;
 
@@ -68,8 +68,8 @@ private:
     void descend(Search &s) const;
 
     std::vector<Node> nodes_;
-    std::vector<float> blocks_;          // per block: kDim rows of kLane coordinates
-    std::vector<std::uint32_t> index_;   // per block: kLane original indices (kNoPoint for padding)
+    std::vector<float> blocks_;        // per block: kDim rows of kLane coordinates
+    std::vector<std::uint32_t> index_; // per block: kLane original indices (kNoPoint for padding)
     float box_lo_[kDim] = {}, box_hi_[kDim] = {};
 };
 

@@ -100,7 +100,8 @@ Projection principal_axes(const Descriptors &a, const Descriptors &b, RunContext
         for (std::size_t r0 = 0; r0 < rows.size(); r0 += kChunk) {
             const std::size_t nr = std::min(kChunk, rows.size() - r0);
             for (std::size_t r = 0; r < nr; ++r)
-                for (int c = 0; c < kDescriptorDim; ++c) xs[r * kPad + c] = static_cast<double>(rows[r0 + r][c]) - mean[c];
+                for (int c = 0; c < kDescriptorDim; ++c)
+                    xs[r * kPad + c] = static_cast<double>(rows[r0 + r][c]) - mean[c];
             for (std::size_t t = t0; t < t1; ++t) {
                 const int i0 = tiles[t].first, j0 = tiles[t].second;
                 double acc[4][4];
@@ -116,13 +117,15 @@ Projection principal_axes(const Descriptors &a, const Descriptors &b, RunContext
             }
         }
     });
-    Eigen::Matrix<double, kDescriptorDim, kDescriptorDim> cov = Eigen::Matrix<double, kDescriptorDim, kDescriptorDim>::Zero();
+    Eigen::Matrix<double, kDescriptorDim, kDescriptorDim> cov =
+        Eigen::Matrix<double, kDescriptorDim, kDescriptorDim>::Zero();
     for (int i = 0; i < kDescriptorDim; ++i)
         for (int j = 0; j <= i; ++j) cov(i, j) = tri[i * kPad + j];
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, kDescriptorDim, kDescriptorDim>> es(cov);
     Projection p;
     p.mean = mean.cast<float>();
-    for (int k = 0; k < kProjDim; ++k) p.basis.row(k) = es.eigenvectors().col(kDescriptorDim - 1 - k).transpose().cast<float>();
+    for (int k = 0; k < kProjDim; ++k)
+        p.basis.row(k) = es.eigenvectors().col(kDescriptorDim - 1 - k).transpose().cast<float>();
     return p;
 }
 
@@ -151,7 +154,8 @@ UninitVector<float> by_slot(const Descriptors &d, const ProjectedKdTree &tree, R
             if (i == ProjectedKdTree::kNoPoint)
                 std::fill_n(&out[s * kDescriptorDim], kDescriptorDim, 0.0f); // padding: never read
             else
-                std::copy_n(&d.values[static_cast<std::size_t>(i) * kDescriptorDim], kDescriptorDim, &out[s * kDescriptorDim]);
+                std::copy_n(&d.values[static_cast<std::size_t>(i) * kDescriptorDim], kDescriptorDim,
+                            &out[s * kDescriptorDim]);
         }
     });
     return out;

@@ -15,9 +15,9 @@ struct MatchParams {
 };
 
 // Mutual nearest neighbours that pass the ratio test, capped. Candidates come from a kd-tree over the
-// descriptors projected on their 6 leading principal components and are ranked by exact 33-D distance. The cloud with fewer keypoints is queried
-// against the other (ties: source queries target); the result is sorted by (source, target) keypoint
-// index, so it depends only on the descriptors, never on threads or input order.
+// descriptors projected on their 6 leading principal components and are ranked by exact 33-D distance. The cloud with
+// fewer keypoints is queried against the other (ties: source queries target); the result is sorted by (source, target)
+// keypoint index, so it depends only on the descriptors, never on threads or input order.
 std::vector<Correspondence> match_descriptors(const Descriptors &source, const Descriptors &target,
                                               const MatchParams &params, RunContext &ctx);
 

@@ -7,10 +7,10 @@
 
 // SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
-#define KISSM_NEIGHBORS_SSE2 1
-#include <emmintrin.h>
+#  define KISSM_NEIGHBORS_SSE2 1
+#  include <emmintrin.h>
 #else
-#define KISSM_NEIGHBORS_SSE2 0
+#  define KISSM_NEIGHBORS_SSE2 0
 #endif
 
 namespace kissm {
@@ -151,8 +151,8 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
             const std::size_t before = used;
             for (int k = 0; k < kRuns; ++k) {
                 const std::uint32_t s0 = r[2 * k], s1 = r[2 * k + 1];
-                used += append_within(sx.data() + s0, sy.data() + s0, sz.data() + s0, sorted_index.data() + s0, s1 - s0, q,
-                                      r2, idx.data() + used);
+                used += append_within(sx.data() + s0, sy.data() + s0, sz.data() + s0, sorted_index.data() + s0, s1 - s0,
+                                      q, r2, idx.data() + used);
             }
             counts[i] = static_cast<std::uint32_t>(used - before);
         }

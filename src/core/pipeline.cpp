@@ -67,8 +67,8 @@ void voxelize_cloud(const PointsView &view, const Params &params, const std::str
     if (input.num_finite() == 0)
         fail(ErrorKind::EmptyInput, name + " has no finite points (" + std::to_string(input.num_given) + " given)");
     if (input.num_finite() < 4)
-        fail(ErrorKind::TooFewPoints, name + " has " + std::to_string(input.num_finite()) +
-                                          " finite points; at least 4 are needed");
+        fail(ErrorKind::TooFewPoints,
+             name + " has " + std::to_string(input.num_finite()) + " finite points; at least 4 are needed");
     f.voxels = voxelize(input, params.voxel_size, name, ctx);
     f.time_voxelize_ms = clock.lap();
 }
@@ -76,7 +76,9 @@ void voxelize_cloud(const PointsView &view, const Params &params, const std::str
 void describe_voxels(const Params &params, const std::string &name, double progress_from, double progress_to,
                      CloudFeatures &f, RunContext &ctx) {
     Stopwatch clock;
-    auto progress = [&](double part) { ctx.checkpoint(kStageFeatures, progress_from + part * (progress_to - progress_from)); };
+    auto progress = [&](double part) {
+        ctx.checkpoint(kStageFeatures, progress_from + part * (progress_to - progress_from));
+    };
     progress(0.0);
     const auto &pts = f.voxels.points;
     if (pts.size() > static_cast<std::size_t>(params.min_normal_neighbors)) {
@@ -86,9 +88,10 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         np.normal_radius = static_cast<float>(params.normal_radius());
         np.min_neighbors = params.min_normal_neighbors;
         np.max_linearity = params.max_linearity;
-        const Vec3d vp = params.viewpoint_mode == ViewpointMode::CloudCenter
-                             ? Vec3d(Vec3d::Zero()) // the local origin is the bounding-box centre
-                             : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
+        const Vec3d vp =
+            params.viewpoint_mode == ViewpointMode::CloudCenter
+                ? Vec3d(Vec3d::Zero()) // the local origin is the bounding-box centre
+                : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
         np.viewpoint = vp.cast<float>();
         const Normals normals = estimate_normals(pts, nb, np, ctx);
         progress(0.6);
@@ -219,8 +222,8 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     r.time_solver_ms = clock.lap();
     if (ctx.logs(LogLevel::Info)) {
         std::ostringstream msg;
-        msg << "matches " << r.num_initial_correspondences << ", max core " << r.num_pruned_correspondences << " (k="
-            << r.max_core_number << "), rotation inliers " << r.num_rotation_inliers << ", final inliers "
+        msg << "matches " << r.num_initial_correspondences << ", max core " << r.num_pruned_correspondences
+            << " (k=" << r.max_core_number << "), rotation inliers " << r.num_rotation_inliers << ", final inliers "
             << r.num_final_inliers;
         ctx.log(LogLevel::Info, msg.str());
     }

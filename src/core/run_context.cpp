@@ -10,7 +10,7 @@
 #include "failure.hpp"
 
 #if defined(__x86_64__) || defined(_M_X64) || defined(__i386__)
-#include <immintrin.h>
+#  include <immintrin.h>
 #endif
 
 namespace kissm {
@@ -162,7 +162,8 @@ RunContext::~RunContext() { delete pool_; }
 bool RunContext::cancelled() const { return cancel_flag_ && cancel_flag_->load(std::memory_order_relaxed) != 0; }
 
 void RunContext::checkpoint(int stage, double fraction) {
-    if (hooks_.progress && hooks_.progress(stage, fraction)) fail(ErrorKind::Cancelled, "cancelled by the progress callback");
+    if (hooks_.progress && hooks_.progress(stage, fraction))
+        fail(ErrorKind::Cancelled, "cancelled by the progress callback");
     if (cancelled()) fail(ErrorKind::Cancelled, "cancelled by kissm_cancel()");
 }
 

@@ -47,7 +47,9 @@ public:
     bool cancelled() const;
 
     void log(LogLevel level, const std::string &message) const;
-    bool logs(LogLevel level) const { return hooks_.log && static_cast<int>(level) <= static_cast<int>(hooks_.log_level); }
+    bool logs(LogLevel level) const {
+        return hooks_.log && static_cast<int>(level) <= static_cast<int>(hooks_.log_level);
+    }
 
 private:
     int threads_;

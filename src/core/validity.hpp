@@ -9,7 +9,15 @@ namespace kissm {
 inline namespace v0_1 {
 namespace detail {
 
-enum class Reason { None = 0, TooFewVoxels, TooFewFeatures, TooFewCorrespondences, SolverFailed, TooFewInliers, Degenerate };
+enum class Reason {
+    None = 0,
+    TooFewVoxels,
+    TooFewFeatures,
+    TooFewCorrespondences,
+    SolverFailed,
+    TooFewInliers,
+    Degenerate
+};
 
 struct Validity {
     Reason reason = Reason::None;

@@ -136,8 +136,8 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
             std::ostringstream msg;
             msg.precision(6);
             msg << "voxel_size " << voxel_size << " is too small for the " << name << "'s extent of " << extent[a]
-                << " along " << "xyz"[a] << " (at most " << kMaxVoxelsPerAxis
-                << " voxels per axis; use a voxel size of at least "
+                << " along "
+                << "xyz"[a] << " (at most " << kMaxVoxelsPerAxis << " voxels per axis; use a voxel size of at least "
                 << extent[a] / static_cast<double>(kMaxVoxelsPerAxis - 1) << ")";
             fail(ErrorKind::VoxelRange, msg.str());
         }
@@ -233,7 +233,9 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
                 const double count = static_cast<double>(s.count);
                 Vec3d centroid;
                 for (int a = 0; a < 3; ++a)
-                    centroid[a] = corner[a] + (static_cast<double>(c[a]) + static_cast<double>(s.sum[a]) / kFixedScale / count) * voxel_size;
+                    centroid[a] =
+                        corner[a] +
+                        (static_cast<double>(c[a]) + static_cast<double>(s.sum[a]) / kFixedScale / count) * voxel_size;
                 out.points[first_voxel[r] + v] = centroid.cast<float>();
             }
         }

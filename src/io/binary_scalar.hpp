@@ -54,16 +54,56 @@ inline double load_scalar(const char *p, Scalar s, bool swap) {
     unsigned char b[8];
     load_bytes(p, scalar_size(s), swap, b);
     switch (s) {
-    case Scalar::I8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
-    case Scalar::U8: { std::uint8_t v; std::memcpy(&v, b, 1); return v; }
-    case Scalar::I16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
-    case Scalar::U16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
-    case Scalar::I32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
-    case Scalar::U32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
-    case Scalar::I64: { std::int64_t v; std::memcpy(&v, b, 8); return static_cast<double>(v); }
-    case Scalar::U64: { std::uint64_t v; std::memcpy(&v, b, 8); return static_cast<double>(v); }
-    case Scalar::F32: { float v; std::memcpy(&v, b, 4); return v; }
-    case Scalar::F64: { double v; std::memcpy(&v, b, 8); return v; }
+    case Scalar::I8: {
+        std::int8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+    }
+    case Scalar::U8: {
+        std::uint8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+    }
+    case Scalar::I16: {
+        std::int16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+    }
+    case Scalar::U16: {
+        std::uint16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+    }
+    case Scalar::I32: {
+        std::int32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+    }
+    case Scalar::U32: {
+        std::uint32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+    }
+    case Scalar::I64: {
+        std::int64_t v;
+        std::memcpy(&v, b, 8);
+        return static_cast<double>(v);
+    }
+    case Scalar::U64: {
+        std::uint64_t v;
+        std::memcpy(&v, b, 8);
+        return static_cast<double>(v);
+    }
+    case Scalar::F32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        return v;
+    }
+    case Scalar::F64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        return v;
+    }
     }
     return 0.0;
 }

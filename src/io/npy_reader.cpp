@@ -151,8 +151,7 @@ void parse_descr(const std::string &path, const std::string &descr, Scalar &type
             known = true;
         }
     }
-    if (!known)
-        fail_parse(path, ".npy dtype " + quote_token(descr) + " is not supported (use float32 or float64)");
+    if (!known) fail_parse(path, ".npy dtype " + quote_token(descr) + " is not supported (use float32 or float64)");
     // '|' means "byte order not applicable", which is only true of single-byte types.
     if (order == '|' && scalar_size(type) != 1)
         fail_parse(path, ".npy dtype " + quote_token(descr) + " has no byte order");

@@ -35,23 +35,36 @@ struct PcdHeader {
 bool pcd_scalar(char type, std::uint64_t size, Scalar &out) {
     switch (type) {
     case 'F':
-        if (size == 4) out = Scalar::F32;
-        else if (size == 8) out = Scalar::F64;
-        else return false;
+        if (size == 4)
+            out = Scalar::F32;
+        else if (size == 8)
+            out = Scalar::F64;
+        else
+            return false;
         return true;
     case 'I':
-        if (size == 1) out = Scalar::I8;
-        else if (size == 2) out = Scalar::I16;
-        else if (size == 4) out = Scalar::I32;
-        else if (size == 8) out = Scalar::I64;
-        else return false;
+        if (size == 1)
+            out = Scalar::I8;
+        else if (size == 2)
+            out = Scalar::I16;
+        else if (size == 4)
+            out = Scalar::I32;
+        else if (size == 8)
+            out = Scalar::I64;
+        else
+            return false;
         return true;
     case 'U':
-        if (size == 1) out = Scalar::U8;
-        else if (size == 2) out = Scalar::U16;
-        else if (size == 4) out = Scalar::U32;
-        else if (size == 8) out = Scalar::U64;
-        else return false;
+        if (size == 1)
+            out = Scalar::U8;
+        else if (size == 2)
+            out = Scalar::U16;
+        else if (size == 4)
+            out = Scalar::U32;
+        else if (size == 8)
+            out = Scalar::U64;
+        else
+            return false;
         return true;
     default: return false;
     }
@@ -150,11 +163,12 @@ PcdHeader parse_header(const std::string &path, std::string_view bytes) {
 
     std::uint64_t grid = 0;
     if (have_width && !checked_mul(width, height, grid))
-        fail_parse(path, "PCD WIDTH * HEIGHT overflows (" + std::to_string(width) + " * " + std::to_string(height) + ")");
+        fail_parse(path,
+                   "PCD WIDTH * HEIGHT overflows (" + std::to_string(width) + " * " + std::to_string(height) + ")");
     if (have_points) {
         if (have_width && grid != points)
-            fail_parse(path, "PCD POINTS " + std::to_string(points) + " disagrees with WIDTH * HEIGHT = " +
-                                 std::to_string(grid));
+            fail_parse(path, "PCD POINTS " + std::to_string(points) +
+                                 " disagrees with WIDTH * HEIGHT = " + std::to_string(grid));
         header.points = points;
     } else if (have_width) {
         header.points = grid;
@@ -166,8 +180,8 @@ PcdHeader parse_header(const std::string &path, std::string_view bytes) {
 
 struct XyzColumns {
     Scalar type[3] = {Scalar::F32, Scalar::F32, Scalar::F32};
-    std::uint64_t byte_offset[3] = {0, 0, 0};  // within a binary record
-    std::uint64_t value_index[3] = {0, 0, 0};  // within an ascii line
+    std::uint64_t byte_offset[3] = {0, 0, 0}; // within a binary record
+    std::uint64_t value_index[3] = {0, 0, 0}; // within an ascii line
     std::uint64_t record_bytes = 0;
     std::uint64_t record_values = 0;
 };
@@ -181,7 +195,8 @@ XyzColumns find_xyz(const std::string &path, const std::vector<PcdField> &fields
         for (int a = 0; a < 3; ++a) {
             if (f.name != axes[a]) continue;
             if (found[a]) fail_parse(path, "the PCD header has two '" + f.name + "' fields");
-            if (f.count != 1) fail_parse(path, "PCD field '" + f.name + "' has COUNT " + std::to_string(f.count) + ", not 1");
+            if (f.count != 1)
+                fail_parse(path, "PCD field '" + f.name + "' has COUNT " + std::to_string(f.count) + ", not 1");
             if (!pcd_scalar(f.type, f.size, c.type[a]))
                 fail_parse(path, "PCD field '" + f.name + "' has an unsupported TYPE/SIZE " + std::string(1, f.type) +
                                      std::to_string(f.size));
@@ -199,7 +214,8 @@ XyzColumns find_xyz(const std::string &path, const std::vector<PcdField> &fields
     return c;
 }
 
-std::vector<double> read_binary(const std::string &path, std::string_view bytes, const PcdHeader &h, const XyzColumns &c) {
+std::vector<double> read_binary(const std::string &path, std::string_view bytes, const PcdHeader &h,
+                                const XyzColumns &c) {
     const std::size_t left = bytes.size() - h.body_offset;
     std::uint64_t need = 0;
     if (!checked_mul(h.points, c.record_bytes, need))
@@ -217,12 +233,14 @@ std::vector<double> read_binary(const std::string &path, std::string_view bytes,
     const char *r = bytes.data() + h.body_offset;
     for (std::size_t i = 0; i < n; ++i, r += record) {
         for (int a = 0; a < 3; ++a)
-            xyz[3 * i + static_cast<std::size_t>(a)] = load_scalar(r + static_cast<std::size_t>(c.byte_offset[a]), c.type[a], swap);
+            xyz[3 * i + static_cast<std::size_t>(a)] =
+                load_scalar(r + static_cast<std::size_t>(c.byte_offset[a]), c.type[a], swap);
     }
     return xyz;
 }
 
-std::vector<double> read_ascii(const std::string &path, std::string_view bytes, const PcdHeader &h, const XyzColumns &c) {
+std::vector<double> read_ascii(const std::string &path, std::string_view bytes, const PcdHeader &h,
+                               const XyzColumns &c) {
     const char *begin = bytes.data() + h.body_offset;
     const char *end = bytes.data() + bytes.size();
     const std::size_t left = static_cast<std::size_t>(end - begin);

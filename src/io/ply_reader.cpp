@@ -60,11 +60,11 @@ bool ply_scalar(std::string_view name, Scalar &out) {
         Scalar type;
     };
     static const Entry table[] = {
-        {"char", Scalar::I8},     {"int8", Scalar::I8},     {"uchar", Scalar::U8},    {"uint8", Scalar::U8},
-        {"short", Scalar::I16},   {"int16", Scalar::I16},   {"ushort", Scalar::U16},  {"uint16", Scalar::U16},
-        {"int", Scalar::I32},     {"int32", Scalar::I32},   {"uint", Scalar::U32},    {"uint32", Scalar::U32},
-        {"float", Scalar::F32},   {"float32", Scalar::F32}, {"double", Scalar::F64},  {"float64", Scalar::F64},
-        {"int64", Scalar::I64},   {"uint64", Scalar::U64},
+        {"char", Scalar::I8},   {"int8", Scalar::I8},     {"uchar", Scalar::U8},   {"uint8", Scalar::U8},
+        {"short", Scalar::I16}, {"int16", Scalar::I16},   {"ushort", Scalar::U16}, {"uint16", Scalar::U16},
+        {"int", Scalar::I32},   {"int32", Scalar::I32},   {"uint", Scalar::U32},   {"uint32", Scalar::U32},
+        {"float", Scalar::F32}, {"float32", Scalar::F32}, {"double", Scalar::F64}, {"float64", Scalar::F64},
+        {"int64", Scalar::I64}, {"uint64", Scalar::U64},
     };
     for (const Entry &e : table) {
         if (name == e.name) {
@@ -174,8 +174,7 @@ XyzSlots find_xyz(const std::string &path, const PlyElement &vertex) {
 
 std::string truncated_bytes(const PlyElement &el, std::uint64_t expected, std::size_t found) {
     const std::string what = el.name == "vertex" ? "vertex data" : "element '" + el.name + "' data";
-    return "truncated: expected " + std::to_string(expected) + " bytes of " + what + ", found " +
-           std::to_string(found);
+    return "truncated: expected " + std::to_string(expected) + " bytes of " + what + ", found " + std::to_string(found);
 }
 
 // ------------------------------------------------------------------------------------------------------
@@ -226,8 +225,8 @@ public:
         // Records vary in length: the smallest possible record bounds how many can fit.
         const std::uint64_t fit = left() / el.min_record_bytes();
         if (el.count > fit)
-            fail_parse(path_, "truncated: the header declares " + std::to_string(el.count) +
-                                  " vertices but only " + std::to_string(left()) + " bytes of data follow");
+            fail_parse(path_, "truncated: the header declares " + std::to_string(el.count) + " vertices but only " +
+                                  std::to_string(left()) + " bytes of data follow");
         xyz.reserve(static_cast<std::size_t>(el.count) * 3);
         for (std::uint64_t r = 0; r < el.count; ++r) {
             double v[3] = {0, 0, 0};
@@ -259,8 +258,8 @@ private:
 
     const char *take(const PlyElement &el, std::uint64_t record, std::uint64_t n) {
         if (n > left())
-            fail_parse(path_, "truncated: record " + std::to_string(record) + " of element '" + el.name +
-                                  "' (of " + std::to_string(el.count) + ") runs past the end of the file");
+            fail_parse(path_, "truncated: record " + std::to_string(record) + " of element '" + el.name + "' (of " +
+                                  std::to_string(el.count) + ") runs past the end of the file");
         const char *at = p_;
         p_ += n;
         return at;
@@ -274,8 +273,8 @@ private:
         const char *at = take(el, record, scalar_size(prop.count_type));
         std::uint64_t items = 0;
         if (!load_count(at, prop.count_type, swap_, items))
-            fail_parse(path_, "negative list length in record " + std::to_string(record) + " of element '" +
-                                  el.name + "'");
+            fail_parse(path_,
+                       "negative list length in record " + std::to_string(record) + " of element '" + el.name + "'");
         std::uint64_t n = 0;
         if (!checked_mul(items, scalar_size(prop.type), n)) n = UINT64_MAX;
         take(el, record, n);
@@ -294,7 +293,8 @@ private:
 class AsciiBody {
 public:
     AsciiBody(const std::string &path, std::string_view bytes, const PlyHeader &header)
-        : path_(path), tokens_(bytes.data() + header.body_offset, bytes.data() + bytes.size(), header.body_first_line) {}
+        : path_(path), tokens_(bytes.data() + header.body_offset, bytes.data() + bytes.size(), header.body_first_line) {
+    }
 
     void skip_element(const PlyElement &el) {
         if (el.properties.empty()) return;
@@ -311,8 +311,8 @@ public:
         const std::size_t left = static_cast<std::size_t>(tokens_.end - tokens_.pos);
         std::uint64_t values = 0;
         if (!checked_mul(el.count, el.properties.size(), values) || values > (left + 1) / 2)
-            fail_parse(path_, "truncated: the header declares " + std::to_string(el.count) +
-                                  " vertices but only " + std::to_string(left) + " bytes of data follow");
+            fail_parse(path_, "truncated: the header declares " + std::to_string(el.count) + " vertices but only " +
+                                  std::to_string(left) + " bytes of data follow");
         xyz.resize(static_cast<std::size_t>(el.count) * 3);
         std::size_t first_line = 0;
         for (std::uint64_t r = 0; r < el.count; ++r) {

@@ -29,12 +29,18 @@ std::string lower_extension(const std::string &path) {
 }
 
 bool from_extension(const std::string &ext, FileFormat &format) {
-    if (ext == "ply") format = FileFormat::Ply;
-    else if (ext == "pcd") format = FileFormat::Pcd;
-    else if (ext == "bin") format = FileFormat::KittiBin;
-    else if (ext == "npy") format = FileFormat::Npy;
-    else if (ext == "xyz" || ext == "txt" || ext == "pts" || ext == "asc") format = FileFormat::Xyz;
-    else return false;
+    if (ext == "ply")
+        format = FileFormat::Ply;
+    else if (ext == "pcd")
+        format = FileFormat::Pcd;
+    else if (ext == "bin")
+        format = FileFormat::KittiBin;
+    else if (ext == "npy")
+        format = FileFormat::Npy;
+    else if (ext == "xyz" || ext == "txt" || ext == "pts" || ext == "asc")
+        format = FileFormat::Xyz;
+    else
+        return false;
     return true;
 }
 

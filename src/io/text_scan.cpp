@@ -19,8 +19,8 @@ inline bool is_digit(char c) { return c >= '0' && c <= '9'; }
 double out_of_range_value(const char *b, const char *e) {
     const bool negative = b < e && *b == '-';
     if (negative) ++b;
-    long long int_digits = 0;     // significant digits before the point
-    long long leading_zeros = 0;  // zeros after the point before the first significant digit
+    long long int_digits = 0;    // significant digits before the point
+    long long leading_zeros = 0; // zeros after the point before the first significant digit
     bool significant = false;
     while (b < e && is_digit(*b)) {
         if (*b != '0' || significant) {

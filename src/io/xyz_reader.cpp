@@ -57,8 +57,8 @@ std::vector<double> parse_xyz_text(const std::string &path, std::string_view byt
         double v[3] = {0, 0, 0};
         for (int t = 0; t < tokens; ++t) {
             if (!parse_double(token_begin[t], token_end[t], v[t]))
-                fail_parse(path, "line " + std::to_string(lines.line_no) + ": not a number: " +
-                                     quote_token(token_begin[t], token_end[t]));
+                fail_parse(path, "line " + std::to_string(lines.line_no) +
+                                     ": not a number: " + quote_token(token_begin[t], token_end[t]));
         }
         if (tokens < 3)
             fail_parse(path, "line " + std::to_string(lines.line_no) + ": expected at least 3 numbers (x y z), found " +

@@ -48,13 +48,14 @@ uint32_t kissm_abi_sizeof(int32_t which);
 
 // No C++ default arguments, overloads or noexcept sneak into the header: the address of each function has
 // the plain C function-pointer type.
-static_assert(std::is_same<decltype(&kissm_register),
-                           int32_t (*)(kissm_matcher *, const kissm_points *, const kissm_points *, kissm_result *)>::value,
+static_assert(std::is_same<decltype(&kissm_register), int32_t (*)(kissm_matcher *, const kissm_points *,
+                                                                  const kissm_points *, kissm_result *)>::value,
               "kissm_register's type changed");
 static_assert(std::is_same<decltype(&kissm_config_init), int32_t (*)(kissm_config *, uint32_t)>::value,
               "kissm_config_init's type changed");
 
-template <typename T> struct is_c_struct {
+template <typename T>
+struct is_c_struct {
     static constexpr bool value = std::is_trivial<T>::value && std::is_standard_layout<T>::value;
 };
 static_assert(is_c_struct<kissm_config>::value, "kissm_config must be a trivial standard-layout struct");
@@ -64,8 +65,8 @@ static_assert(std::is_same<kissm_log_fn, void (*)(void *, int32_t, const char *)
 static_assert(std::is_same<kissm_progress_fn, int32_t (*)(void *, int32_t, double)>::value,
               "kissm_progress_fn changed");
 
-#define LAYOUT_ASSERT_TYPE(s, f, type, off, size)                                                       \
-    static_assert(std::is_same<decltype(s::f), type>::value, "the type of " #s "." #f " is not " #type);
+#define LAYOUT_ASSERT_TYPE(s, f, type, off, size)                                                                      \
+  static_assert(std::is_same<decltype(s::f), type>::value, "the type of " #s "." #f " is not " #type);
 KISSM_LAYOUT_FIELDS(LAYOUT_ASSERT_TYPE)
 
 // Constants are int constant expressions, usable in switch labels and array sizes.

@@ -25,23 +25,23 @@
 #include "layout_table.h"
 
 #if UINTPTR_MAX == UINT64_MAX
-#define KISSM_LAYOUT_64 1
+#  define KISSM_LAYOUT_64 1
 
 _Static_assert(sizeof(void *) == 8, "64-bit pointers");
 _Static_assert(sizeof(double) == 8 && _Alignof(double) == 8, "8-byte aligned doubles");
 
-#define LAYOUT_ASSERT_FIELD(s, f, type, off, size)                                                    \
-    _Static_assert(offsetof(s, f) == (off), "offsetof(" #s ", " #f ") is not " #off ": the ABI changed"); \
+#  define LAYOUT_ASSERT_FIELD(s, f, type, off, size)                                                                   \
+    _Static_assert(offsetof(s, f) == (off), "offsetof(" #s ", " #f ") is not " #off ": the ABI changed");              \
     _Static_assert(sizeof(((s *)0)->f) == (size), "sizeof " #s "." #f " is not " #size ": the ABI changed");
 KISSM_LAYOUT_FIELDS(LAYOUT_ASSERT_FIELD)
 
-#define LAYOUT_ASSERT_STRUCT(s, id, size)                                                             \
-    _Static_assert(sizeof(s) == (size), "sizeof(" #s ") is not " #size ": the ABI changed");          \
+#  define LAYOUT_ASSERT_STRUCT(s, id, size)                                                                            \
+    _Static_assert(sizeof(s) == (size), "sizeof(" #s ") is not " #size ": the ABI changed");                           \
     _Static_assert(_Alignof(s) == 8, "_Alignof(" #s ") is not 8: the ABI changed");
 KISSM_LAYOUT_STRUCTS(LAYOUT_ASSERT_STRUCT)
 
 /* The table lists every byte: the field sizes add up to the struct size. */
-#define LAYOUT_ADD_SIZE(s, f, type, off, size) +(size)
+#  define LAYOUT_ADD_SIZE(s, f, type, off, size) +(size)
 _Static_assert(0 KISSM_LAYOUT_CONFIG(LAYOUT_ADD_SIZE) == sizeof(kissm_config),
                "kissm_config has a field that tests/abi/layout_table.h does not list");
 _Static_assert(0 KISSM_LAYOUT_POINTS(LAYOUT_ADD_SIZE) == sizeof(kissm_points),
@@ -49,7 +49,7 @@ _Static_assert(0 KISSM_LAYOUT_POINTS(LAYOUT_ADD_SIZE) == sizeof(kissm_points),
 _Static_assert(0 KISSM_LAYOUT_RESULT(LAYOUT_ADD_SIZE) == sizeof(kissm_result),
                "kissm_result has a field that tests/abi/layout_table.h does not list");
 #else
-#define KISSM_LAYOUT_64 0
+#  define KISSM_LAYOUT_64 0
 #endif
 
 /* The compiled layout (offsetof/sizeof, not the table's numbers), whatever the target. */
@@ -106,8 +106,8 @@ static void test_no_padding(void) {
             end = kFields[i].offset + kFields[i].size;
             ++listed;
         }
-        CHECK_MSG(listed > 0 && end == kStructs[s].size, "%s: fields end at %zu, sizeof is %zu", kStructs[s].name,
-                  end, kStructs[s].size);
+        CHECK_MSG(listed > 0 && end == kStructs[s].size, "%s: fields end at %zu, sizeof is %zu", kStructs[s].name, end,
+                  kStructs[s].size);
     }
     /* struct_size comes first in the growable structs. */
     CHECK_EQ_INT(offsetof(kissm_config, struct_size), 0);

@@ -14,72 +14,72 @@
 #define KISSM_TEST_ABI_LAYOUT_TABLE_H
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
-#define KISSM_LAYOUT_STRUCTS(X)                                                                        \
-    X(kissm_config, KISSM_STRUCT_CONFIG, 152)                                                         \
-    X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                          \
-    X(kissm_result, KISSM_STRUCT_RESULT, 440)
+#define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 152)                                                                            \
+  X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
+  X(kissm_result, KISSM_STRUCT_RESULT, 440)
 
-#define KISSM_LAYOUT_CONFIG(X)                                                                         \
-    X(kissm_config, struct_size, uint32_t, 0, 4)                                                      \
-    X(kissm_config, num_threads, int32_t, 4, 4)                                                       \
-    X(kissm_config, voxel_size, double, 8, 8)                                                         \
-    X(kissm_config, normal_radius_gain, double, 16, 8)                                                \
-    X(kissm_config, fpfh_radius_gain, double, 24, 8)                                                  \
-    X(kissm_config, max_linearity, double, 32, 8)                                                     \
-    X(kissm_config, ratio_test, double, 40, 8)                                                        \
-    X(kissm_config, prune_noise_bound_gain, double, 48, 8)                                            \
-    X(kissm_config, solver_noise_bound_gain, double, 56, 8)                                           \
-    X(kissm_config, noise_bound_max, double, 64, 8)                                                   \
-    X(kissm_config, viewpoint, double[3], 72, 24)                                                     \
-    X(kissm_config, min_normal_neighbors, int32_t, 96, 4)                                             \
-    X(kissm_config, max_correspondences, int32_t, 100, 4)                                             \
-    X(kissm_config, min_inliers, int32_t, 104, 4)                                                     \
-    X(kissm_config, nonfinite_policy, int32_t, 108, 4)                                                \
-    X(kissm_config, viewpoint_mode, int32_t, 112, 4)                                                  \
-    X(kissm_config, log_level, int32_t, 116, 4)                                                       \
-    X(kissm_config, log_fn, kissm_log_fn, 120, 8)                                                     \
-    X(kissm_config, log_user_data, void *, 128, 8)                                                    \
-    X(kissm_config, progress_fn, kissm_progress_fn, 136, 8)                                           \
-    X(kissm_config, progress_user_data, void *, 144, 8)
+#define KISSM_LAYOUT_CONFIG(X)                                                                                         \
+  X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
+  X(kissm_config, num_threads, int32_t, 4, 4)                                                                          \
+  X(kissm_config, voxel_size, double, 8, 8)                                                                            \
+  X(kissm_config, normal_radius_gain, double, 16, 8)                                                                   \
+  X(kissm_config, fpfh_radius_gain, double, 24, 8)                                                                     \
+  X(kissm_config, max_linearity, double, 32, 8)                                                                        \
+  X(kissm_config, ratio_test, double, 40, 8)                                                                           \
+  X(kissm_config, prune_noise_bound_gain, double, 48, 8)                                                               \
+  X(kissm_config, solver_noise_bound_gain, double, 56, 8)                                                              \
+  X(kissm_config, noise_bound_max, double, 64, 8)                                                                      \
+  X(kissm_config, viewpoint, double[3], 72, 24)                                                                        \
+  X(kissm_config, min_normal_neighbors, int32_t, 96, 4)                                                                \
+  X(kissm_config, max_correspondences, int32_t, 100, 4)                                                                \
+  X(kissm_config, min_inliers, int32_t, 104, 4)                                                                        \
+  X(kissm_config, nonfinite_policy, int32_t, 108, 4)                                                                   \
+  X(kissm_config, viewpoint_mode, int32_t, 112, 4)                                                                     \
+  X(kissm_config, log_level, int32_t, 116, 4)                                                                          \
+  X(kissm_config, log_fn, kissm_log_fn, 120, 8)                                                                        \
+  X(kissm_config, log_user_data, void *, 128, 8)                                                                       \
+  X(kissm_config, progress_fn, kissm_progress_fn, 136, 8)                                                              \
+  X(kissm_config, progress_user_data, void *, 144, 8)
 
-#define KISSM_LAYOUT_POINTS(X)                                                                         \
-    X(kissm_points, data, const void *, 0, 8)                                                         \
-    X(kissm_points, count, uint64_t, 8, 8)                                                            \
-    X(kissm_points, stride_bytes, uint64_t, 16, 8)                                                    \
-    X(kissm_points, scalar_type, int32_t, 24, 4)                                                      \
-    X(kissm_points, reserved, int32_t, 28, 4)
+#define KISSM_LAYOUT_POINTS(X)                                                                                         \
+  X(kissm_points, data, const void *, 0, 8)                                                                            \
+  X(kissm_points, count, uint64_t, 8, 8)                                                                               \
+  X(kissm_points, stride_bytes, uint64_t, 16, 8)                                                                       \
+  X(kissm_points, scalar_type, int32_t, 24, 4)                                                                         \
+  X(kissm_points, reserved, int32_t, 28, 4)
 
-#define KISSM_LAYOUT_RESULT(X)                                                                         \
-    X(kissm_result, struct_size, uint32_t, 0, 4)                                                      \
-    X(kissm_result, valid, int32_t, 4, 4)                                                             \
-    X(kissm_result, reason, int32_t, 8, 4)                                                            \
-    X(kissm_result, reserved0, int32_t, 12, 4)                                                        \
-    X(kissm_result, transform, double[16], 16, 128)                                                   \
-    X(kissm_result, rotation, double[9], 144, 72)                                                     \
-    X(kissm_result, translation, double[3], 216, 24)                                                  \
-    X(kissm_result, num_source_points, uint64_t, 240, 8)                                              \
-    X(kissm_result, num_target_points, uint64_t, 248, 8)                                              \
-    X(kissm_result, num_source_nonfinite, uint64_t, 256, 8)                                           \
-    X(kissm_result, num_target_nonfinite, uint64_t, 264, 8)                                           \
-    X(kissm_result, num_source_voxels, uint64_t, 272, 8)                                              \
-    X(kissm_result, num_target_voxels, uint64_t, 280, 8)                                              \
-    X(kissm_result, num_source_keypoints, uint64_t, 288, 8)                                           \
-    X(kissm_result, num_target_keypoints, uint64_t, 296, 8)                                           \
-    X(kissm_result, num_initial_correspondences, uint64_t, 304, 8)                                    \
-    X(kissm_result, num_pruned_correspondences, uint64_t, 312, 8)                                     \
-    X(kissm_result, num_rotation_inliers, uint64_t, 320, 8)                                           \
-    X(kissm_result, num_final_inliers, uint64_t, 328, 8)                                              \
-    X(kissm_result, max_core_number, uint64_t, 336, 8)                                                \
-    X(kissm_result, inlier_ratio, double, 344, 8)                                                     \
-    X(kissm_result, residual_rms, double, 352, 8)                                                     \
-    X(kissm_result, noise_bound, double, 360, 8)                                                      \
-    X(kissm_result, inlier_extent, double[3], 368, 24)                                                \
-    X(kissm_result, time_voxelize_ms, double, 392, 8)                                                 \
-    X(kissm_result, time_features_ms, double, 400, 8)                                                 \
-    X(kissm_result, time_matching_ms, double, 408, 8)                                                 \
-    X(kissm_result, time_pruning_ms, double, 416, 8)                                                  \
-    X(kissm_result, time_solver_ms, double, 424, 8)                                                   \
-    X(kissm_result, time_total_ms, double, 432, 8)
+#define KISSM_LAYOUT_RESULT(X)                                                                                         \
+  X(kissm_result, struct_size, uint32_t, 0, 4)                                                                         \
+  X(kissm_result, valid, int32_t, 4, 4)                                                                                \
+  X(kissm_result, reason, int32_t, 8, 4)                                                                               \
+  X(kissm_result, reserved0, int32_t, 12, 4)                                                                           \
+  X(kissm_result, transform, double[16], 16, 128)                                                                      \
+  X(kissm_result, rotation, double[9], 144, 72)                                                                        \
+  X(kissm_result, translation, double[3], 216, 24)                                                                     \
+  X(kissm_result, num_source_points, uint64_t, 240, 8)                                                                 \
+  X(kissm_result, num_target_points, uint64_t, 248, 8)                                                                 \
+  X(kissm_result, num_source_nonfinite, uint64_t, 256, 8)                                                              \
+  X(kissm_result, num_target_nonfinite, uint64_t, 264, 8)                                                              \
+  X(kissm_result, num_source_voxels, uint64_t, 272, 8)                                                                 \
+  X(kissm_result, num_target_voxels, uint64_t, 280, 8)                                                                 \
+  X(kissm_result, num_source_keypoints, uint64_t, 288, 8)                                                              \
+  X(kissm_result, num_target_keypoints, uint64_t, 296, 8)                                                              \
+  X(kissm_result, num_initial_correspondences, uint64_t, 304, 8)                                                       \
+  X(kissm_result, num_pruned_correspondences, uint64_t, 312, 8)                                                        \
+  X(kissm_result, num_rotation_inliers, uint64_t, 320, 8)                                                              \
+  X(kissm_result, num_final_inliers, uint64_t, 328, 8)                                                                 \
+  X(kissm_result, max_core_number, uint64_t, 336, 8)                                                                   \
+  X(kissm_result, inlier_ratio, double, 344, 8)                                                                        \
+  X(kissm_result, residual_rms, double, 352, 8)                                                                        \
+  X(kissm_result, noise_bound, double, 360, 8)                                                                         \
+  X(kissm_result, inlier_extent, double[3], 368, 24)                                                                   \
+  X(kissm_result, time_voxelize_ms, double, 392, 8)                                                                    \
+  X(kissm_result, time_features_ms, double, 400, 8)                                                                    \
+  X(kissm_result, time_matching_ms, double, 408, 8)                                                                    \
+  X(kissm_result, time_pruning_ms, double, 416, 8)                                                                     \
+  X(kissm_result, time_solver_ms, double, 424, 8)                                                                      \
+  X(kissm_result, time_total_ms, double, 432, 8)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

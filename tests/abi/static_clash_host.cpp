@@ -19,8 +19,21 @@
 namespace kissm {
 namespace detail {
 
-enum class ErrorKind { InvalidArgument, NullArgument, EmptyInput, TooFewPoints, NonFinite, VoxelRange, StructSize,
-                       Cancelled, FeaturesMismatch, Io, Parse, UnsupportedFormat, Internal };
+enum class ErrorKind {
+    InvalidArgument,
+    NullArgument,
+    EmptyInput,
+    TooFewPoints,
+    NonFinite,
+    VoxelRange,
+    StructSize,
+    Cancelled,
+    FeaturesMismatch,
+    Io,
+    Parse,
+    UnsupportedFormat,
+    Internal
+};
 
 class Failure : public std::runtime_error {
 public:

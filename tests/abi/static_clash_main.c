@@ -90,9 +90,12 @@ static size_t make_scene(void) {
                 const double bump = 0.3 * sin(1.3 * u + 0.4 * wall) * cos(0.9 * v);
                 const double noise = 0.002 * ((double)(next_random(&state) >> 11) / 9007199254740992.0 - 0.5);
                 double *p = &g_source[3 * n], *q = &g_target[3 * n];
-                if (wall == 0) p[0] = u, p[1] = v, p[2] = bump + noise;
-                else if (wall == 1) p[0] = u, p[1] = bump + noise, p[2] = v;
-                else p[0] = bump + noise, p[1] = u, p[2] = v;
+                if (wall == 0)
+                    p[0] = u, p[1] = v, p[2] = bump + noise;
+                else if (wall == 1)
+                    p[0] = u, p[1] = bump + noise, p[2] = v;
+                else
+                    p[0] = bump + noise, p[1] = u, p[2] = v;
                 /* target = Rz(0.3) p + (0.5, -0.2, 0.1) */
                 q[0] = c * p[0] - s * p[1] + 0.5;
                 q[1] = s * p[0] + c * p[1] - 0.2;

@@ -24,8 +24,8 @@ static const uint32_t kPublishedConfigSizes[] = {152 /* 0.1.0 */};
 static const uint32_t kPublishedResultSizes[] = {440 /* 0.1.0 */};
 #define COUNT_OF(a) (sizeof(a) / sizeof((a)[0]))
 
-#define TAIL 64            /* bytes a hypothetical newer header appended */
-#define POISON 0xA5        /* a byte value the library never writes */
+#define TAIL 64     /* bytes a hypothetical newer header appended */
+#define POISON 0xA5 /* a byte value the library never writes */
 #define MAX_STRUCT_SIZE 65536u
 
 /* Storage for a struct of up to MAX_STRUCT_SIZE + 8 bytes, aligned for any kissm struct. */
@@ -119,8 +119,9 @@ static void test_config_init_larger_zeroes_the_tail(void) {
 }
 
 static void test_config_init_refuses_bad_sizes(void) {
-    const uint32_t sizes[] = {0, 4, 8, (uint32_t)sizeof(kissm_config) - 8, (uint32_t)sizeof(kissm_config) - 1,
-                              MAX_STRUCT_SIZE + 1, UINT32_MAX};
+    const uint32_t sizes[] = {
+        0,         4, 8, (uint32_t)sizeof(kissm_config) - 8, (uint32_t)sizeof(kissm_config) - 1, MAX_STRUCT_SIZE + 1,
+        UINT32_MAX};
     size_t i;
     big_buffer *b = new_buffer();
     for (i = 0; i < COUNT_OF(sizes); ++i) {
@@ -272,8 +273,8 @@ static void test_published_sizes(void) {
             back.struct_size = (uint32_t)sizeof back;
             CHECK_EQ_INT(kissm_get_config(m, &back), KISSM_OK);
             CHECK(back.voxel_size == 0.5);
-            CHECK(size >= sizeof back ||
-                  memcmp((const unsigned char *)&back + size, (const unsigned char *)&d + size, sizeof back - size) == 0);
+            CHECK(size >= sizeof back || memcmp((const unsigned char *)&back + size, (const unsigned char *)&d + size,
+                                                sizeof back - size) == 0);
             kissm_destroy(m);
         }
         free(b);

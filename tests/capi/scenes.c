@@ -227,7 +227,8 @@ void scn_pose_compose(const scn_pose *a, const scn_pose *b, scn_pose *out) {
 void scn_pose_apply_point(const scn_pose *p, const double in[3], double out[3]) {
     int i;
     double tmp[3];
-    for (i = 0; i < 3; ++i) tmp[i] = p->R[3 * i + 0] * in[0] + p->R[3 * i + 1] * in[1] + p->R[3 * i + 2] * in[2] + p->t[i];
+    for (i = 0; i < 3; ++i)
+        tmp[i] = p->R[3 * i + 0] * in[0] + p->R[3 * i + 1] * in[1] + p->R[3 * i + 2] * in[2] + p->t[i];
     memcpy(out, tmp, sizeof(tmp));
 }
 
@@ -280,8 +281,8 @@ static void scn_sample_rect(scn_cloud *c, scn_rng *rng, const double o[3], const
 }
 
 /* A box standing on z = z0: four sides and the top (no bottom), rotated by yaw about its vertical axis. */
-static void scn_sample_box(scn_cloud *c, scn_rng *rng, double cx, double cy, double z0, double sx, double sy,
-                           double sz, double yaw, double density, double sigma) {
+static void scn_sample_box(scn_cloud *c, scn_rng *rng, double cx, double cy, double z0, double sx, double sy, double sz,
+                           double yaw, double density, double sigma) {
     const double ex[3] = {cos(yaw) * sx, sin(yaw) * sx, 0.0};
     const double ey[3] = {-sin(yaw) * sy, cos(yaw) * sy, 0.0};
     const double ez[3] = {0.0, 0.0, sz};
@@ -290,7 +291,7 @@ static void scn_sample_box(scn_cloud *c, scn_rng *rng, double cx, double cy, dou
     int k;
     scn_sample_rect(c, rng, base, ex, ez, density, sigma); /* front */
     for (k = 0; k < 3; ++k) o[k] = base[k] + ey[k];
-    scn_sample_rect(c, rng, o, ex, ez, density, sigma); /* back */
+    scn_sample_rect(c, rng, o, ex, ez, density, sigma);    /* back */
     scn_sample_rect(c, rng, base, ey, ez, density, sigma); /* left */
     for (k = 0; k < 3; ++k) o[k] = base[k] + ex[k];
     scn_sample_rect(c, rng, o, ey, ez, density, sigma); /* right */
@@ -341,8 +342,8 @@ static void scn_sample_sphere(scn_cloud *c, scn_rng *rng, double cx, double cy, 
 #define SCN_NUM_SPHERES 3
 
 typedef struct scn_layout {
-    double box[SCN_NUM_BOXES][6]; /* cx, cy, sx, sy, sz, yaw */
-    double pole[SCN_NUM_POLES][4]; /* cx, cy, r, h */
+    double box[SCN_NUM_BOXES][6];      /* cx, cy, sx, sy, sz, yaw */
+    double pole[SCN_NUM_POLES][4];     /* cx, cy, r, h */
     double sphere[SCN_NUM_SPHERES][3]; /* cx, cy, r */
 } scn_layout;
 
@@ -511,13 +512,13 @@ void scn_result_poison(kissm_result *r) {
     r->num_final_inliers = 1234;
 }
 
-#define SCN_FAIL(...)                                                                                           \
-    do {                                                                                                        \
-        fprintf(stderr, "  result not reset: ");                                                                \
-        fprintf(stderr, __VA_ARGS__);                                                                           \
-        fprintf(stderr, "\n");                                                                                  \
-        ok = 0;                                                                                                 \
-    } while (0)
+#define SCN_FAIL(...)                                                                                                  \
+  do {                                                                                                                 \
+    fprintf(stderr, "  result not reset: ");                                                                           \
+    fprintf(stderr, __VA_ARGS__);                                                                                      \
+    fprintf(stderr, "\n");                                                                                             \
+    ok = 0;                                                                                                            \
+  } while (0)
 
 int scn_result_is_reset(const kissm_result *r) {
     const uint64_t *counts = &r->num_source_points;

@@ -170,7 +170,9 @@ static const points_case k_points_cases[] = {
 static kissm_points make_case_points(const points_case *pc, const double *xyz64, const float *xyz32) {
     kissm_points p;
     memset(&p, 0, sizeof(p));
-    p.data = pc->data == DATA_NULL ? NULL : (pc->scalar_type == KISSM_SCALAR_FLOAT32 ? (const void *)xyz32 : (const void *)xyz64);
+    p.data = pc->data == DATA_NULL
+                 ? NULL
+                 : (pc->scalar_type == KISSM_SCALAR_FLOAT32 ? (const void *)xyz32 : (const void *)xyz64);
     p.count = pc->count;
     p.stride_bytes = pc->stride_bytes;
     p.scalar_type = pc->scalar_type;
@@ -300,7 +302,8 @@ static void test_nonfinite(void) {
             CHECK_EQ_INT(r.num_target_nonfinite, 0);
             CHECK_EQ_INT(r.valid, 1);
             scn_cloud_copy(&removed, &g_pair.source);
-            memmove(removed.xyz + 3 * where[w], removed.xyz + 3 * (where[w] + 1), 3 * (n - where[w] - 1) * sizeof(double));
+            memmove(removed.xyz + 3 * where[w], removed.xyz + 3 * (where[w] + 1),
+                    3 * (n - where[w] - 1) * sizeof(double));
             removed.count--;
             {
                 const kissm_points sr = scn_points(&removed);
@@ -309,8 +312,8 @@ static void test_nonfinite(void) {
                 CHECK_EQ_INT(ref.num_source_points, n - 1);
                 ref.num_source_points = n;
                 ref.num_source_nonfinite = 1;
-                CHECK_MSG(scn_result_equal(&r, &ref), "DROP of %s at %lu differs from removing the point",
-                          bad_names[v], (unsigned long)where[w]);
+                CHECK_MSG(scn_result_equal(&r, &ref), "DROP of %s at %lu differs from removing the point", bad_names[v],
+                          (unsigned long)where[w]);
             }
             /* DROP as the target, float32 */
             {
@@ -574,17 +577,36 @@ static const field_case k_bad_fields[] = {
 
 /* Documented boundary values that must be accepted. */
 static const field_case k_good_fields[] = {
-    {F_NUM_THREADS, 0, ""},         {F_NUM_THREADS, 1, ""},          {F_NUM_THREADS, 64, ""},
-    {F_NORMAL_GAIN, 5.0, ""},       /* equal to fpfh_radius_gain */ {F_FPFH_GAIN, 3.5, ""},
-    {F_FPFH_GAIN, 10.0, ""},        {F_MAX_LINEARITY, 1.0, ""},     {F_MAX_LINEARITY, 1e-6, ""},
-    {F_RATIO_TEST, 1.0, ""},        {F_RATIO_TEST, 1e-6, ""},        {F_PRUNE_GAIN, 1e-3, ""},
-    {F_PRUNE_GAIN, 100.0, ""},      {F_SOLVER_GAIN, 1e-3, ""},      {F_NOISE_BOUND_MAX, 0.0, ""},
-    {F_NOISE_BOUND_MAX, 2.5, ""},   {F_VIEWPOINT0, -1e7, ""},       {F_VIEWPOINT2, 1e7, ""},
-    {F_MIN_NORMAL_NEIGHBORS, 3, ""}, {F_MIN_NORMAL_NEIGHBORS, 50, ""}, {F_MAX_CORRESPONDENCES, 3, ""},
-    {F_MAX_CORRESPONDENCES, 20000, ""}, {F_MIN_INLIERS, 3, ""},     {F_MIN_INLIERS, 1000, ""},
-    {F_NONFINITE_POLICY, KISSM_NONFINITE_REJECT, ""}, {F_NONFINITE_POLICY, KISSM_NONFINITE_DROP, ""},
-    {F_VIEWPOINT_MODE, KISSM_VIEWPOINT_FIXED, ""}, {F_VIEWPOINT_MODE, KISSM_VIEWPOINT_CLOUD_CENTER, ""},
-    {F_LOG_LEVEL, 0, ""},           {F_LOG_LEVEL, KISSM_LOG_ERROR, ""}, {F_LOG_LEVEL, KISSM_LOG_DEBUG, ""},
+    {F_NUM_THREADS, 0, ""},
+    {F_NUM_THREADS, 1, ""},
+    {F_NUM_THREADS, 64, ""},
+    {F_NORMAL_GAIN, 5.0, ""},
+    /* equal to fpfh_radius_gain */ {F_FPFH_GAIN, 3.5, ""},
+    {F_FPFH_GAIN, 10.0, ""},
+    {F_MAX_LINEARITY, 1.0, ""},
+    {F_MAX_LINEARITY, 1e-6, ""},
+    {F_RATIO_TEST, 1.0, ""},
+    {F_RATIO_TEST, 1e-6, ""},
+    {F_PRUNE_GAIN, 1e-3, ""},
+    {F_PRUNE_GAIN, 100.0, ""},
+    {F_SOLVER_GAIN, 1e-3, ""},
+    {F_NOISE_BOUND_MAX, 0.0, ""},
+    {F_NOISE_BOUND_MAX, 2.5, ""},
+    {F_VIEWPOINT0, -1e7, ""},
+    {F_VIEWPOINT2, 1e7, ""},
+    {F_MIN_NORMAL_NEIGHBORS, 3, ""},
+    {F_MIN_NORMAL_NEIGHBORS, 50, ""},
+    {F_MAX_CORRESPONDENCES, 3, ""},
+    {F_MAX_CORRESPONDENCES, 20000, ""},
+    {F_MIN_INLIERS, 3, ""},
+    {F_MIN_INLIERS, 1000, ""},
+    {F_NONFINITE_POLICY, KISSM_NONFINITE_REJECT, ""},
+    {F_NONFINITE_POLICY, KISSM_NONFINITE_DROP, ""},
+    {F_VIEWPOINT_MODE, KISSM_VIEWPOINT_FIXED, ""},
+    {F_VIEWPOINT_MODE, KISSM_VIEWPOINT_CLOUD_CENTER, ""},
+    {F_LOG_LEVEL, 0, ""},
+    {F_LOG_LEVEL, KISSM_LOG_ERROR, ""},
+    {F_LOG_LEVEL, KISSM_LOG_DEBUG, ""},
 };
 
 static void test_config_fields(void) {
@@ -632,7 +654,8 @@ typedef struct newer_result {
 } newer_result;
 
 static void test_struct_sizes(void) {
-    const uint32_t small_sizes[] = {0u, 4u, 8u, (uint32_t)sizeof(kissm_config) - 8u, (uint32_t)sizeof(kissm_config) - 1u};
+    const uint32_t small_sizes[] = {0u, 4u, 8u, (uint32_t)sizeof(kissm_config) - 8u,
+                                    (uint32_t)sizeof(kissm_config) - 1u};
     kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
     size_t i;
 

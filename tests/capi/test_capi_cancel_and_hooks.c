@@ -125,8 +125,8 @@ typedef struct progress_record {
     int32_t stage[MAX_EVENTS];
     double fraction[MAX_EVENTS];
     int off_thread;
-    int cancel_stage;  /* return 1 on the first call at this stage (0 = never) */
-    int cancel_after;  /* ... or on this call number (1-based; 0 = never) */
+    int cancel_stage; /* return 1 on the first call at this stage (0 = never) */
+    int cancel_after; /* ... or on this call number (1-based; 0 = never) */
     int cancels_returned;
 } progress_record;
 
@@ -138,7 +138,8 @@ static int32_t on_progress(void *user, int32_t stage, double fraction) {
     }
     rec->calls++;
     if (!pthread_equal(pthread_self(), g_main_thread)) rec->off_thread++;
-    if ((rec->cancel_stage != 0 && stage == rec->cancel_stage) || (rec->cancel_after != 0 && rec->calls == rec->cancel_after)) {
+    if ((rec->cancel_stage != 0 && stage == rec->cancel_stage) ||
+        (rec->cancel_after != 0 && rec->calls == rec->cancel_after)) {
         rec->cancel_stage = 0;
         rec->cancel_after = 0;
         rec->cancels_returned++;
@@ -150,7 +151,8 @@ static int32_t on_progress(void *user, int32_t stage, double fraction) {
 static void print_events(const progress_record *rec) {
     int i;
     fprintf(stderr, "  progress events:");
-    for (i = 0; i < rec->calls && i < MAX_EVENTS; ++i) fprintf(stderr, " (%d, %.3g)", (int)rec->stage[i], rec->fraction[i]);
+    for (i = 0; i < rec->calls && i < MAX_EVENTS; ++i)
+        fprintf(stderr, " (%d, %.3g)", (int)rec->stage[i], rec->fraction[i]);
     fprintf(stderr, "\n");
 }
 
@@ -341,13 +343,13 @@ static void test_cancel_idle(void) {
 /* Thread A registers; thread B cancels. */
 typedef struct cancel_shared {
     pthread_mutex_t lock;
-    int running;      /* set by A's progress callback once trigger_stage is under way */
+    int running;       /* set by A's progress callback once trigger_stage is under way */
     int trigger_stage; /* KISSM_STAGE_* that arms a single cancel (modes 0 and 2) */
-    int done;         /* set by A when kissm_register returned */
-    double cancel_at; /* when B first called kissm_cancel (scn_now) */
-    int cancels;      /* how many times B called it */
-    int mode; /* 0: B cancels once, after A reported the features stage; 1: B cancels in a loop;
-               * 2: B cancels once, after A reported the matching stage */
+    int done;          /* set by A when kissm_register returned */
+    double cancel_at;  /* when B first called kissm_cancel (scn_now) */
+    int cancels;       /* how many times B called it */
+    int mode;          /* 0: B cancels once, after A reported the features stage; 1: B cancels in a loop;
+                        * 2: B cancels once, after A reported the matching stage */
     kissm_matcher *m;
 } cancel_shared;
 
@@ -458,8 +460,8 @@ static void test_cancel_from_thread(void) {
                         call_ms, latency_ms);
                 /* promptly: well before the call would have finished */
                 if (mode != 2)
-                    CHECK_MSG(call_ms < 0.75 * full_ms + 20.0, "mode %d: took %.1f ms of a %.1f ms call", mode,
-                              call_ms, full_ms);
+                    CHECK_MSG(call_ms < 0.75 * full_ms + 20.0, "mode %d: took %.1f ms of a %.1f ms call", mode, call_ms,
+                              full_ms);
                 if (mode != 1)
                     CHECK_MSG(latency_ms < 0.5 * full_ms + 20.0, "cancel latency %.1f ms (full call %.1f ms)",
                               latency_ms, full_ms);

@@ -44,8 +44,8 @@ typedef struct worker {
     pthread_t thread;
     int pair;
     int32_t num_threads;
-    int calls_ok;  /* calls that returned KISSM_OK */
-    int equal;     /* results equal to g_serial[pair] */
+    int calls_ok; /* calls that returned KISSM_OK */
+    int equal;    /* results equal to g_serial[pair] */
 } worker;
 
 static void *work(void *arg) {
@@ -83,15 +83,19 @@ static void test_parallel_matchers_equal_serial(void) {
     for (i = 0; i < NUM_WORKERS; ++i) {
         workers[i].pair = i % NUM_PAIRS;
         workers[i].num_threads = 1 + i % 3; /* per-call pools of 1, 2 and 3 threads run side by side */
-        if (pthread_create(&workers[i].thread, NULL, work, &workers[i]) == 0) started++;
-        else break;
+        if (pthread_create(&workers[i].thread, NULL, work, &workers[i]) == 0)
+            started++;
+        else
+            break;
     }
     CHECK_EQ_INT(started, NUM_WORKERS);
     for (i = 0; i < started; ++i) pthread_join(workers[i].thread, NULL);
     for (i = 0; i < started; ++i) {
-        CHECK_MSG(workers[i].calls_ok == 2 * ROUNDS, "worker %d: %d of %d calls OK", i, workers[i].calls_ok, 2 * ROUNDS);
-        CHECK_MSG(workers[i].equal == 2 * ROUNDS, "worker %d (pair %d, %d threads): %d of %d results equal the serial run",
-                  i, workers[i].pair, (int)workers[i].num_threads, workers[i].equal, 2 * ROUNDS);
+        CHECK_MSG(workers[i].calls_ok == 2 * ROUNDS, "worker %d: %d of %d calls OK", i, workers[i].calls_ok,
+                  2 * ROUNDS);
+        CHECK_MSG(workers[i].equal == 2 * ROUNDS,
+                  "worker %d (pair %d, %d threads): %d of %d results equal the serial run", i, workers[i].pair,
+                  (int)workers[i].num_threads, workers[i].equal, 2 * ROUNDS);
     }
 }
 

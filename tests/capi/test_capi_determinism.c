@@ -1,11 +1,11 @@
 /* Bitwise determinism: thread counts, reused and fresh handles, repeated calls, 50 runs, separate
  * processes, permuted input. C99 (+ POSIX fork and pipe for the process test). */
 #if defined(__unix__) || defined(__APPLE__)
-#define _POSIX_C_SOURCE 200809L
-#include <sys/types.h>
-#include <sys/wait.h>
-#include <unistd.h>
-#define HAVE_FORK 1
+#  define _POSIX_C_SOURCE 200809L
+#  include <sys/types.h>
+#  include <sys/wait.h>
+#  include <unistd.h>
+#  define HAVE_FORK 1
 #endif
 #include <stdint.h>
 #include <stdlib.h>
@@ -231,7 +231,8 @@ static void test_separate_processes(void) {
         }
         close(fd[0]);
         waitpid(child, &status, 0);
-        equal += got == sizeof(r) && WIFEXITED(status) && WEXITSTATUS(status) == 0 && scn_result_equal(&g_reference, &r);
+        equal +=
+            got == sizeof(r) && WIFEXITED(status) && WEXITSTATUS(status) == 0 && scn_result_equal(&g_reference, &r);
     }
     CHECK_EQ_INT(equal, 4);
 }

@@ -159,14 +159,38 @@ static void test_mismatch(void) {
         kissm_result r;
         const char *what = "";
         switch (i) {
-        case 0: d.voxel_size = 0.6; what = "voxel_size"; break;
-        case 1: d.voxel_size = 0.45; what = "voxel_size (smaller)"; break;
-        case 2: d.normal_radius_gain = 3.0; what = "normal_radius_gain"; break;
-        case 3: d.fpfh_radius_gain = 6.0; what = "fpfh_radius_gain"; break;
-        case 4: d.max_linearity = 0.9; what = "max_linearity"; break;
-        case 5: d.min_normal_neighbors = 5; what = "min_normal_neighbors"; break;
-        case 6: d.viewpoint[2] = 1.0; what = "viewpoint (fixed mode)"; break;
-        case 7: d.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER; what = "viewpoint_mode"; break;
+        case 0:
+            d.voxel_size = 0.6;
+            what = "voxel_size";
+            break;
+        case 1:
+            d.voxel_size = 0.45;
+            what = "voxel_size (smaller)";
+            break;
+        case 2:
+            d.normal_radius_gain = 3.0;
+            what = "normal_radius_gain";
+            break;
+        case 3:
+            d.fpfh_radius_gain = 6.0;
+            what = "fpfh_radius_gain";
+            break;
+        case 4:
+            d.max_linearity = 0.9;
+            what = "max_linearity";
+            break;
+        case 5:
+            d.min_normal_neighbors = 5;
+            what = "min_normal_neighbors";
+            break;
+        case 6:
+            d.viewpoint[2] = 1.0;
+            what = "viewpoint (fixed mode)";
+            break;
+        case 7:
+            d.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
+            what = "viewpoint_mode";
+            break;
         default: break;
         }
         REQUIRE(kissm_create(&d, &other) == KISSM_OK);
@@ -203,13 +227,17 @@ static void test_mismatch(void) {
         case 0: d.ratio_test = 0.95; break;
         case 1: d.max_correspondences = 300; break;
         case 2: d.min_inliers = 5; break;
-        case 3: d.solver_noise_bound_gain = 1.0; d.prune_noise_bound_gain = 1.5; break;
+        case 3:
+            d.solver_noise_bound_gain = 1.0;
+            d.prune_noise_bound_gain = 1.5;
+            break;
         case 4: d.num_threads = 1; break;
         default: break;
         }
         REQUIRE(kissm_create(&d, &other) == KISSM_OK);
         scn_result_poison(&via);
-        CHECK_MSG(kissm_register_features(other, fs, ft, &via) == KISSM_OK, "case %d: %s", i, kissm_last_error_message());
+        CHECK_MSG(kissm_register_features(other, fs, ft, &via) == KISSM_OK, "case %d: %s", i,
+                  kissm_last_error_message());
         scn_result_poison(&direct);
         CHECK_EQ_INT(kissm_register(other, &s, &t, &direct), KISSM_OK);
         CHECK_MSG(scn_result_equal(&direct, &via), "case %d", i);

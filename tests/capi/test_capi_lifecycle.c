@@ -84,7 +84,8 @@ static void test_config_init(void) {
 
     /* Too small: nothing written. */
     {
-        const uint32_t small_sizes[] = {0u, 4u, (uint32_t)sizeof(kissm_config) - 8u, (uint32_t)sizeof(kissm_config) - 1u};
+        const uint32_t small_sizes[] = {0u, 4u, (uint32_t)sizeof(kissm_config) - 8u,
+                                        (uint32_t)sizeof(kissm_config) - 1u};
         for (i = 0; i < (int)(sizeof(small_sizes) / sizeof(small_sizes[0])); ++i) {
             memset(buf, 0x33, sizeof(buf));
             memcpy(before, buf, sizeof(buf));

@@ -68,7 +68,8 @@ static void check_read(const char *what, const char *path, int32_t format, const
     if (data != NULL && kissm_cloud_count(cloud) == n) {
         for (i = 0; i < 3 * n; ++i) {
             const int same = (isnan(expected[i]) && isnan(data[i])) || data[i] == expected[i];
-            CHECK_MSG(same, "%s: coordinate %lu is %.17g, expected %.17g", what, (unsigned long)i, data[i], expected[i]);
+            CHECK_MSG(same, "%s: coordinate %lu is %.17g, expected %.17g", what, (unsigned long)i, data[i],
+                      expected[i]);
         }
     }
     memset(&view, 0x3C, sizeof(view));
@@ -121,8 +122,18 @@ static void test_ply(void) {
                             "-1024 0.5 65536 8\n"
                             "0 -0 3 9\n";
     const double f_expected[9] = {1.5, -2.25, 0.125, -1024, 0.5, 65536, 0, -0.0, 3};
-    const double d_expected[12] = {0.1, -2.25, 300, 1e-3, 123456.789, -0.5, -7, 8, 9.75,
-                                   3.141592653589793, 2.718281828459045, -1.4142135623730951};
+    const double d_expected[12] = {0.1,
+                                   -2.25,
+                                   300,
+                                   1e-3,
+                                   123456.789,
+                                   -0.5,
+                                   -7,
+                                   8,
+                                   9.75,
+                                   3.141592653589793,
+                                   2.718281828459045,
+                                   -1.4142135623730951};
     check_read("ascii PLY (double)", write_text("d.ply", ply_double), KISSM_FORMAT_AUTO, d_expected, 4);
     check_read("ascii PLY (float)", write_text("f.ply", ply_float), KISSM_FORMAT_AUTO, f_expected, 3);
     check_read("ascii PLY, explicit format", write_text("f2.ply", ply_float), KISSM_FORMAT_PLY, f_expected, 3);
@@ -152,8 +163,8 @@ static void test_xyz_text(void) {
                        "\n"
                        "nan 1 inf\n"
                        "0.30000000000000004 -1e-300 1.7976931348623157e308\n";
-    const double expected[15] = {1, 2, 3, -4.5, 5.25, -600, 7, 8, 9, NAN, 1, INFINITY,
-                                 0.30000000000000004, -1e-300, 1.7976931348623157e308};
+    const double expected[15] = {
+        1, 2, 3, -4.5, 5.25, -600, 7, 8, 9, NAN, 1, INFINITY, 0.30000000000000004, -1e-300, 1.7976931348623157e308};
     check_read("xyz text", write_text("a.xyz", text), KISSM_FORMAT_AUTO, expected, 5);
     check_read("txt", write_text("a.txt", text), KISSM_FORMAT_AUTO, expected, 5);
     /* explicit format overrides an unknown extension */
@@ -194,7 +205,8 @@ static void test_binary(void) {
     const unsigned one = 1;
     if (*(const unsigned char *)&one != 1) return; /* files hold native floats: little-endian hosts only */
     check_read("KITTI .bin", write_file("k.bin", kitti, sizeof(kitti)), KISSM_FORMAT_AUTO, kitti_expected, 3);
-    check_read("KITTI, explicit", write_file("k.data", kitti, sizeof(kitti)), KISSM_FORMAT_KITTI_BIN, kitti_expected, 3);
+    check_read("KITTI, explicit", write_file("k.data", kitti, sizeof(kitti)), KISSM_FORMAT_KITTI_BIN, kitti_expected,
+               3);
     check_read("float32 xyz", write_file("r.raw", raw, sizeof(raw)), KISSM_FORMAT_BIN_XYZ, raw_expected, 3);
     /* the same 36 bytes as KITTI: not a whole number of 16-byte points */
     expect_failure("KITTI, truncated", write_file("t.bin", raw, sizeof(raw)), KISSM_FORMAT_AUTO, KISSM_ERR_PARSE, NULL);

@@ -301,7 +301,8 @@ static void test_swapped(void) {
     scn_pose_compose(&f, &b, &fb);
     {
         const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zero[3] = {0, 0, 0};
-        CHECK_MSG(scn_rotation_error_deg(fb.R, I) < 2.0, "fwd o bwd rotation %.3f deg", scn_rotation_error_deg(fb.R, I));
+        CHECK_MSG(scn_rotation_error_deg(fb.R, I) < 2.0, "fwd o bwd rotation %.3f deg",
+                  scn_rotation_error_deg(fb.R, I));
         CHECK_MSG(scn_translation_error(fb.t, zero) < 2.0 * VOXEL, "fwd o bwd translation %.3f m",
                   scn_translation_error(fb.t, zero));
     }

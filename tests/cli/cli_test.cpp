@@ -15,7 +15,7 @@
 #include <vector>
 
 #if !defined(_WIN32)
-#include <sys/wait.h>
+#  include <sys/wait.h>
 #endif
 
 #include <kissm.h>
@@ -29,8 +29,8 @@ using namespace cli_test;
 
 namespace {
 
-std::string g_kissm;    // the binary under test
-std::string g_work;     // scratch folder of this case
+std::string g_kissm; // the binary under test
+std::string g_work;  // scratch folder of this case
 int g_run_counter = 0;
 
 constexpr double kRealVoxel = 0.5; // metres, for the KITTI keyframe pair
@@ -143,9 +143,7 @@ std::vector<double> read_back(const std::string &path) {
 }
 
 // Runs the demo into a folder of this case and returns its run.
-Run run_demo(const std::string &dir, const std::string &extra) {
-    return run("demo --out " + quote(dir) + " " + extra);
-}
+Run run_demo(const std::string &dir, const std::string &extra) { return run("demo --out " + quote(dir) + " " + extra); }
 
 // ---------------------------------------------------------------------------------------------------
 
@@ -224,8 +222,7 @@ void test_errors() {
     expect_usage_error("register " + quote(g_work) + " " + quote(b) + " --voxel 0.3", "source");
 
     // Output that cannot be written.
-    expect_usage_error("register " + ab + " --voxel 0.3 --out-transform " + quote(work("no/such/dir/T.txt")),
-                       "T.txt");
+    expect_usage_error("register " + ab + " --voxel 0.3 --out-transform " + quote(work("no/such/dir/T.txt")), "T.txt");
 
     expect_usage_error("demo --threads -2", "--threads");
     expect_usage_error("demo --seed abc", "--seed");
@@ -295,8 +292,8 @@ void check_demo_files(const std::string &dir) {
                   "%s: %zu bytes for %lld float64 vertices", path.c_str(), bytes.size(), counts[i]);
         CHECK(contains(bytes.substr(0, header), "property double x\nproperty double y\nproperty double z\n"));
         const std::vector<double> back = read_back(path);
-        CHECK_MSG(static_cast<long long>(back.size() / 3) == counts[i], "%s read back with %zu points",
-                  path.c_str(), back.size() / 3);
+        CHECK_MSG(static_cast<long long>(back.size() / 3) == counts[i], "%s read back with %zu points", path.c_str(),
+                  back.size() / 3);
     }
     CHECK_EQ_INT(counts[0], counts[2]);
 
@@ -344,7 +341,8 @@ void check_result_json(const std::string &json, const char *what) {
                             "\"features\"", "\"matching\"", "\"pruning\"", "\"solver\"", "\"total\""}) {
         CHECK_MSG(contains(json, key), "%s: %s is missing", what, key);
     }
-    CHECK_MSG(!contains(json, "nan") && !contains(json, "NaN") && !contains(json, "inf"), "%s: non-finite literal", what);
+    CHECK_MSG(!contains(json, "nan") && !contains(json, "NaN") && !contains(json, "inf"), "%s: non-finite literal",
+              what);
     CHECK_EQ_INT(numbers_in(json_line_value(json, "transform")).size(), 16);
 }
 
@@ -378,7 +376,8 @@ void test_json() {
     for (char c : text) lines += c == '\n' ? 1u : 0u;
     CHECK_EQ_INT(lines, 4);
     REQUIRE(from_file.size() == 16 && from_json.size() == 16);
-    for (int i = 0; i < 16; ++i) CHECK_MSG(from_file[i] == from_json[i], "element %d: %.17g vs %.17g", i, from_file[i], from_json[i]);
+    for (int i = 0; i < 16; ++i)
+        CHECK_MSG(from_file[i] == from_json[i], "element %d: %.17g vs %.17g", i, from_file[i], from_json[i]);
 
     // --out-aligned: the source moved by that transform.
     const std::vector<double> src = read_back(source), aligned = read_back(aligned_path);
@@ -440,8 +439,8 @@ void test_threads() {
         if (first.empty()) first = t;
         CHECK_MSG(t == first, "demo --threads %s: %s\nvs %s", threads, t.c_str(), first.c_str());
     }
-    const std::string files = quote((fs::path(dir) / "source.ply").string()) + " " +
-                              quote((fs::path(dir) / "target.ply").string());
+    const std::string files =
+        quote((fs::path(dir) / "source.ply").string()) + " " + quote((fs::path(dir) / "target.ply").string());
     for (const char *threads : {"1", "2", "4"}) {
         const Run r = run("register " + files + " --voxel 0.3 --json --threads " + threads);
         CHECK_MSG(r.code == 0, "register --threads %s exited with %d: %s", threads, r.code, r.err.c_str());
@@ -459,7 +458,8 @@ void test_threads() {
     for (const char *threads : {"1", "2", "4"}) {
         const Run r = run("register " + real_pair_args(pair) + " --voxel " + std::to_string(kRealVoxel) +
                           " --json --threads " + threads);
-        CHECK_MSG(r.code == 0 || r.code == 1, "real pair --threads %s exited with %d: %s", threads, r.code, r.err.c_str());
+        CHECK_MSG(r.code == 0 || r.code == 1, "real pair --threads %s exited with %d: %s", threads, r.code,
+                  r.err.c_str());
         const std::string t = json_line_value(r.out, "transform");
         if (real_first.empty()) real_first = t;
         CHECK_MSG(t == real_first, "real pair --threads %s: %s\nvs %s", threads, t.c_str(), real_first.c_str());
@@ -481,12 +481,15 @@ int test_realdata() {
         for (int i = 0; i < 3; ++i) {
             for (int j = 0; j < 3; ++j) trace += T[static_cast<size_t>(4 * i + j)] * pair.gt[4 * i + j];
         }
-        const double rot_err = std::acos(std::fmax(-1.0, std::fmin(1.0, 0.5 * (trace - 1.0)))) * 57.295779513082320876798;
+        const double rot_err =
+            std::acos(std::fmax(-1.0, std::fmin(1.0, 0.5 * (trace - 1.0)))) * 57.295779513082320876798;
         const double trans_err = std::sqrt(std::pow(T[3] - pair.gt[3], 2) + std::pow(T[7] - pair.gt[7], 2) +
                                            std::pow(T[11] - pair.gt[11], 2));
-        std::printf("KITTI 07 keyframes 000001 -> 000000 (voxel %g): rotation error %.4f deg, translation error %.4f m\n",
-                    kRealVoxel, rot_err, trans_err);
-        CHECK_MSG(rot_err < 5.0 && trans_err < 2.0, "rotation error %g deg, translation error %g m", rot_err, trans_err);
+        std::printf(
+            "KITTI 07 keyframes 000001 -> 000000 (voxel %g): rotation error %.4f deg, translation error %.4f m\n",
+            kRealVoxel, rot_err, trans_err);
+        CHECK_MSG(rot_err < 5.0 && trans_err < 2.0, "rotation error %g deg, translation error %g m", rot_err,
+                  trans_err);
     }
 
     // The human summary names every stage.

@@ -187,9 +187,7 @@ private:
     size_t i_ = 0;
 };
 
-inline bool json_valid(const std::string &text, std::string *error = nullptr) {
-    return JsonChecker(text).valid(error);
-}
+inline bool json_valid(const std::string &text, std::string *error = nullptr) { return JsonChecker(text).valid(error); }
 
 // The raw text of a top-level "key": value on one line (how the tool prints arrays), e.g. the transform.
 inline std::string json_line_value(const std::string &json, const std::string &key) {
@@ -266,11 +264,13 @@ inline uint32_t decode_fixed_litlen(BitReader &br) {
 inline void inflate_raw(const uint8_t *data, size_t size, std::vector<uint8_t> *out, size_t *consumed) {
     static const uint16_t kLenBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
                                           31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
-    static const uint8_t kLenExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
-    static const uint16_t kDistBase[30] = {1,    2,    3,    4,    5,    7,     9,     13,    17,    25,
-                                           33,   49,   65,   97,   129,  193,   257,   385,   513,   769,
+    static const uint8_t kLenExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+                                          2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+    static const uint16_t kDistBase[30] = {1,    2,    3,    4,    5,    7,    9,    13,    17,    25,
+                                           33,   49,   65,   97,   129,  193,  257,  385,   513,   769,
                                            1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
-    static const uint8_t kDistExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+    static const uint8_t kDistExtra[30] = {0, 0, 0, 0, 1, 1, 2, 2,  3,  3,  4,  4,  5,  5,  6,
+                                           6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
     BitReader br(data, size);
     bool last = false;
     while (!last) {
@@ -326,7 +326,8 @@ inline uint32_t test_crc32(const uint8_t *data, size_t size) { // bit by bit, no
 }
 
 inline uint32_t be32(const uint8_t *p) {
-    return static_cast<uint32_t>(p[0]) << 24 | static_cast<uint32_t>(p[1]) << 16 | static_cast<uint32_t>(p[2]) << 8 | p[3];
+    return static_cast<uint32_t>(p[0]) << 24 | static_cast<uint32_t>(p[1]) << 16 | static_cast<uint32_t>(p[2]) << 8 |
+           p[3];
 }
 
 // Throws on any error (bad header, bad check value).
@@ -362,7 +363,8 @@ inline PngImage decode_png(const std::string &bytes) {
         const uint32_t len = be32(p + pos);
         if (pos + 12 + len > bytes.size()) throw std::runtime_error("chunk runs past the end");
         const std::string type(bytes, pos + 4, 4);
-        if (be32(p + pos + 8 + len) != test_crc32(p + pos + 4, len + 4)) throw std::runtime_error("CRC mismatch in " + type);
+        if (be32(p + pos + 8 + len) != test_crc32(p + pos + 4, len + 4))
+            throw std::runtime_error("CRC mismatch in " + type);
         const uint8_t *data = p + pos + 8;
         if (type == "IHDR") {
             if (len != 13) throw std::runtime_error("bad IHDR");

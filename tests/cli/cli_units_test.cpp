@@ -169,7 +169,8 @@ void test_ply_writer() {
     for (size_t i = 0; i < xyz.size(); ++i) {
         uint64_t bits = 0;
         for (int k = 0; k < 8; ++k) {
-            bits |= static_cast<uint64_t>(static_cast<uint8_t>(bytes[header.size() + 8 * i + static_cast<size_t>(k)])) << (8 * k);
+            bits |= static_cast<uint64_t>(static_cast<uint8_t>(bytes[header.size() + 8 * i + static_cast<size_t>(k)]))
+                    << (8 * k);
         }
         double v = 0.0;
         std::memcpy(&v, &bits, sizeof v);
@@ -203,7 +204,8 @@ void test_ply_writer() {
     CHECK(!write_ply_xyz("/nonexistent_dir_kissm/x.ply", xyz.data(), 1, nullptr, {}, &error));
 }
 
-template <typename F> bool throws_usage(F f) {
+template <typename F>
+bool throws_usage(F f) {
     try {
         f();
     } catch (const UsageError &) {
@@ -338,7 +340,8 @@ void test_demo_scene() {
         const double dist = translation_norm(T);
         const double angle = rotation_angle_deg(T);
         CHECK_MSG(dist > 9.0 && dist < 16.5, "seed %llu: %g m apart", static_cast<unsigned long long>(seed), dist);
-        CHECK_MSG(angle > 110.0 && angle < 175.0, "seed %llu: %g degrees", static_cast<unsigned long long>(seed), angle);
+        CHECK_MSG(angle > 110.0 && angle < 175.0, "seed %llu: %g degrees", static_cast<unsigned long long>(seed),
+                  angle);
         CHECK(d.stats.buildings > 20 && d.stats.cars > 5 && d.stats.poles > 2 && d.stats.clutter > 40);
     }
     options.seed = 2;

@@ -35,9 +35,8 @@ std::vector<Hit> brute_force(const std::vector<float> &points, const float *q, i
         }
         if (dist < std::numeric_limits<float>::max()) all.push_back(Hit{dist, static_cast<std::uint32_t>(i)});
     }
-    std::sort(all.begin(), all.end(), [](const Hit &a, const Hit &b) {
-        return a.dist != b.dist ? a.dist < b.dist : a.index < b.index;
-    });
+    std::sort(all.begin(), all.end(),
+              [](const Hit &a, const Hit &b) { return a.dist != b.dist ? a.dist < b.dist : a.index < b.index; });
     if (all.size() > static_cast<std::size_t>(k)) all.resize(static_cast<std::size_t>(k));
     return all;
 }
@@ -77,7 +76,7 @@ static void test_random_points_match_brute_force() {
         for (int d = 0; d < kDim; ++d) points[i * kDim + d] *= static_cast<float>(8 - d);
     std::vector<float> queries = gaussian(rng, 200, 6.0);
     queries.insert(queries.end(), points.begin(), points.begin() + 100 * kDim); // queries on data points
-    for (int d = 0; d < kDim; ++d) queries.push_back(1000.0f);                   // far outside the box
+    for (int d = 0; d < kDim; ++d) queries.push_back(1000.0f);                  // far outside the box
     for (const int k : {1, 2, 7, 16}) CHECK_EQ_INT(mismatches(points, queries, k), 0);
 }
 
@@ -93,8 +92,9 @@ struct FlatSet {
         return false;
     }
 };
-using FlannTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, FlatSet, float, std::uint32_t>,
-                                                      FlatSet, kDim, std::uint32_t>;
+using FlannTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, FlatSet, float, std::uint32_t>, FlatSet,
+                                        kDim, std::uint32_t>;
 } // namespace
 
 static void test_agrees_with_nanoflann() {
@@ -113,9 +113,8 @@ static void test_agrees_with_nanoflann() {
         const std::size_t got = flann.knnSearch(&queries[q * kDim], k + 8, fi.data(), fd.data());
         std::vector<Hit> want;
         for (std::size_t i = 0; i < got; ++i) want.push_back(Hit{fd[i], fi[i]});
-        std::sort(want.begin(), want.end(), [](const Hit &a, const Hit &b) {
-            return a.dist != b.dist ? a.dist < b.dist : a.index < b.index;
-        });
+        std::sort(want.begin(), want.end(),
+                  [](const Hit &a, const Hit &b) { return a.dist != b.dist ? a.dist < b.dist : a.index < b.index; });
         std::uint32_t index[k];
         float dist[k];
         const int found = tree.nearest(&queries[q * kDim], k, index, dist);

@@ -59,8 +59,8 @@ static void test_sphere_normals_radial() {
 static void test_lines_and_sparse_points_get_no_normal() {
     std::vector<Vec3f> pts;
     for (int i = 0; i < 100; ++i) pts.emplace_back(0.1f * static_cast<float>(i), 0.0f, 0.0f); // a line
-    pts.emplace_back(50.0f, 50.0f, 50.0f);                                                     // isolated
-    pts.emplace_back(50.2f, 50.0f, 50.0f);                                                     // and its one neighbour
+    pts.emplace_back(50.0f, 50.0f, 50.0f);                                                    // isolated
+    pts.emplace_back(50.2f, 50.0f, 50.0f);                                                    // and its one neighbour
     RunContext ctx(1, nullptr, Hooks());
     const Neighborhoods nb = radius_neighbors(pts, 0.5f, ctx);
     const Normals normals = estimate_normals(pts, nb, NormalParams{0.35f, 3, 0.99, Vec3f::Zero()}, ctx);
@@ -74,7 +74,8 @@ static void test_neighbors_match_brute_force() {
     TestRng rng(6);
     std::vector<Vec3f> pts;
     for (int i = 0; i < 2000; ++i)
-        pts.emplace_back(static_cast<float>(rng.uniform(-3, 3)), static_cast<float>(rng.uniform(-3, 3)), static_cast<float>(rng.uniform(-1, 1)));
+        pts.emplace_back(static_cast<float>(rng.uniform(-3, 3)), static_cast<float>(rng.uniform(-3, 3)),
+                         static_cast<float>(rng.uniform(-1, 1)));
     RunContext ctx(3, nullptr, Hooks());
     const float r = 0.4f;
     const Neighborhoods nb = radius_neighbors(pts, r, ctx);

@@ -1,6 +1,6 @@
-#include <cstring>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstring>
 
 #include "core/compat_graph.hpp"
 #include "core/gnc_solver.hpp"
@@ -59,7 +59,8 @@ static void test_gnc_with_90_percent_outliers() {
         a = ca, b = cb, inl = cinl;
         const SolverOutput out = solve_pose(a, b, sample_induced_edges(g, core, p.max_tims), p, ctx);
         REQUIRE(out.solved);
-        CHECK_MSG(rotation_error_deg(out.rotation, R) < 0.5, "seed %d: %g deg", (int)seed, rotation_error_deg(out.rotation, R));
+        CHECK_MSG(rotation_error_deg(out.rotation, R) < 0.5, "seed %d: %g deg", (int)seed,
+                  rotation_error_deg(out.rotation, R));
         CHECK_MSG((out.translation - t).norm() < 0.1, "seed %d: %g m", (int)seed, (out.translation - t).norm());
         std::size_t true_inliers = 0, agree = 0;
         for (std::size_t i = 0; i < inl.size(); ++i) {

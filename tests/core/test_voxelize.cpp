@@ -31,7 +31,8 @@ static void test_counts_and_centroids() {
         for (int y = 0; y < 3; ++y)
             for (int z = 0; z < 2; ++z)
                 for (int k = 0; k < 5; ++k)
-                    pts.emplace_back(x + 0.1 + 0.8 * rng.uniform(), y + 0.1 + 0.8 * rng.uniform(), z + 0.1 + 0.8 * rng.uniform());
+                    pts.emplace_back(x + 0.1 + 0.8 * rng.uniform(), y + 0.1 + 0.8 * rng.uniform(),
+                                     z + 0.1 + 0.8 * rng.uniform());
     RunContext ctx(1, nullptr, Hooks());
     const VoxelCloud v = voxelize(make_input(pts), 1.0, "cloud", ctx);
     CHECK_EQ_INT(v.points.size(), 24);
@@ -78,7 +79,8 @@ static void test_centroids_are_means() {
     std::map<std::array<long, 3>, std::pair<Vec3d, int>> sums;
     for (const auto &p : pts) {
         const Vec3d rel = (p - in.min) / size;
-        const std::array<long, 3> cell = {static_cast<long>(std::floor(rel.x())), static_cast<long>(std::floor(rel.y())),
+        const std::array<long, 3> cell = {static_cast<long>(std::floor(rel.x())),
+                                          static_cast<long>(std::floor(rel.y())),
                                           static_cast<long>(std::floor(rel.z()))};
         auto it = sums.emplace(cell, std::make_pair(Vec3d(Vec3d::Zero()), 0)).first;
         it->second.first += p - v.origin, ++it->second.second;
@@ -123,7 +125,8 @@ static void test_large_coordinates_keep_precision() {
     const VoxelCloud b = voxelize(make_input(shifted), 0.25, "cloud", ctx);
     REQUIRE(a.points.size() == b.points.size());
     double worst = 0.0;
-    for (std::size_t i = 0; i < a.points.size(); ++i) worst = std::max(worst, static_cast<double>((a.points[i] - b.points[i]).norm()));
+    for (std::size_t i = 0; i < a.points.size(); ++i)
+        worst = std::max(worst, static_cast<double>((a.points[i] - b.points[i]).norm()));
     CHECK_MSG(worst < 1e-5, "worst local difference %g m", worst);
 }
 

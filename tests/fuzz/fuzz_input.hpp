@@ -4,10 +4,10 @@
 // duplicates. Every input maps to something; nothing here can fail.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -118,15 +118,17 @@ inline bool result_sane(const kissm_result &r) {
             for (int k = 0; k < 3; ++k) dot += R[3 * i + k] * R[3 * j + k];
             if (std::fabs(dot - (i == j ? 1.0 : 0.0)) > 1e-9) return false;
         }
-    const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
-                       R[2] * (R[3] * R[7] - R[4] * R[6]);
+    const double det =
+        R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
     return std::fabs(det - 1.0) < 1e-9 && r.num_final_inliers >= 3;
 }
 
 inline bool same_result(const kissm_result &a, const kissm_result &b) {
     // Everything but the timings.
-    return a.valid == b.valid && a.reason == b.reason && std::memcmp(a.transform, b.transform, sizeof a.transform) == 0 &&
-           a.num_final_inliers == b.num_final_inliers && a.num_initial_correspondences == b.num_initial_correspondences &&
+    return a.valid == b.valid && a.reason == b.reason &&
+           std::memcmp(a.transform, b.transform, sizeof a.transform) == 0 &&
+           a.num_final_inliers == b.num_final_inliers &&
+           a.num_initial_correspondences == b.num_initial_correspondences &&
            a.num_source_voxels == b.num_source_voxels && a.num_target_voxels == b.num_target_voxels;
 }
 

@@ -43,8 +43,8 @@ public:
         std::random_device rd;
         const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
         for (int attempt = 0; attempt < 100; ++attempt) {
-            const fs::path p = fs::temp_directory_path() /
-                               ("kissm_io_test_" + std::to_string(stamp) + "_" + std::to_string(rd()));
+            const fs::path p =
+                fs::temp_directory_path() / ("kissm_io_test_" + std::to_string(stamp) + "_" + std::to_string(rd()));
             std::error_code ec;
             if (fs::create_directory(p, ec)) {
                 path_ = p;
@@ -82,7 +82,8 @@ private:
 struct Bytes {
     std::string s;
 
-    template <typename T> Bytes &put(T value, bool big_endian = false) {
+    template <typename T>
+    Bytes &put(T value, bool big_endian = false) {
         unsigned char b[sizeof(T)];
         std::memcpy(b, &value, sizeof(T));
         const std::uint16_t probe = 1;
@@ -138,8 +139,9 @@ inline Outcome expect_failure(const char *file, int line, const std::string &pat
                               const char *needle = nullptr) {
     Outcome o = try_read(path, format);
     if (o.ok) {
-        record(false, file, line, "expected a " + std::string(kind_name(kind)) + " failure, read " +
-                                      std::to_string(o.points.size() / 3) + " points from " + path);
+        record(false, file, line,
+               "expected a " + std::string(kind_name(kind)) + " failure, read " + std::to_string(o.points.size() / 3) +
+                   " points from " + path);
         return o;
     }
     record(o.kind == kind, file, line,
@@ -183,8 +185,8 @@ inline Outcome expect_points(const char *file, int line, const std::string &path
 
 // How a prefix of a valid file may be read.
 enum class CutRule {
-    ParseError,      // every proper prefix must fail with Parse
-    ParseOrPrefix,   // fail with Parse, or return the first k points exactly (binary record formats)
+    ParseError,        // every proper prefix must fail with Parse
+    ParseOrPrefix,     // fail with Parse, or return the first k points exactly (binary record formats)
     ParseOrTextPrefix, // like ParseOrPrefix, but the last point may differ (a number cut mid-digits)
 };
 
@@ -205,8 +207,10 @@ inline void check_every_cut(const char *file, int line, const TempDir &dir, cons
                 for (std::size_t i = 0; i < full.size(); ++i)
                     if (!same_value(o.points[i], full[i])) problem = "wrong value";
         } else if (!o.ok) {
-            if (o.kind != ErrorKind::Parse) problem = std::string("failed with ") + kind_name(o.kind) + ": " + o.message;
-            else if (o.message.find('\n') != std::string::npos) problem = "multi-line message";
+            if (o.kind != ErrorKind::Parse)
+                problem = std::string("failed with ") + kind_name(o.kind) + ": " + o.message;
+            else if (o.message.find('\n') != std::string::npos)
+                problem = "multi-line message";
         } else if (rule == CutRule::ParseError || cut == 0) {
             problem = "succeeded";
         } else {
@@ -219,8 +223,8 @@ inline void check_every_cut(const char *file, int line, const TempDir &dir, cons
         }
         if (!problem.empty()) {
             ++bad;
-            record(false, file, line, name + " cut at " + std::to_string(cut) + " of " + std::to_string(bytes.size()) +
-                                          ": " + problem);
+            record(false, file, line,
+                   name + " cut at " + std::to_string(cut) + " of " + std::to_string(bytes.size()) + ": " + problem);
         }
     }
     record(bad == 0, file, line, name + ": some cuts misbehaved");
@@ -243,8 +247,8 @@ inline int check_mutations(const char *file, int line, const TempDir &dir, const
             ++variants;
             if (!o.ok && o.kind != ErrorKind::Parse) {
                 ++bad;
-                record(false, file, line, name + " with byte " + std::to_string(i) + " changed: " + kind_name(o.kind) +
-                                              ": " + o.message);
+                record(false, file, line,
+                       name + " with byte " + std::to_string(i) + " changed: " + kind_name(o.kind) + ": " + o.message);
             }
         }
     }

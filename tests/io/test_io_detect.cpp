@@ -23,7 +23,10 @@ std::string npy() {
     while ((10 + header.size() + 1) % 64 != 0) header += ' ';
     header += '\n';
     Bytes b;
-    b.text("\x93NUMPY").put<std::uint8_t>(1).put<std::uint8_t>(0).put<std::uint16_t>(static_cast<std::uint16_t>(header.size()));
+    b.text("\x93NUMPY")
+        .put<std::uint8_t>(1)
+        .put<std::uint8_t>(0)
+        .put<std::uint16_t>(static_cast<std::uint16_t>(header.size()));
     b.text(header).put<double>(1).put<double>(2).put<double>(3);
     return b.s;
 }
@@ -33,10 +36,10 @@ void test_by_extension() {
     const struct {
         const char *name;
         std::string bytes;
-    } files[] = {{"a.ply", kPly},   {"b.PLY", kPly},   {"c.Ply", kPly},   {"d.pcd", kPcd},   {"e.PCD", kPcd},
-                 {"f.bin", kitti()}, {"g.BIN", kitti()}, {"h.npy", npy()},  {"i.NPY", npy()},  {"j.xyz", kXyz},
-                 {"k.XYZ", kXyz},   {"l.txt", kXyz},   {"m.TXT", kXyz},   {"n.pts", kXyz},   {"o.PTS", kXyz},
-                 {"p.asc", kXyz},   {"q.Asc", kXyz},   {"r.s.t.ply", kPly}};
+    } files[] = {{"a.ply", kPly},    {"b.PLY", kPly},    {"c.Ply", kPly},    {"d.pcd", kPcd},  {"e.PCD", kPcd},
+                 {"f.bin", kitti()}, {"g.BIN", kitti()}, {"h.npy", npy()},   {"i.NPY", npy()}, {"j.xyz", kXyz},
+                 {"k.XYZ", kXyz},    {"l.txt", kXyz},    {"m.TXT", kXyz},    {"n.pts", kXyz},  {"o.PTS", kXyz},
+                 {"p.asc", kXyz},    {"q.Asc", kXyz},    {"r.s.t.ply", kPly}};
     for (const auto &f : files) EXPECT_POINTS(dir.write(f.name, f.bytes), FileFormat::Auto, k123);
     // Spaces and UTF-8 in the path.
     EXPECT_POINTS(dir.write("with space \xc3\xbc.ply", kPly), FileFormat::Auto, k123);

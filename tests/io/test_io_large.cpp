@@ -74,7 +74,10 @@ void test_large() {
     while ((10 + header.size() + 1) % 64 != 0) header += ' ';
     header += '\n';
     Bytes npy;
-    npy.text("\x93NUMPY").put<std::uint8_t>(1).put<std::uint8_t>(0).put<std::uint16_t>(static_cast<std::uint16_t>(header.size()));
+    npy.text("\x93NUMPY")
+        .put<std::uint8_t>(1)
+        .put<std::uint8_t>(0)
+        .put<std::uint16_t>(static_cast<std::uint16_t>(header.size()));
     npy.text(header);
     for (double d : v) npy.put<double>(d);
 
@@ -87,8 +90,8 @@ void test_large() {
     const std::string rows = text_rows(v, " 0.5");
     timed("ascii PLY", dir.write("a.ply", "ply\nformat ascii 1.0\n" + ply_header + rows), FileFormat::Auto, v, 5000,
           __LINE__);
-    timed("ascii PCD", dir.write("a.pcd", "FIELDS x y z i\nSIZE 4 4 4 4\nTYPE F F F F\nPOINTS " + nstr +
-                                              "\nDATA ascii\n" + rows),
+    timed("ascii PCD",
+          dir.write("a.pcd", "FIELDS x y z i\nSIZE 4 4 4 4\nTYPE F F F F\nPOINTS " + nstr + "\nDATA ascii\n" + rows),
           FileFormat::Auto, v, 5000, __LINE__);
     timed("xyz text", dir.write("a.xyz", rows), FileFormat::Auto, v, 5000, __LINE__);
 }

@@ -78,11 +78,13 @@ void test_exact() {
                   FileFormat::Npy, ints);
     EXPECT_POINTS(dir.write("i8.npy", npy(1, dict(">i8", false, "(2, 3)"), matrix<std::int64_t>(ints, 3, false, true))),
                   FileFormat::Npy, ints);
-    EXPECT_POINTS(dir.write("u1.npy", npy(1, dict("|u1", false, "(2, 3)"), matrix<std::uint8_t>({1, 2, 3, 4, 5, 255}, 3, false))),
-                  FileFormat::Npy, {1, 2, 3, 4, 5, 255});
+    EXPECT_POINTS(
+        dir.write("u1.npy", npy(1, dict("|u1", false, "(2, 3)"), matrix<std::uint8_t>({1, 2, 3, 4, 5, 255}, 3, false))),
+        FileFormat::Npy, {1, 2, 3, 4, 5, 255});
     EXPECT_POINTS(dir.write("i1.npy", npy(1, dict("|i1", false, "(2, 3)"), matrix<std::int8_t>(ints, 3, false))),
                   FileFormat::Npy, ints);
-    EXPECT_POINTS(dir.write("u2.npy", npy(1, dict("<u2", false, "(2, 3)"), matrix<std::uint16_t>({1, 2, 3, 4, 5, 65535}, 3, false))),
+    EXPECT_POINTS(dir.write("u2.npy", npy(1, dict("<u2", false, "(2, 3)"),
+                                          matrix<std::uint16_t>({1, 2, 3, 4, 5, 65535}, 3, false))),
                   FileFormat::Npy, {1, 2, 3, 4, 5, 65535});
     EXPECT_POINTS(dir.write("nat.npy", npy(1, dict("=f8", false, "(4, 3)"), matrix<double>(k3, 3, false))),
                   FileFormat::Npy, k3);
@@ -117,9 +119,9 @@ void test_malformed() {
     parse_error(npy(1, dict("<c16", false, "(4, 3)"), data), "is not supported", __LINE__);
     parse_error(npy(1, dict("|f8", false, "(4, 3)"), data), "has no byte order", __LINE__);
     parse_error(npy(1, dict("<U8", false, "(4, 3)"), data), "is not supported", __LINE__);
-    parse_error(npy(1, "{'descr': [('x', '<f8'), ('y', '<f8'), ('z', '<f8')], 'fortran_order': False, 'shape': (4,), }",
-                    data),
-                "structured .npy dtypes are not supported", __LINE__);
+    parse_error(
+        npy(1, "{'descr': [('x', '<f8'), ('y', '<f8'), ('z', '<f8')], 'fortran_order': False, 'shape': (4,), }", data),
+        "structured .npy dtypes are not supported", __LINE__);
     parse_error(npy(1, "{'descr': '<f8', 'fortran_order': Maybe, 'shape': (4, 3), }", data), "expected True or False",
                 __LINE__);
     parse_error(npy(1, "{'descr': '<f8', 'fortran_order': False, 'shape': (-4, 3), }", data),
@@ -128,7 +130,8 @@ void test_malformed() {
                 __LINE__);
     parse_error(npy(1, "{'descr': '<f8', 'fortran_order': False, 'shape': (4, 3) 'x' }", data), "expected ',' or '}'",
                 __LINE__);
-    parse_error(npy(1, "{'descr': '<f8, 'fortran_order': False, 'shape': (4, 3), }", data), "malformed .npy header", __LINE__);
+    parse_error(npy(1, "{'descr': '<f8, 'fortran_order': False, 'shape': (4, 3), }", data), "malformed .npy header",
+                __LINE__);
     parse_error(npy(1, "{'descr': '<f8', 'fortran_order': False, 'shape': (4, 3), 'extra': 1}", data),
                 "unexpected key 'extra'", __LINE__);
     parse_error(npy(1, "{'fortran_order': False, 'shape': (4, 3), }", data), "no 'descr'", __LINE__);
@@ -137,8 +140,7 @@ void test_malformed() {
     parse_error(npy(1, "{'descr': '<f8'", data), "malformed .npy header", __LINE__);
     parse_error(npy(1, dict("<f8", false, "(100000000000000000, 3)"), data),
                 "truncated: expected 2400000000000000000 bytes of array data, found 96", __LINE__);
-    parse_error(npy(1, dict("<f8", false, "(1000000000000000000, 3)"), data), "far larger than the 96 bytes",
-                __LINE__);
+    parse_error(npy(1, dict("<f8", false, "(1000000000000000000, 3)"), data), "far larger than the 96 bytes", __LINE__);
     parse_error(npy(1, dict("<f8", false, "(18446744073709551616, 3)"), data), "expected a non-negative dimension",
                 __LINE__);
     // Preamble problems.

@@ -147,8 +147,8 @@ void test_malformed() {
     parse_error("FIELDS x y z\nSIZE 4 0 4\nPOINTS 1\nDATA ascii\n1 2 3\n", "bad SIZE '0'", __LINE__);
     parse_error("FIELDS x y z\nSIZE 4 -4 4\nPOINTS 1\nDATA ascii\n1 2 3\n", "bad SIZE '-4'", __LINE__);
     parse_error("FIELDS x y z\nSIZE 4 4 4\nCOUNT 1 1 0\nPOINTS 1\nDATA ascii\n1 2 3\n", "bad COUNT '0'", __LINE__);
-    parse_error("FIELDS x y z w\nSIZE 4 4 4 4\nCOUNT 1 1 1 18446744073709551615\nPOINTS 1\nDATA binary\n",
-                "too large", __LINE__);
+    parse_error("FIELDS x y z w\nSIZE 4 4 4 4\nCOUNT 1 1 1 18446744073709551615\nPOINTS 1\nDATA binary\n", "too large",
+                __LINE__);
     parse_error("SIZE 4 4 4\nPOINTS 1\nDATA ascii\n1 2 3\n", "no FIELDS line", __LINE__);
     parse_error("FIELDS x y z\nPOINTS 1\nDATA ascii\n1 2 3\n", "no SIZE line", __LINE__);
     parse_error("FIELDS x y z\nFIELDS x y z\nSIZE 4 4 4\nPOINTS 1\nDATA ascii\n1 2 3\n", "a second FIELDS line",
@@ -165,7 +165,8 @@ void test_malformed() {
                 "truncated: expected 12000000000000000000 bytes of point data, found 24", __LINE__);
     parse_error("FIELDS x y z w\nSIZE 8 8 8 8\nPOINTS 1000000000000000000\nDATA binary\n" + std::string(24, '\0'),
                 "far more than the 24 bytes", __LINE__);
-    parse_error(xyz + "POINTS 1000000000000000000\nDATA ascii\n1 2 3\n", "truncated: the PCD header declares", __LINE__);
+    parse_error(xyz + "POINTS 1000000000000000000\nDATA ascii\n1 2 3\n", "truncated: the PCD header declares",
+                __LINE__);
     // Ascii data problems.
     parse_error(xyz + "POINTS 2\nDATA ascii\n1.0 2.0 3.0\n4.0 5.0\n", "line 8: expected 3 values, found 2", __LINE__);
     parse_error(xyz + "POINTS 2\nDATA ascii\n1 2 3\n4 5 6 7\n", "line 8: expected 3 values, found 4", __LINE__);

@@ -20,25 +20,24 @@ std::string crlf(const std::string &s) {
     return out;
 }
 
-const char *kAscii =
-    "ply\n"
-    "format ascii 1.0\n"
-    "comment made by hand\n"
-    "obj_info scanner 1\n"
-    "element vertex 3\n"
-    "property float x\n"
-    "property float nx\n"
-    "property double y\n"
-    "property uchar red\n"
-    "property float z\n"
-    "element face 2\n"
-    "property list uchar int vertex_indices\n"
-    "end_header\n"
-    "1.5 0 -2.25 255 3\n"
-    "-0.125 1 1e3 0 4.5e-2\n"
-    "nan 0 inf 7 -0\n"
-    "3 0 1 2\n"
-    "3 2 1 0\n";
+const char *kAscii = "ply\n"
+                     "format ascii 1.0\n"
+                     "comment made by hand\n"
+                     "obj_info scanner 1\n"
+                     "element vertex 3\n"
+                     "property float x\n"
+                     "property float nx\n"
+                     "property double y\n"
+                     "property uchar red\n"
+                     "property float z\n"
+                     "element face 2\n"
+                     "property list uchar int vertex_indices\n"
+                     "end_header\n"
+                     "1.5 0 -2.25 255 3\n"
+                     "-0.125 1 1e3 0 4.5e-2\n"
+                     "nan 0 inf 7 -0\n"
+                     "3 0 1 2\n"
+                     "3 2 1 0\n";
 const std::vector<double> kAsciiPoints = {1.5, -2.25, 3, -0.125, 1000, 0.045, kNaN, kInf, -0.0};
 
 void test_ascii() {
@@ -133,10 +132,10 @@ void test_all_types() {
         bool is_signed;
         bool is_float;
     };
-    const Type types[] = {{{"char", "int8"}, 1, true, false},     {{"uchar", "uint8"}, 1, false, false},
-                          {{"short", "int16"}, 2, true, false},   {{"ushort", "uint16"}, 2, false, false},
-                          {{"int", "int32"}, 4, true, false},     {{"uint", "uint32"}, 4, false, false},
-                          {{"float", "float32"}, 4, true, true},  {{"double", "float64"}, 8, true, true}};
+    const Type types[] = {{{"char", "int8"}, 1, true, false},    {{"uchar", "uint8"}, 1, false, false},
+                          {{"short", "int16"}, 2, true, false},  {{"ushort", "uint16"}, 2, false, false},
+                          {{"int", "int32"}, 4, true, false},    {{"uint", "uint32"}, 4, false, false},
+                          {{"float", "float32"}, 4, true, true}, {{"double", "float64"}, 8, true, true}};
     for (const Type &t : types) {
         double lo = 0, hi = 0;
         if (t.is_float) {
@@ -152,14 +151,14 @@ void test_all_types() {
         if (t.is_float && t.bytes == 4) lo = static_cast<double>(static_cast<float>(lo));
         const std::vector<double> expected = {lo, hi, 1, 2, lo, hi};
         for (const char *name : t.names) {
-            const std::string props = std::string("property ") + name + " x\nproperty " + name + " y\nproperty " +
-                                      name + " z\n";
+            const std::string props =
+                std::string("property ") + name + " x\nproperty " + name + " y\nproperty " + name + " z\n";
             // ascii
             char line1[200], line2[200];
             snprintf(line1, sizeof line1, "%.17g %.17g 1\n", lo, hi);
             snprintf(line2, sizeof line2, "2 %.17g %.17g\n", lo, hi);
-            EXPECT_POINTS(dir.write(std::string("t_") + name + ".ply",
-                                    "ply\nformat ascii 1.0\nelement vertex 2\n" + props + "end_header\n" + line1 + line2),
+            EXPECT_POINTS(dir.write(std::string("t_") + name + ".ply", "ply\nformat ascii 1.0\nelement vertex 2\n" +
+                                                                           props + "end_header\n" + line1 + line2),
                           FileFormat::Ply, expected);
             for (int big = 0; big < 2; ++big) {
                 Bytes b;
@@ -177,8 +176,8 @@ void test_all_types() {
                     case -8: b.put<double>(v, big); break;
                     }
                 }
-                EXPECT_POINTS(dir.write(std::string("t_") + name + (big ? "_be" : "_le") + ".ply", b.s), FileFormat::Ply,
-                              expected);
+                EXPECT_POINTS(dir.write(std::string("t_") + name + (big ? "_be" : "_le") + ".ply", b.s),
+                              FileFormat::Ply, expected);
             }
         }
     }
@@ -268,8 +267,7 @@ void test_malformed() {
     parse_error(ascii_with(v1 + "property list float int ids\n" + kXyz), "not an integer type", __LINE__);
     parse_error(ascii_with(v1 + "property list uchar blob ids\n" + kXyz), "unknown property type", __LINE__);
     parse_error(ascii_with("element vertex -1\n" + std::string(kXyz)), "bad element count", __LINE__);
-    parse_error(ascii_with("element vertex 18446744073709551616\n" + std::string(kXyz)), "bad element count",
-                __LINE__);
+    parse_error(ascii_with("element vertex 18446744073709551616\n" + std::string(kXyz)), "bad element count", __LINE__);
     parse_error(ascii_with("element vertex 3x\n" + std::string(kXyz)), "bad element count", __LINE__);
     parse_error(ascii_with("element vertex\n" + std::string(kXyz)), "expected 'element <name> <count>'", __LINE__);
     parse_error(ascii_with("element vertex 1000000000000000000\n" + std::string(kXyz)), "truncated", __LINE__);
@@ -290,8 +288,8 @@ void test_malformed() {
     // Ascii data problems.
     parse_error(ascii_with(v1 + kXyz, "1.5 abc 3\n"), "line 8: bad vertex value 'abc'", __LINE__);
     parse_error(ascii_with(v1 + kXyz, "1.5 2 3 4\n"), "does not fill exactly one line", __LINE__);
-    parse_error(ascii_with("element vertex 2\n" + std::string(kXyz), "1 2\n3 4\n5 6\n"), "does not fill exactly one line",
-                __LINE__);
+    parse_error(ascii_with("element vertex 2\n" + std::string(kXyz), "1 2\n3 4\n5 6\n"),
+                "does not fill exactly one line", __LINE__);
     parse_error(ascii_with("element face 1\nproperty list uchar int idx\n" + v1 + kXyz, "x 1 2\n1 2 3\n"),
                 "bad list length 'x'", __LINE__);
     parse_error(ascii_with("element face 1\nproperty list uchar int idx\n" + v1 + kXyz, "-1 1 2\n1 2 3\n"),

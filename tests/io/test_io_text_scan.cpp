@@ -44,8 +44,8 @@ void test_parse_double() {
     CHECK(d("1e-99999999999999999999", v) && v == 0);
     CHECK(d("1e99999999999999999999", v) && std::isinf(v));
     CHECK(d("4e-320", v) && v > 0 && v < 1e-300); // subnormal, in range
-    const char *bad[] = {"", "+", "-", ".", "e5", "1e", "1e+", "1..2", "1.2.3", "0x10", " 1", "1 ", "1,5",
-                         "++1", "+-1", "-+1", "abc", "1f", "nanx", "in"};
+    const char *bad[] = {"",   "+",  "-",   ".",   "e5",  "1e",  "1e+", "1..2", "1.2.3", "0x10",
+                         " 1", "1 ", "1,5", "++1", "+-1", "-+1", "abc", "1f",   "nanx",  "in"};
     for (const char *s : bad) CHECK_MSG(!d(s, v), "'%s' parsed", s);
     // Bounds are respected: the parser must not read past e.
     const char buf[] = "12345";
@@ -57,7 +57,8 @@ void test_parse_u64() {
     CHECK(u("0", v) && v == 0);
     CHECK(u("40256", v) && v == 40256);
     CHECK(u("18446744073709551615", v) && v == UINT64_MAX);
-    const char *bad[] = {"", "-1", "+1", "18446744073709551616", "99999999999999999999999", "1.0", "1e3", " 1", "0x1", "1 "};
+    const char *bad[] = {"",   "-1",  "+1", "18446744073709551616", "99999999999999999999999", "1.0", "1e3",
+                         " 1", "0x1", "1 "};
     for (const char *s : bad) CHECK_MSG(!u(s, v), "'%s' parsed", s);
 }
 

@@ -21,8 +21,8 @@ const char *kText = "# x y z intensity\n"
                     "inf -inf -0.0 # trailing columns are ignored\n"
                     "1e400 -1e400 1e-400\n"
                     ".5 5. 0.000001";
-const std::vector<double> kPoints = {1, 2, 3, 4, 5, 6, 7, 8, 9, 150, -0.25, kNaN, kInf, -kInf, -0.0,
-                                     kInf, -kInf, 0, 0.5, 5, 1e-6};
+const std::vector<double> kPoints = {1,    2,    3,     4,    5,    6,     7, 8,   9, 150, -0.25,
+                                     kNaN, kInf, -kInf, -0.0, kInf, -kInf, 0, 0.5, 5, 1e-6};
 
 void test_exact() {
     TempDir dir;

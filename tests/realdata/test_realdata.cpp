@@ -143,14 +143,17 @@ int main() {
         std::istringstream r(line);
         std::string cell;
         while (std::getline(r, cell, '\t')) row.push_back(cell);
-        const std::string dataset = column(row, "dataset"), pair_dir = column(row, "pair_dir"), kind_name = column(row, "kind");
+        const std::string dataset = column(row, "dataset"), pair_dir = column(row, "pair_dir"),
+                          kind_name = column(row, "kind");
         const auto kind_it = kKinds.find(kind_name);
         CHECK_MSG(kind_it != kKinds.end(), "unknown kind %s", kind_name.c_str());
         if (kind_it == kKinds.end()) continue;
         const Kind kind = kind_it->second;
         auto pair = read_pair_txt(root + "/" + pair_dir + "/pair.txt");
-        const std::vector<double> source = read_cloud(root + "/" + dataset + "/" + pair["source"], format_id(pair["source_format"]));
-        const std::vector<double> target = read_cloud(root + "/" + dataset + "/" + pair["target"], format_id(pair["target_format"]));
+        const std::vector<double> source =
+            read_cloud(root + "/" + dataset + "/" + pair["source"], format_id(pair["source_format"]));
+        const std::vector<double> target =
+            read_cloud(root + "/" + dataset + "/" + pair["target"], format_id(pair["target_format"]));
         CHECK(!source.empty() && !target.empty());
         if (source.empty() || target.empty()) continue;
         double gt[16];
@@ -181,7 +184,8 @@ int main() {
             std::vector<double> turned(source.size());
             for (std::size_t i = 0; i < source.size(); i += 3)
                 for (int a = 0; a < 3; ++a)
-                    turned[i + a] = turn.m[3 * a] * source[i] + turn.m[3 * a + 1] * source[i + 1] + turn.m[3 * a + 2] * source[i + 2];
+                    turned[i + a] = turn.m[3 * a] * source[i] + turn.m[3 * a + 1] * source[i + 1] +
+                                    turn.m[3 * a + 2] * source[i + 2];
             const Mat3 expect_r = mul(gt_r, transpose(turn)); // p_t = R_gt turn^T p'
             const double expect_t[3] = {gt[3], gt[7], gt[11]};
 
@@ -191,8 +195,9 @@ int main() {
             result.struct_size = sizeof(result);
             const int32_t status = kissm_register(matcher, &src, &tgt, &result);
             CHECK_MSG(status == KISSM_OK, "%s: %s", pair_dir.c_str(), kissm_last_error_message());
-            const Mat3 got{{result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3], result.rotation[4],
-                            result.rotation[5], result.rotation[6], result.rotation[7], result.rotation[8]}};
+            const Mat3 got{{result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3],
+                            result.rotation[4], result.rotation[5], result.rotation[6], result.rotation[7],
+                            result.rotation[8]}};
             const double rre = result.valid ? rotation_error_deg(got, expect_r) : NAN;
             const double rte = result.valid ? std::sqrt(std::pow(result.translation[0] - expect_t[0], 2) +
                                                         std::pow(result.translation[1] - expect_t[1], 2) +

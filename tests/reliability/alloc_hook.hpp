@@ -2,8 +2,8 @@
 #pragma once
 
 namespace alloc_hook {
-long count();      // allocations made so far
-long live();       // allocations not freed yet
+long count();         // allocations made so far
+long live();          // allocations not freed yet
 void fail_at(long k); // make the allocation whose count() value is k fail (bad_alloc); -1: none
-long failed();     // allocations refused so far
+long failed();        // allocations refused so far
 } // namespace alloc_hook

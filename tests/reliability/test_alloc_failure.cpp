@@ -49,11 +49,13 @@ Sweep sweep(const char *what, long every, Call call, Release release, Same same_
             ++s.ok;
         } else {
             ++s.other;
-            std::fprintf(stderr, "%s: allocation %ld failed -> status %d (%s)\n", what, k, (int)st, kissm_last_error_message());
+            std::fprintf(stderr, "%s: allocation %ld failed -> status %d (%s)\n", what, k, (int)st,
+                         kissm_last_error_message());
         }
         if (alloc_hook::live() != live) {
             ++s.leaks;
-            std::fprintf(stderr, "%s: allocation %ld failed -> %ld allocations left behind\n", what, k, alloc_hook::live() - live);
+            std::fprintf(stderr, "%s: allocation %ld failed -> %ld allocations left behind\n", what, k,
+                         alloc_hook::live() - live);
         }
         const bool same = call() == KISSM_OK && same_as_reference();
         release();
@@ -85,12 +87,13 @@ void test_register(int32_t threads, long every) {
     scn_result_poison(&reference);
     REQUIRE(kissm_register(m, &s, &t, &reference) == KISSM_OK);
     CHECK(reference.valid == 1);
-    const Sweep sw = sweep(threads == 1 ? "kissm_register, 1 thread" : "kissm_register, 2 threads", every,
-                           [&] {
-                               scn_result_poison(&r);
-                               return kissm_register(m, &s, &t, &r);
-                           },
-                           [] {}, [&] { return scn_result_equal(&reference, &r) != 0; });
+    const Sweep sw = sweep(
+        threads == 1 ? "kissm_register, 1 thread" : "kissm_register, 2 threads", every,
+        [&] {
+            scn_result_poison(&r);
+            return kissm_register(m, &s, &t, &r);
+        },
+        [] {}, [&] { return scn_result_equal(&reference, &r) != 0; });
     check_sweep(sw);
     kissm_destroy(m);
 }
@@ -111,38 +114,41 @@ void test_create_and_features() {
     c.num_threads = 1;
     kissm_matcher *m = nullptr;
     bool created = false;
-    check_sweep(sweep("kissm_create", 1, [&] { return kissm_create(&c, &m); },
-                      [&] {
-                          created = created || m != nullptr;
-                          kissm_destroy(m);
-                          m = nullptr;
-                      },
-                      [&] { return m != nullptr; }));
+    check_sweep(sweep(
+        "kissm_create", 1, [&] { return kissm_create(&c, &m); },
+        [&] {
+            created = created || m != nullptr;
+            kissm_destroy(m);
+            m = nullptr;
+        },
+        [&] { return m != nullptr; }));
     CHECK(created);
     REQUIRE(kissm_create(&c, &m) == KISSM_OK);
     const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
     kissm_features *fs = nullptr, *ft = nullptr, *f = nullptr;
     REQUIRE(kissm_features_compute(m, &s, &fs) == KISSM_OK);
     REQUIRE(kissm_features_compute(m, &t, &ft) == KISSM_OK);
-    check_sweep(sweep("kissm_features_compute", 1, [&] { return kissm_features_compute(m, &s, &f); },
-                      [&] {
-                          kissm_features_destroy(f);
-                          f = nullptr;
-                      },
-                      [&] {
-                          return f != nullptr && kissm_features_num_keypoints(f) == kissm_features_num_keypoints(fs) &&
-                                 kissm_features_num_voxels(f) == kissm_features_num_voxels(fs);
-                      }));
+    check_sweep(sweep(
+        "kissm_features_compute", 1, [&] { return kissm_features_compute(m, &s, &f); },
+        [&] {
+            kissm_features_destroy(f);
+            f = nullptr;
+        },
+        [&] {
+            return f != nullptr && kissm_features_num_keypoints(f) == kissm_features_num_keypoints(fs) &&
+                   kissm_features_num_voxels(f) == kissm_features_num_voxels(fs);
+        }));
     kissm_result reference, r;
     scn_result_poison(&reference);
     const int32_t st = kissm_register_features(m, fs, ft, &reference);
     CHECK_MSG(st == KISSM_OK, "%d %s", (int)st, kissm_last_error_message());
-    check_sweep(sweep("kissm_register_features", 1,
-                      [&] {
-                          scn_result_poison(&r);
-                          return kissm_register_features(m, fs, ft, &r);
-                      },
-                      [] {}, [&] { return scn_result_equal(&reference, &r) != 0; }));
+    check_sweep(sweep(
+        "kissm_register_features", 1,
+        [&] {
+            scn_result_poison(&r);
+            return kissm_register_features(m, fs, ft, &r);
+        },
+        [] {}, [&] { return scn_result_equal(&reference, &r) != 0; }));
     kissm_features_destroy(fs);
     kissm_features_destroy(ft);
     kissm_destroy(m);
@@ -156,15 +162,16 @@ void test_read_points() {
     REQUIRE(kissm_read_points(g_file, KISSM_FORMAT_AUTO, &reference) == KISSM_OK);
     const uint64_t n = kissm_cloud_count(reference);
     CHECK(n > 1000);
-    check_sweep(sweep("kissm_read_points", 1, [&] { return kissm_read_points(g_file, KISSM_FORMAT_AUTO, &c); },
-                      [&] {
-                          kissm_cloud_destroy(c);
-                          c = nullptr;
-                      },
-                      [&] {
-                          return c != nullptr && kissm_cloud_count(c) == n &&
-                                 std::memcmp(kissm_cloud_data(c), kissm_cloud_data(reference), n * 3 * sizeof(double)) == 0;
-                      }));
+    check_sweep(sweep(
+        "kissm_read_points", 1, [&] { return kissm_read_points(g_file, KISSM_FORMAT_AUTO, &c); },
+        [&] {
+            kissm_cloud_destroy(c);
+            c = nullptr;
+        },
+        [&] {
+            return c != nullptr && kissm_cloud_count(c) == n &&
+                   std::memcmp(kissm_cloud_data(c), kissm_cloud_data(reference), n * 3 * sizeof(double)) == 0;
+        }));
     kissm_cloud_destroy(reference);
 }
 

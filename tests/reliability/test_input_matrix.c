@@ -10,17 +10,28 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "capi/scenes.h"
 #include "harness.h"
 #include "kissm.h"
-#include "capi/scenes.h"
 
 enum content {
-    C_NULL, C_EMPTY, C_ONE, C_TWO, C_THREE, C_NAN, C_INF, C_DUPLICATES, C_COLLINEAR, C_PLANAR, C_HUGE_EXTENT,
-    C_FAR_SCENE, C_COUNT
+    C_NULL,
+    C_EMPTY,
+    C_ONE,
+    C_TWO,
+    C_THREE,
+    C_NAN,
+    C_INF,
+    C_DUPLICATES,
+    C_COLLINEAR,
+    C_PLANAR,
+    C_HUGE_EXTENT,
+    C_FAR_SCENE,
+    C_COUNT
 };
-static const char *const k_content_names[C_COUNT] = {
-    "NULL", "empty", "1 point", "2 points", "3 points", "a NaN", "an Inf", "5000 duplicates", "collinear",
-    "planar", "1e7 m extent", "scene 1e7 m away"};
+static const char *const k_content_names[C_COUNT] = {"NULL",      "empty",  "1 point",      "2 points",
+                                                     "3 points",  "a NaN",  "an Inf",       "5000 duplicates",
+                                                     "collinear", "planar", "1e7 m extent", "scene 1e7 m away"};
 
 enum voxel { V_TINY, V_GOOD, V_HUGE, V_COUNT };
 static const double k_voxels[V_COUNT] = {1e-9, 0.5, 1e9};
@@ -43,7 +54,9 @@ static outcome expected(enum content c, enum voxel v, enum role role) {
     switch (c) {
     case C_NULL: o.status = KISSM_ERR_NULL_ARGUMENT; return o;
     case C_EMPTY: o.status = KISSM_ERR_EMPTY_INPUT; return o;
-    case C_ONE: case C_TWO: case C_THREE: o.status = KISSM_ERR_TOO_FEW_POINTS; return o;
+    case C_ONE:
+    case C_TWO:
+    case C_THREE: o.status = KISSM_ERR_TOO_FEW_POINTS; return o;
     default: break;
     }
     if (v == V_TINY && role == R_TARGET) { /* the good source fails first */
@@ -54,7 +67,7 @@ static outcome expected(enum content c, enum voxel v, enum role role) {
         o.status = KISSM_ERR_NONFINITE;
         return o;
     }
-    if (c == C_DUPLICATES) { /* zero extent: one voxel at any size */
+    if (c == C_DUPLICATES) {                                                   /* zero extent: one voxel at any size */
         if (v == V_TINY && role == R_SOURCE) o.status = KISSM_ERR_VOXEL_RANGE; /* the good target's turn */
         o.reason = KISSM_REASON_TOO_FEW_VOXELS;
         return o;
@@ -111,8 +124,7 @@ static int usable(kissm_matcher *m, int32_t ref_status, const kissm_result *ref)
     return st == ref_status && (st != KISSM_OK || scn_result_equal(ref, &r));
 }
 
-static int cell_ok(const char *where, enum role role, enum content c, enum voxel v, int32_t st,
-                   const kissm_result *r) {
+static int cell_ok(const char *where, enum role role, enum content c, enum voxel v, int32_t st, const kissm_result *r) {
     const outcome o = expected(c, v, role);
     if (st != o.status) {
         fprintf(stderr, "  %s, %s, voxel %g: status %d, expected %d (%s)\n", where, k_content_names[c], k_voxels[v],
@@ -171,8 +183,10 @@ static void test_matrix(void) {
             kissm_features_destroy(f);
             cells++;
             good_cells += ok;
-            if (usable(m, ref_status, &ref)) still_usable++;
-            else fprintf(stderr, "  after %s at voxel %g the handle changed\n", k_content_names[c], k_voxels[v]);
+            if (usable(m, ref_status, &ref))
+                still_usable++;
+            else
+                fprintf(stderr, "  after %s at voxel %g the handle changed\n", k_content_names[c], k_voxels[v]);
         }
         kissm_features_destroy(good_f);
         kissm_destroy(m);

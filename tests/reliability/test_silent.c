@@ -21,18 +21,18 @@ static void exercise(const scn_pair *pair) {
     kissm_result r;
     r.struct_size = sizeof r;
     nothing.count = 0;
-    (void)kissm_create(&bad, &m);  /* invalid config */
+    (void)kissm_create(&bad, &m);   /* invalid config */
     (void)kissm_create(&bad, NULL); /* NULL output */
     c.num_threads = 4;
     if (kissm_create(&c, &m) != KISSM_OK) return;
-    (void)kissm_register(m, &s, &t, &r);         /* good, 4 threads */
-    (void)kissm_register(m, &nothing, &t, &r);   /* empty */
-    (void)kissm_register(m, &s, &t, NULL);       /* NULL result */
+    (void)kissm_register(m, &s, &t, &r);       /* good, 4 threads */
+    (void)kissm_register(m, &nothing, &t, &r); /* empty */
+    (void)kissm_register(m, &s, &t, NULL);     /* NULL result */
     r.struct_size = 3;
-    (void)kissm_register(m, &s, &t, &r);         /* bad struct size */
+    (void)kissm_register(m, &s, &t, &r); /* bad struct size */
     r.struct_size = sizeof r;
     ((double *)pair->source.xyz)[7] = NAN;
-    (void)kissm_register(m, &s, &t, &r);         /* non-finite */
+    (void)kissm_register(m, &s, &t, &r); /* non-finite */
     (void)kissm_features_compute(m, &t, &f);
     c.voxel_size = 0.7;
     if (kissm_create(&c, &m2) == KISSM_OK) {
@@ -42,7 +42,7 @@ static void exercise(const scn_pair *pair) {
         kissm_features_destroy(g);
     }
     (void)kissm_read_points("/nonexistent/kissm/cloud.ply", KISSM_FORMAT_AUTO, &cloud); /* I/O error */
-    (void)kissm_read_points("/dev/null", KISSM_FORMAT_PLY, &cloud);                      /* parse error */
+    (void)kissm_read_points("/dev/null", KISSM_FORMAT_PLY, &cloud);                     /* parse error */
     kissm_cancel(m);
     kissm_features_destroy(f);
     kissm_destroy(m2);

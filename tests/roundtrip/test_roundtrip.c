@@ -144,8 +144,9 @@ static void check_case(const char *text, const golden_case *gc) {
         v = strchr(v, '[') + 1;
         for (i = 0; i < 16; ++i) {
             const double expect = strtod(v, &next);
-            CHECK_MSG(memcmp(&expect, &r.transform[i], sizeof(double)) == 0, "%s threads %d transform[%d]: %.17g vs %.17g",
-                      gc->name, (int)threads[t], i, expect, r.transform[i]);
+            CHECK_MSG(memcmp(&expect, &r.transform[i], sizeof(double)) == 0,
+                      "%s threads %d transform[%d]: %.17g vs %.17g", gc->name, (int)threads[t], i, expect,
+                      r.transform[i]);
             v = next + strspn(next, ", ");
         }
 /* clang-format off */
@@ -153,7 +154,7 @@ static void check_case(const char *text, const golden_case *gc) {
     v = value_of(begin, end, #f);                                                                      \
     CHECK_MSG(v && strtoull(v, NULL, 10) == r.f, "%s threads %d: " #f " %llu", gc->name, (int)threads[t], \
               (unsigned long long)r.f);
-/* clang-format on */
+        /* clang-format on */
         COUNT_FIELDS(CHECK_COUNT)
         v = value_of(begin, end, "residual_rms");
         {

@@ -154,8 +154,8 @@ void kissm_destroy(kissm_matcher *matcher);
 
 int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *out_config);
 
-int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source,
-    const kissm_points *target, kissm_result *result);
+int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
+    kissm_result *result);
 
 void kissm_cancel(kissm_matcher *matcher);
 
