@@ -26,14 +26,18 @@ cd "$here"
 # reconfigure one build tree at the same time: build once, then start them with this set).
 if [[ ${KISSM_FUZZ_NO_BUILD:-0} != 1 ]]; then
   cmake --preset fuzz >/dev/null
-  cmake --build --preset fuzz --target $(printf 'fuzz_%s ' "${targets[@]}")
+  fuzz_targets=()
+  for t in "${targets[@]}"; do fuzz_targets+=("fuzz_$t"); done
+  cmake --build --preset fuzz --target "${fuzz_targets[@]}"
 fi
 
 for t in "${targets[@]}"; do
   corpus=build-fuzz/corpus/$t findings=build-fuzz/findings/$t
   mkdir -p "$corpus" "$findings"
   cp -n tests/fuzz/corpus/"$t"/* "$corpus"/ 2>/dev/null || true
-  [[ -d tests/fuzz/regressions/$t ]] && cp -n tests/fuzz/regressions/"$t"/* "$corpus"/ 2>/dev/null || true
+  if [[ -d tests/fuzz/regressions/$t ]]; then
+    cp -n tests/fuzz/regressions/"$t"/* "$corpus"/ 2>/dev/null || true
+  fi
   echo "== fuzz_$t for ${seconds}s =="
   # 64 KiB inputs, 2 GiB RSS, 30 s per input; ASan/UBSan findings abort the run.
   ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
