@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """kissm benchmark: kissm against the reference KISS-Matcher and Open3D, on real pairs and synthetic scenes.
 
 Full run (normally through ``bash bench/run.sh``, which makes the venv with every peer installed)::

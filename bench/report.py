@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Writes docs/benchmarks.md and the plots in docs/img/ from the results of bench.py.
 
 ``python bench/report.py RAW.json --out DIR`` regenerates the report from a saved raw results file.

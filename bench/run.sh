@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The benchmark in one command: sets up its own venv (kissm's Python binding built from this checkout, the
 # reference KISS-Matcher, Open3D, small_gicp, numpy, matplotlib) and runs bench/bench.py.
 #

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /*
  * kissm: fast, robust, deterministic global 3D point cloud registration.
  *

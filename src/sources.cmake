@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # The registration core: one pipeline stage per file (see docs/architecture.md).
 set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/run_context.cpp

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* A tiny test harness usable from C99 and C++: CHECK(...) records a failure and carries on, REQUIRE(...)
  * stops the current test function. Each test binary ends with `return TEST_SUMMARY();`, which prints
  * "N passed, N failed" and returns 1 when anything failed. Return 77 from main to mark a skip. */

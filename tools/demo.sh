@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The main job: set up, build, and run `kissm demo` on the built-in synthetic LiDAR pair.
 # Writes the clouds and a before/after picture into kissm_demo_out/.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Builds the libFuzzer targets (clang, ASan + UBSan; CMakePresets.json "fuzz") and runs each for a while,
 # starting from the committed seed corpus. Not part of CI (minutes per target); the seed corpus and the
 # regressions are replayed by normal CTest instead.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Writes the fuzz targets' seed corpus (tests/fuzz/corpus/<target>/): small valid files for every reader
 and byte strings for the pipeline targets that decode (tests/fuzz/fuzz_input.hpp) into a registrable pair.
 Deterministic (fixed seeds); standard library only. Run from anywhere:  python3 tools/make_fuzz_seeds.py"""

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Writes the small synthetic clouds of tests/data/ that the C, Python and Rust suites all register and
 compare with tests/data/golden.json (bitwise). Pure Python, no dependencies; the output is committed, so
 this only needs to run again when the scene itself should change (then regenerate the golden file with

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The C/C++ suite under AddressSanitizer + UndefinedBehaviorSanitizer (every test except the ABI ones,
 # which check the binary rather than its behaviour), then the concurrency tests under ThreadSanitizer.
 # Presets in CMakePresets.json; build trees build-asan/ and build-tsan/. Any finding fails the run.

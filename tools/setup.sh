@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs what building and testing kissm needs on Debian/Ubuntu. As root it uses apt-get; otherwise it
 # checks and says what is missing. Safe to run repeatedly: it installs only what is absent.
 #   required: the build (cmake, a C++17 compiler, Eigen) and pkg-config for the install test;

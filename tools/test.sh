@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Every test: set up, build, then the C/C++ suite (CTest), the same suite under ASan + UBSan and the
 # concurrency tests under TSan, the Python binding (pytest), a seconds-long benchmark smoke run and the
 # Rust binding (cargo test). Tests that need ../shared/data skip with a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* A small kissm consumer: reads two point clouds through the API, registers them and prints the pose.
  *
  *   kissm_example SOURCE TARGET [VOXEL_SIZE]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The C++ objects behind the opaque C handles.
 #pragma once
 

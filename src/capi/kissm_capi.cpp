@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The C boundary: argument checks, the catch-all, status mapping and the thread-local error message.
 // Every exported function is noexcept so that no C++ exception can unwind into a C, Python or Rust frame.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Command-line parsing helpers shared by the kissm commands. Every problem with the command line or the
 // inputs is reported by throwing UsageError; main() prints it as one "kissm: ..." line and exits with 2.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The kissm commands, and owning wrappers for the library's handles. The tool uses only the public C API
 // of kissm.h.
 #pragma once

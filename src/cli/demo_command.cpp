@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--json]
 //
 // Simulates two LiDAR scans of a synthetic street (demo_scene.hpp), registers them through the public C

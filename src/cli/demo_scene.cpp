@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The demo scene and LiDAR simulator (see demo_scene.hpp).
 //
 // World frame: z up. The main street runs along x between two kerbs (an asymmetric cross-section), is closed

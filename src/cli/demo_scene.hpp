@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The synthetic outdoor scene behind `kissm demo`: a street with buildings, poles, trees, parked cars and
 // clutter on rough, gently undulating ground, scanned twice by a simulated spinning LiDAR (ray casting
 // against the analytic primitives, so occlusion and partial overlap are real). Everything is a deterministic

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A minimal JSON writer: objects, arrays, strings, numbers, booleans and null, pretty-printed with two-space
 // indentation; arrays can be kept on one line. Doubles are printed with the shortest of "%.15g", "%.16g"
 // and "%.17g" that reads back to the very same value (0.3, not 0.29999999999999999); NaN and infinities,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // kissm: the command-line front end of the kissm library.
 //
 //   kissm register SOURCE TARGET --voxel V [options]   global registration of two point files

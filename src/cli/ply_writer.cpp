@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "ply_writer.hpp"
 
 #include <cerrno>

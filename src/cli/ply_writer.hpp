@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Writes point clouds as binary little-endian PLY with float64 ("double") x y z properties, whatever the
 // host's byte order. float64 keeps every coordinate exactly, so a cloud written here and read back with
 // kissm_read_points() registers to the same result as the in-memory cloud.

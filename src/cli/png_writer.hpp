@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A dependency-free PNG encoder for 8-bit RGB images. The image data is compressed with our own deflate
 // encoder (LZ77 with hash chains, fixed Huffman codes: RFC 1951 block type 1) inside a zlib stream
 // (RFC 1950); mostly-white pictures shrink about 30-fold compared with stored blocks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Small rigid-transform helpers for the command-line tool (header-only, no dependency).
 // Conventions match kissm.h: 4x4 transforms are row-major doubles and map source points into the target
 // frame, p_target = R p_source + t.

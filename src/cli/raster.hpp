@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // An RGB image with a few drawing primitives and a built-in 5x7 bitmap font (upper-case letters, digits
 // and some punctuation; lower-case letters are drawn as upper-case, unknown characters as blanks).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // kissm register SOURCE TARGET --voxel V [options]
 #include <chrono>
 #include <cmath>

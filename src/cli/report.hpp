@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Presenting a kissm_result: the human summary, the JSON fields, and the transform file.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Deterministic pseudo-random numbers for the demo scene: xoshiro256** seeded through splitmix64, with our
 // own uniform and normal transforms. std::random_device is never used, and std:: distributions are avoided
 // because their output is implementation-defined: the same seed must give the same scene everywhere.

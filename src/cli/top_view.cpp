@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "top_view.hpp"
 
 #include <algorithm>

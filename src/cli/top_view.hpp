@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Top-down (x-y) pictures of point clouds: one or more square panels side by side, each overlaying several
 // clouds in their own colours, with a metric grid, a scale bar, sensor markers, titles and a legend.
 #pragma once

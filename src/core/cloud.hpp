@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Data passed between pipeline stages.
 #pragma once
 

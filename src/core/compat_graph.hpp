@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 4a: the pairwise-consistency graph over correspondences, in CSR form.
 #pragma once
 

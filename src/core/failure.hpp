@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The one exception type the core throws. The C boundary (src/capi) maps each kind to a status code;
 // nothing below src/capi knows about C status numbers.
 #pragma once

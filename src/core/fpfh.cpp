@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "fpfh.hpp"
 
 #include <Eigen/Geometry>

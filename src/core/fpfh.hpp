@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 2c: FPFH descriptors (33 bins) of the keypoints.
 #pragma once
 

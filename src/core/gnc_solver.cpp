@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "gnc_solver.hpp"
 
 #include <Eigen/LU>

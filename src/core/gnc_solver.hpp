@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 5: robust pose from the pruned correspondences: rotation by GNC-TLS on translation-invariant
 // measurements, translation by truncated least squares, then final inliers.
 #pragma once

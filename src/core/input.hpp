@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 0: reading the caller's points (zero-copy view), applying the non-finite policy.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 4b: maximum k-core of the compatibility graph (Batagelj-Zaversnik peeling, O(V + E)).
 #pragma once
 

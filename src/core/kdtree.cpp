@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "kdtree.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Exact k-nearest-neighbour search over the 6-D projected descriptors (stage 3's candidate search).
 #pragma once
 

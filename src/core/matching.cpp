@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "matching.hpp"
 
 #include <Eigen/Eigenvalues>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 3: correspondences by nearest neighbours in descriptor space (33-D L2).
 #pragma once
 

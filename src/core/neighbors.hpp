@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 2a: the one radius search per point (Faster-PFH): every neighbour within the FPFH radius.
 // Normals use the subset within the normal radius, so no second search is ever made.
 #pragma once

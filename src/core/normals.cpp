@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "normals.hpp"
 
 #include <Eigen/Eigenvalues>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 2b: normals and linearity from the neighbours within the normal radius (a subset of the one
 // radius search), then the keypoint filter of Faster-PFH.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Plain C++ mirror of kissm_config, as the pipeline sees it (already validated at the boundary).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The whole registration: stages wired together, with counts and per-stage times.
 #pragma once
 

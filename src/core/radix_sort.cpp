@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "radix_sort.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What every stage of one call shares: the worker threads, cancellation and the log sink.
 //
 // Parallel loops split [0, n) into fixed chunks whose size does not depend on the thread count, and every

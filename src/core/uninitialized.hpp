@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A std::vector whose resize() leaves new elements of trivial types unset, for the large arrays whose every
 // element a parallel loop writes anyway. Zero-filling them first is a pass over all of it on one thread, and
 // that pass also takes every page fault of the fresh memory on that thread: on a VM whose balloon driver has

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "validity.hpp"
 
 #include <cmath>

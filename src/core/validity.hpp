@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 5b: whether a solved pose can be trusted.
 #pragma once
 

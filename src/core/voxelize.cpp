@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "voxelize.hpp"
 
 #include <algorithm>

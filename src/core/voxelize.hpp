@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Stage 1: one centroid per occupied voxel.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Fixed-size numeric fields of binary point formats, loaded from unaligned bytes of either byte order.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Whole-file loading and the error helpers every reader shares. Readers parse from one in-memory buffer:
 // a single read is faster than streaming and lets every header count be checked against the real size.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // One parser per file format, each over a whole file already in memory. `path` is used for messages only.
 // All return packed x y z doubles and throw Failure(Parse) for malformed or truncated content.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // NumPy .npy (format versions 1.0, 2.0, 3.0): a 2-D array of shape (N, k >= 3), C or Fortran order; the
 // first three columns are x, y, z.
 #include "io/binary_scalar.hpp"

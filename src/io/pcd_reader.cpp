@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PCD (DATA ascii and binary): the x, y, z fields; every other field is skipped by its SIZE and COUNT.
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PLY (ascii, binary_little_endian, binary_big_endian): the x, y, z properties of the `vertex` element.
 //
 // Elements after `vertex` are never read: they cannot change the points, and the Stanford scans carry a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Headerless little-endian float32 records: KITTI velodyne scans (x y z intensity) and bare x y z triples.
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // kissm_read_points(): load the file once, pick the format, hand the bytes to that format's parser.
 #include "io/read_points.hpp"
 

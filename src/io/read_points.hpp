@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Point file readers. Every reader bounds-checks every byte it reads and throws Failure(Io | Parse |
 // UnsupportedFormat) with a message naming the file and the problem; none allocates more than the file
 // could justify (counts in headers are checked against the file size before allocating).

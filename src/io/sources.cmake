@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Point file readers behind kissm_read_points().
 set(KISSM_IO_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/read_points.cpp

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bounded scanning of text in a byte buffer that is not NUL-terminated: lines, tokens, numbers.
 #pragma once
 

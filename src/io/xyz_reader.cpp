@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Plain-text point lists (.xyz, .txt, .pts, .asc): one point per line, the first three of any number of
 // whitespace- or comma-separated columns are x, y, z; '#' starts a comment line.
 #include "io/file_bytes.hpp"

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # abi_abidiff_selftest: proves that check_abi.sh, with the committed kissm.abignore and abidiff's exit
 # status handling, accepts the changes docs/abi-policy.md allows and rejects the others. It builds a
 # miniature kissm (abidiff_selftest/mini_kissm.{h,c}) once as a baseline and once per kind of change.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # abi_abidiff: compares a freshly built libkissm.so (with debug info) against the committed ABI baseline
 # tests/abi/kissm.abi with libabigail's abidiff, and fails on any change that is not an addition.
 #

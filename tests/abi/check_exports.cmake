@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # abi_exports: the dynamic symbol table of libkissm.so is exactly the committed list tests/abi/kissm.symbols,
 # which is exactly the set of KISSM_API functions declared in include/kissm.h, and every export is a
 # function. (The linker version script src/kissm.map and hidden visibility make it so.)

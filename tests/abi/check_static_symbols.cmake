@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # abi_static_symbols: what libkissm.a can clash with when a program links it statically.
 #
 #   cmake -DNM=nm -DARCHIVE=libkissm.a -DSYMBOLS=tests/abi/kissm.symbols -DNAMESPACE=v0_1 -P check_static_symbols.cmake

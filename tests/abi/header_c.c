@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Compile-only test of the public header from C. The abi_header_c99 and abi_header_c11 tests compile this
  * file with -std=c99 / -std=c11 -Wall -Wextra -pedantic -Werror -Wstrict-prototypes -Wpadded (and a few
  * more): kissm.h must be warning-free, self-contained (it is included first) and padding-free.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Compile-only test of the public header from C++. The abi_header_cxx11 and abi_header_cxx17 tests compile
 // this file with -std=c++11 / -std=c++17 -Wall -Wextra -pedantic -Werror -Wpadded -Wold-style-cast (and a
 // few more).

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # abi_install: installs the build tree with `cmake --install` into a scratch prefix, then builds the C
 # example (examples/c) against the installed tree only, four ways, and runs each on two clouds:
 #   1. CMake find_package(kissm), kissm::kissm         (libkissm.so)

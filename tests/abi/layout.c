@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The layout of kissm.h's public structs (C11), three ways:
  *
  *  - at compile time, on 64-bit targets: _Static_assert on sizeof, _Alignof and every field's offsetof and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The layout of every public struct of kissm.h, field by field, in declaration order, for 64-bit targets
  * (x86-64 and aarch64: 8-byte pointers, 8-byte aligned doubles and uint64_t).
  *

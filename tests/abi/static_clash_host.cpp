@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Part of the abi_static_clash test: C++ code of a host program that links libkissm.a and happens to have
 // its own kissm::detail namespace, with the names, signatures and class names kissm's internals use.
 //

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* abi_static_clash: a C program that links libkissm.a statically and defines, as its own global functions
  * and variables, names a point cloud program plausibly has and that kissm uses internally (voxelize,
  * compute_fpfh, match_descriptors, radius_neighbors, ...), plus its own C++ kissm::detail code

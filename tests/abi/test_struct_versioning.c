@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Struct versioning (C99): the struct_size rules of kissm_config and kissm_result that let a program built
  * against one kissm header run with a later library (docs/abi-policy.md, "Growable structs").
  *

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Regenerates the committed ABI baselines of tests/abi from a build tree:
 #   kissm.symbols  the exported symbols of libkissm.so        (checked by abi_exports)
 #   kissm.abi      libabigail's description of libkissm.so   (checked by abi_abidiff)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Deterministic synthetic scenes for the C API tests (see scenes.h). */
 #define _POSIX_C_SOURCE 200809L
 

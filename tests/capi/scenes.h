@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Deterministic synthetic scenes and small helpers shared by the C API tests (C99).
  *
  * Everything here is a pure function of its seeds: a splitmix64 generator (never rand()), fixed sampling

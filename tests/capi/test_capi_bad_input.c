@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Every way a caller can misuse the C API: exact status, a message naming the argument, outputs left alone
  * (a registration result is fully overwritten instead), and a handle that stays usable afterwards. Also
  * degenerate but well-formed inputs, which succeed with valid = 0 and a reason. C99. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Log and progress callbacks, cancellation by the progress callback and by kissm_cancel() from another
  * thread (pthreads). C99. */
 #define _POSIX_C_SOURCE 200809L

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Concurrency: eight threads, each with its own matcher, register different pairs at once and share
  * kissm_features objects; every result must equal the serial run's bit for bit. A child forked after the
  * parent has registered must register too, with the same result. C99 + pthreads; also run under TSan

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Bitwise determinism: thread counts, reused and fresh handles, repeated calls, 50 runs, separate
  * processes, permuted input. C99 (+ POSIX fork and pipe for the process test). */
 #if defined(__unix__) || defined(__APPLE__)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Features computed once and matched against many: equal to kissm_register, mismatch detection, lifetime
  * independent of the matcher, and sharing between threads (pthreads). C99. */
 #define _POSIX_C_SOURCE 200809L

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Versions, ABI sizes, config defaults, create/destroy, get_config, status and reason strings, and the
  * thread-local last error message. C99. */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* kissm_read_points and the kissm_cloud accessors on files written by the test (PLY, xyz text, KITTI
  * .bin, raw float32 xyz), error statuses, and registering clouds read through the API. C99 + POSIX. */
 #define _POSIX_C_SOURCE 200809L

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* kissm_register on a synthetic scene moved by a large known transform: accuracy, result consistency,
  * input representations (float32, float64, strided), georeferenced coordinates and the inverse pair. C99. */
 #include <math.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs the kissm command-line tool as a user would (through the shell) and checks exit codes, messages,
 // output files and JSON.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers for the command-line tool's tests: file I/O, a JSON syntax checker, a zlib/deflate decoder
 // (stored and fixed-Huffman blocks, which is what the tool's PNG encoder emits) and a PNG reader. They are
 // written independently of the tool's own encoders so that each checks the other.

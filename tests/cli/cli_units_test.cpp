@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Unit tests of the command-line tool's own pieces: checksums, the deflate/PNG encoder, the JSON writer,
 // the PLY writer, the argument parsers and the demo scene simulator.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The projected-descriptor kd-tree against brute force: the same k nearest, in the same order, with the
 // same float distances, ties (duplicate points, equal distances) broken by the lower index.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Deterministic random numbers for tests (std distributions differ between standard libraries).
 #pragma once
 

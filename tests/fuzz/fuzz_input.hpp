@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Turning fuzz bytes into a config and clouds. The first bytes pick the config, the rest become points as
 // 16-bit integers scaled to a few tens of metres (so that most inputs reach the later stages instead of
 // stopping at the voxel range check), with some bytes turned into NaN, infinities, huge values and

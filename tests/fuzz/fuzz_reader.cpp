@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for one point-file parser, chosen at compile time by KISSM_FUZZ_FORMAT (ply, pcd, npy,
 // xyz_text, kitti_bin, bin_xyz). Invariants: the parser returns whole points or throws kissm's Failure (Parse);
 // any other exception, a crash or a sanitizer report is a finding. Allocation is bounded by the input

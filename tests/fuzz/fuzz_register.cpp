@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for the whole pipeline through the public C API: a config and two clouds from the
 // bytes (fuzz_input.hpp), one fresh matcher, kissm_register. Invariants: the status is one a caller can
 // get from such inputs; a failed call leaves valid = 0; a valid pose is finite and a proper rotation.

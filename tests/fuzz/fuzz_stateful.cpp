@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // libFuzzer target for one matcher used for a sequence of calls: registrations, features computed and
 // reused, a cancellation request between calls, configs read back. Invariants on top of fuzz_register's:
 // repeating a call on the reused handle gives the identical result, features give the same pose as the

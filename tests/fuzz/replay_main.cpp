@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs a libFuzzer target's LLVMFuzzerTestOneInput over files, without libFuzzer: the committed seed
 // corpus and crash regressions are replayed in every normal CTest run (any compiler, no clang needed).
 //   replay_<target> FILE_OR_DIR...    (exit 0 when every input ran; a finding aborts)

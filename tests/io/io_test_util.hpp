@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers shared by the reader tests: a scratch directory, byte builders for binary files, and checks that
 // a read succeeds with exact coordinates or fails with one exact ErrorKind and a one-line message.
 #pragma once

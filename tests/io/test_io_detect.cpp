@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Format selection (extension, then content), explicit formats, and the file-level failures every format
 // shares: empty files, missing files, directories, unreadable files, unknown format codes.
 #include "io_test_util.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // 125K-point files in every format: exact values, and the read time printed (a single whole-file read and
 // a parse from memory should take a few milliseconds for the binary formats).
 #include "io_test_util.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // .npy reader: format versions 1/2/3, float32/float64 in both byte orders, integer dtypes, C and Fortran
 // order, (N, k >= 3) shapes, and every way a header can be wrong.
 #include "io_test_util.hpp"

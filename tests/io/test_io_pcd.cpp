@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PCD reader: ascii and binary data, extra fields with COUNT > 1, F4 / F8 / integer coordinates, optional
 // header lines, truncation at every byte, malformed headers.
 #include "io_test_util.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PLY reader: ascii / binary little / big endian, every scalar type, skipped properties and list elements
 // before and after the vertex element, truncation at every byte, malformed headers.
 #include "io_test_util.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Headerless float32 readers: KITTI .bin (x y z intensity) and BinXyz (x y z).
 #include "io_test_util.hpp"
 

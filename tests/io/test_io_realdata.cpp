@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The real scans in $KISSM_DATA_DIR (../shared/data): point counts, finiteness, a known first point. Skipped
 // with a message when the directory is absent.
 #include "io_test_util.hpp"

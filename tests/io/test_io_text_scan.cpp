@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bounded number parsers and message quoting every text reader relies on.
 #include "harness.h"
 

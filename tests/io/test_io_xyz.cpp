@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // xyz text reader: separators, comments, extra columns, CRLF, non-finite tokens, .pts count lines, and
 // errors that name the line.
 #include "io_test_util.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Registers every pair listed in $KISSM_DATA_DIR/index.tsv, raw and with the source rotated about its origin
 // by large random rotations (fixed seeds), and checks the pose against the ground truth with the success
 // thresholds of SPEC section 7. LiDAR and indoor pairs must all succeed; object scans (the bunny) must never

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The global operator new and delete of the reliability tests: counts allocations, tracks how many are
 // live, and can refuse one chosen allocation (alloc_hook.hpp). Linked into a test executable, it sees
 // every C++ allocation of the statically linked library.

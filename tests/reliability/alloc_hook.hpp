@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Test-only allocation hook (alloc_hook.cpp replaces the global operator new and delete).
 #pragma once
 

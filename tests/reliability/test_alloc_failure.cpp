@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Allocation failure: the k-th allocation of a call fails, for every k the call makes. Each such call must
 // return KISSM_ERR_OUT_OF_MEMORY (or KISSM_OK when the library could do without that memory), leave no
 // allocation behind, and the next call must give exactly the reference result.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The input-validation matrix: every entry point that takes a cloud (kissm_register as source and as target,
  * kissm_features_compute, kissm_register_features) x cloud contents (NULL, empty, 1-3 points, NaN, Inf,
  * duplicates, collinear, planar, 1e7 m extents, a scene 1e7 m from the origin) x voxel sizes (1e-9, 0.5,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Long run: 10,000 sequential registrations of small clouds on one reused matcher (and every 100th on a
 // fresh one, plus features) must not grow memory: the live allocation count returns to the same value
 // after every call, and the resident set does not creep. Every result equals the first.

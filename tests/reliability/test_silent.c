@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* The library never writes to stdout or stderr: file descriptors 1 and 2 are pointed at a temporary file
  * while good calls, failing calls and multi-threaded calls run (no log callback set), and the file must
  * stay empty. POSIX (dup2). C99. */

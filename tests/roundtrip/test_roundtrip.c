@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Cross-language round trip, C side. Registers the clouds of tests/data (made by
  * tools/make_roundtrip_data.py) as listed in tests/data/golden.json and requires the result to equal the
  * golden values bit for bit: the transform (doubles printed with %.17g, so they parse back exactly),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* Definitions for mini_kissm.h (abidiff_selftest.sh). Nothing here is ever called. */
 #include "mini_kissm.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: MIT */
 /* A miniature kissm.h for abidiff_selftest.sh: each MINI_* macro makes one kind of change to it, so that
  * the self-test can check which changes check_abi.sh (abidiff + kissm.abignore) accepts and which it
  * rejects. Same struct names as kissm.h, because kissm.abignore matches them by name. */

@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Every linter, failing on any finding (run by tools/test.sh, so by CI):
+#   clang-format --dry-run -Werror   src, include, tests, examples (style: .clang-format)
+#   every shell script of the repository, through shellcheck
+#   SPDX lines                       every source file we wrote starts with SPDX-License-Identifier: MIT
+#   .editorconfig basics             no trailing whitespace, a final newline, no tabs in source files
+#   bindings/python/lint.sh          ruff check, ruff format --check, mypy --strict
+#   bindings/rust/lint.sh            cargo fmt --check, cargo clippy --all-targets -- -D warnings
+# Installs clang-format and shellcheck with apt-get when run as root; the Python tools come from PyPI
+# into a venv, the Rust ones with the toolchain (rustup components).
+#
+#   bash tools/lint.sh            all of them
+#   bash tools/lint.sh --fix      apply clang-format in place first (then check everything)
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+cd "$here"
+fix=0
+if [[ ${1:-} == --fix ]]; then fix=1; fi
+
+failed=()
+step() { echo "== lint: $1 =="; }
+fail() {
+  echo "lint: FAIL: $1" >&2
+  failed+=("$1")
+}
+
+# ---- tools -----------------------------------------------------------------------------------------
+need=()
+command -v clang-format >/dev/null || need+=(clang-format)
+command -v shellcheck >/dev/null || need+=(shellcheck)
+if ((${#need[@]})); then
+  if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
+    echo "lint: installing ${need[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
+  else
+    echo "lint: missing ${need[*]} (sudo apt-get install ${need[*]})" >&2
+    exit 1
+  fi
+fi
+
+# Files git knows (tracked and new, not ignored): the lint sees what a clean clone has.
+files() { git ls-files --cached --others --exclude-standard -- "$@" | while read -r f; do [[ -f $f ]] && echo "$f"; done; }
+
+# ---- C and C++ layout --------------------------------------------------------------------------------
+step "clang-format ($(clang-format --version | sed 's/.*version \([0-9.]*\).*/\1/'))"
+mapfile -t cxx < <(files 'src/*.c' 'src/*.h' 'src/*.cpp' 'src/*.hpp' 'include/*.h' 'tests/*.c' 'tests/*.h' \
+  'tests/*.cpp' 'tests/*.hpp' 'examples/*.c' 'examples/*.h' 'examples/*.cpp')
+if ((fix)); then clang-format -i "${cxx[@]}"; fi
+if ! clang-format --dry-run -Werror "${cxx[@]}"; then
+  fail "clang-format (bash tools/lint.sh --fix applies it)"
+fi
+
+# ---- shell scripts -----------------------------------------------------------------------------------
+step "shellcheck ($(shellcheck --version | sed -n 's/^version: //p'))"
+mapfile -t scripts < <(files '*.sh' '.ci/run')
+if ! shellcheck -x "${scripts[@]}"; then fail "shellcheck"; fi
+
+# ---- licence lines -----------------------------------------------------------------------------------
+# Every file we wrote that can hold a comment; generated and third-party files are named here.
+step "SPDX-License-Identifier lines"
+mapfile -t sources < <(files '*.c' '*.h' '*.cpp' '*.hpp' '*.py' '*.rs' '*.sh' '*.cmake' '*.in' 'CMakeLists.txt' \
+  '*.toml' '.ci/run' '.clang-format' '.editorconfig' | grep -v -e '^third_party/' -e '^tests/fuzz/corpus/')
+missing=0
+for f in "${sources[@]}"; do
+  if ! head -n 3 "$f" | grep -q 'SPDX-License-Identifier: MIT'; then
+    echo "$f: no 'SPDX-License-Identifier: MIT' in its first three lines" >&2
+    missing=1
+  fi
+done
+if ((missing)); then fail "SPDX lines"; fi
+
+# ---- whitespace (.editorconfig) -----------------------------------------------------------------------
+step "whitespace (.editorconfig)"
+mapfile -t texts < <(files '*.c' '*.h' '*.cpp' '*.hpp' '*.py' '*.rs' '*.sh' '*.cmake' '*.in' '*.toml' '*.json' \
+  '*.txt' '*.md' '*.map' '*.yml' 'CMakeLists.txt' '.ci/run' | grep -v -e '^third_party/' -e '^tests/fuzz/corpus/' -e '^bench/results/')
+ws=0
+for f in "${texts[@]}"; do
+  if [[ -s $f && $(tail -c 1 "$f" | od -An -c | tr -d ' ') != '\n' ]]; then
+    echo "$f: no newline at the end of the file" >&2
+    ws=1
+  fi
+  case $f in
+    *.md) ;; # two trailing spaces are a line break in Markdown
+    *) if grep -n '[[:blank:]]$' "$f" | head -3 | sed "s|^|$f:|" | grep .; then ws=1; fi ;;
+  esac
+  case $f in
+    *.c | *.h | *.cpp | *.hpp | *.py | *.rs | *.sh | *.toml | *.cmake | CMakeLists.txt)
+      if grep -n $'\t' "$f" | head -3 | sed "s|^|$f: tab: |" | grep .; then ws=1; fi
+      ;;
+  esac
+done
+if ((ws)); then fail "whitespace"; fi
+
+# ---- the bindings ------------------------------------------------------------------------------------
+for sub in bindings/python/lint.sh bindings/rust/lint.sh; do
+  if [[ -f $sub ]]; then
+    step "$sub"
+    if ! bash "$sub"; then fail "$sub"; fi
+  fi
+done
+
+if ((${#failed[@]})); then
+  echo "lint: ${#failed[@]} check(s) failed: ${failed[*]}" >&2
+  exit 1
+fi
+echo "lint: all checks passed"
