@@ -8,12 +8,10 @@
 #include <cstring>
 #include <vector>
 
+#include "detail_namespace.hpp"
 #include "uninitialized.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // A borrowed view of the caller's xyz array (float or double, any byte stride).
 struct PointsView {
@@ -108,6 +106,4 @@ struct Correspondence {
     float score; // ratio d0^2 / d1^2 (lower is more distinctive)
 };
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -7,10 +7,7 @@
 
 #include "radix_sort.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b, float noise_bound,
                             RunContext &ctx) {
@@ -108,6 +105,4 @@ sample_induced_edges(const CsrGraph &g, const std::vector<std::uint32_t> &vertic
     return out;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -5,12 +5,10 @@
 #include <utility>
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // Undirected graph in compressed sparse rows: the neighbours of v are adj[offsets[v] .. offsets[v+1]),
 // in ascending order, without self loops.
@@ -32,6 +30,4 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
 std::vector<std::pair<std::uint32_t, std::uint32_t>>
 sample_induced_edges(const CsrGraph &g, const std::vector<std::uint32_t> &vertices, std::size_t max_pairs);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -6,10 +6,9 @@
 #include <stdexcept>
 #include <string>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 enum class ErrorKind {
     InvalidArgument,
@@ -38,6 +37,4 @@ private:
 
 [[noreturn]] inline void fail(ErrorKind kind, const std::string &message) { throw Failure(kind, message); }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

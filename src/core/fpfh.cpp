@@ -15,10 +15,7 @@
 #  define KISSM_FPFH_SSE2 0
 #endif
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -382,6 +379,4 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
     return out;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

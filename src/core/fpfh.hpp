@@ -3,12 +3,10 @@
 #pragma once
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 constexpr int kBinsPerFeature = 11;
 
@@ -31,6 +29,4 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
 Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
                          std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power, RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -8,10 +8,7 @@
 #include <limits>
 #include <numeric>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -311,6 +308,4 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
     return out;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

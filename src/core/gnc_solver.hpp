@@ -8,12 +8,10 @@
 #include <utility>
 #include <vector>
 
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 struct SolverParams {
     double noise_bound; // inlier bound on one correspondence, metres
@@ -67,6 +65,4 @@ std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs);
 SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
                         std::vector<IndexPair> pairs, const SolverParams &params, RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

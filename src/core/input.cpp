@@ -6,10 +6,7 @@
 
 #include "failure.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -65,6 +62,4 @@ InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const s
     return cloud;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

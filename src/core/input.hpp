@@ -5,18 +5,14 @@
 #include <string>
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "params.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // `name` ("source", "target", "cloud") is used in error messages. Under NonFinitePolicy::Reject the error
 // names the first non-finite point, whatever the thread count.
 InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const std::string &name, RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -3,10 +3,7 @@
 
 #include <algorithm>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 std::vector<std::uint32_t> core_numbers(const CsrGraph &g) {
     const std::size_t n = g.num_vertices();
@@ -63,6 +60,4 @@ std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core)
     return out;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

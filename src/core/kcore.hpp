@@ -3,11 +3,9 @@
 #pragma once
 
 #include "compat_graph.hpp"
+#include "detail_namespace.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // Core number of every vertex.
 std::vector<std::uint32_t> core_numbers(const CsrGraph &g);
@@ -16,6 +14,4 @@ std::vector<std::uint32_t> core_numbers(const CsrGraph &g);
 // empty graph, in which case no vertex is returned).
 std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -13,10 +13,7 @@
 #  define KISSM_KDTREE_SSE2 0
 #endif
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -310,6 +307,4 @@ int ProjectedKdTree::nearest(const float *query, int k, std::uint32_t *index, fl
     return s.count;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

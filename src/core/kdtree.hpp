@@ -6,10 +6,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 // A kd-tree built for this one job: low dimension, a few dozen thousand to a few million points, k <= 16.
 // Leaves hold their points contiguously in blocks of kLane as structure of arrays, so a leaf is scanned by
@@ -74,6 +73,4 @@ private:
     float box_lo_[kDim] = {}, box_hi_[kDim] = {};
 };
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

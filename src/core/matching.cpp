@@ -10,10 +10,7 @@
 
 #include "kdtree.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -266,6 +263,4 @@ std::vector<Correspondence> match_descriptors(const Descriptors &source, const D
     return out;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

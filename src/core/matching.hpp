@@ -3,12 +3,10 @@
 #pragma once
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 struct MatchParams {
     double ratio_test;       // on squared distances; >= 1 disables the test
@@ -22,6 +20,4 @@ struct MatchParams {
 std::vector<Correspondence> match_descriptors(const Descriptors &source, const Descriptors &target,
                                               const MatchParams &params, RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -14,10 +14,7 @@
 #  define KISSM_NEIGHBORS_SSE2 0
 #endif
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -164,6 +161,4 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
     return nb;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -4,18 +4,14 @@
 #pragma once
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // Neighbours strictly closer than `radius`, the point itself included. Uses a uniform grid of cell size
 // `radius` (the input is voxelised, so cells hold a bounded number of points): 27 cells per query.
 // Deterministic order: by cell, then by point index.
 Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

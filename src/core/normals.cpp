@@ -3,10 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 void symmetric_eigen3(const Eigen::Matrix3d &cov, Eigen::Vector3d &eigenvalues_desc, Eigen::Vector3d &smallest_vec) {
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
@@ -81,6 +78,4 @@ std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Norma
     return keypoints;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

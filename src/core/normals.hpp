@@ -4,12 +4,10 @@
 #pragma once
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 struct NormalParams {
     float normal_radius;
@@ -31,6 +29,4 @@ std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Norma
 // (closed form; no iterative or dynamic-size solver). Exposed for tests.
 void symmetric_eigen3(const Eigen::Matrix3d &cov, Eigen::Vector3d &eigenvalues_desc, Eigen::Vector3d &smallest_vec);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

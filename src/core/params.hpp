@@ -6,10 +6,9 @@
 #include <cstdint>
 #include <functional>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 enum class NonFinitePolicy { Reject, Drop };
 enum class ViewpointMode { Fixed, CloudCenter };
@@ -40,6 +39,4 @@ private:
     double capped(double b) const { return (noise_bound_max > 0.0 && b > noise_bound_max) ? noise_bound_max : b; }
 };
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -3,10 +3,7 @@
 
 #include <algorithm>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 void radix_sort_by_key(std::vector<KeyIndex> &records) {
     const std::size_t n = records.size();
@@ -31,6 +28,4 @@ void radix_sort_by_key(std::vector<KeyIndex> &records) {
     }
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -7,10 +7,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 struct KeyIndex {
     std::uint64_t key;
@@ -20,6 +19,4 @@ struct KeyIndex {
 // Sorts by key; records with equal keys keep their relative order.
 void radix_sort_by_key(std::vector<KeyIndex> &records);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

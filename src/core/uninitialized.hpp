@@ -11,10 +11,9 @@
 #include <utility>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 template <class T>
 struct DefaultInitAllocator : std::allocator<T> {
@@ -39,6 +38,4 @@ struct DefaultInitAllocator : std::allocator<T> {
 template <class T>
 using UninitVector = std::vector<T, DefaultInitAllocator<T>>;
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -5,10 +5,7 @@
 
 #include "normals.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::size_t min_inliers, double noise_bound,
                         const Eigen::Matrix3d &rotation, const Eigen::Vector3d &translation) {
@@ -35,6 +32,4 @@ Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::
     return v;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

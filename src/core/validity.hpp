@@ -5,10 +5,9 @@
 #include <Eigen/Core>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 enum class Reason {
     None = 0,
@@ -31,6 +30,4 @@ struct Validity {
 Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::size_t min_inliers, double noise_bound,
                         const Eigen::Matrix3d &rotation, const Eigen::Vector3d &translation);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -9,10 +9,7 @@
 #include "failure.hpp"
 #include "radix_sort.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -244,6 +241,4 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     return out;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -5,12 +5,10 @@
 #include <string>
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "run_context.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // At most this many voxels per axis: keys then pack into 63 bits, and single-precision local coordinates
 // stay well below the voxel size (half the extent carries at most v/16 of rounding).
@@ -22,6 +20,4 @@ constexpr std::uint64_t kMaxVoxelsPerAxis = std::uint64_t(1) << 21;
 // Throws Failure(VoxelRange) when the extent needs more than kMaxVoxelsPerAxis voxels on an axis.
 VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -6,10 +6,9 @@
 #include <cstdint>
 #include <cstring>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "core/detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 enum class Scalar { I8, U8, I16, U16, I32, U32, I64, U64, F32, F64 };
 
@@ -125,6 +124,4 @@ inline bool load_count(const char *p, Scalar s, bool swap, std::uint64_t &out) {
     return true;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -9,10 +9,7 @@
 #include <memory>
 #include <system_error>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -69,6 +66,4 @@ std::string read_file_bytes(const std::string &path) {
     return bytes;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -7,10 +7,9 @@
 #include <cstdint>
 #include <string>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "core/detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 // The file's bytes. Throws Failure(Io) naming the path and the OS reason when it cannot be opened or read
 // (missing, a directory, no permission, read error).
@@ -32,6 +31,4 @@ inline bool checked_add(std::uint64_t a, std::uint64_t b, std::uint64_t &out) {
     return true;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -7,10 +7,9 @@
 #include <string_view>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "core/detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 std::vector<double> parse_ply(const std::string &path, std::string_view bytes);
 std::vector<double> parse_pcd(const std::string &path, std::string_view bytes);
@@ -19,6 +18,4 @@ std::vector<double> parse_bin_xyz(const std::string &path, std::string_view byte
 std::vector<double> parse_npy(const std::string &path, std::string_view bytes);
 std::vector<double> parse_xyz_text(const std::string &path, std::string_view bytes);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // NumPy .npy (format versions 1.0, 2.0, 3.0): a 2-D array of shape (N, k >= 3), C or Fortran order; the
 // first three columns are x, y, z.
+#include "core/detail_namespace.hpp"
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"
 #include "io/format_readers.hpp"
@@ -11,10 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -231,6 +229,4 @@ std::vector<double> parse_npy(const std::string &path, std::string_view bytes) {
     return xyz;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

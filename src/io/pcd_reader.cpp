@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // PCD (DATA ascii and binary): the x, y, z fields; every other field is skipped by its SIZE and COUNT.
+#include "core/detail_namespace.hpp"
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"
 #include "io/format_readers.hpp"
@@ -9,10 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -296,6 +294,4 @@ std::vector<double> parse_pcd(const std::string &path, std::string_view bytes) {
     return read_ascii(path, bytes, header, columns);
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

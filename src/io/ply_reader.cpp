@@ -4,6 +4,7 @@
 // Elements after `vertex` are never read: they cannot change the points, and the Stanford scans carry a
 // 200K-record range_grid list element after theirs. Elements before it are skipped record by record
 // (list lengths vary), with every length checked against the bytes that are left.
+#include "core/detail_namespace.hpp"
 #include "core/failure.hpp"
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"
@@ -14,10 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -399,6 +397,4 @@ std::vector<double> parse_ply(const std::string &path, std::string_view bytes) {
     return body.read_vertices(header.elements[vertex], slots);
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Headerless little-endian float32 records: KITTI velodyne scans (x y z intensity) and bare x y z triples.
+#include "core/detail_namespace.hpp"
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"
 #include "io/format_readers.hpp"
@@ -7,10 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -43,6 +41,4 @@ std::vector<double> parse_bin_xyz(const std::string &path, std::string_view byte
     return read_float_records(path, bytes, 3, "float32 x y z");
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

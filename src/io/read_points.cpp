@@ -12,10 +12,7 @@
 #include <string>
 #include <string_view>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -119,6 +116,4 @@ std::vector<double> read_points_file(const std::string &path, FileFormat format)
     fail(ErrorKind::Internal, path + ": format detection left no format");
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

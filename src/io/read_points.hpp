@@ -7,12 +7,11 @@
 #include <string>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "core/detail_namespace.hpp"
 
-// Values equal the KISSM_FORMAT_* constants of kissm.h.
+KISSM_DETAIL_BEGIN
+
+// The readers (src/capi/files.cpp maps the KISSM_FORMAT_* constants of kissm.h to these).
 enum class FileFormat { Auto = 0, Ply = 1, Pcd = 2, KittiBin = 3, Npy = 4, Xyz = 5, BinXyz = 6 };
 
 // Reads the file's points as packed x y z doubles (3 * N values). Non-finite values are returned as-is.
@@ -22,6 +21,4 @@ enum class FileFormat { Auto = 0, Ply = 1, Pcd = 2, KittiBin = 3, Npy = 4, Xyz =
 // ones Failure(Parse). A well-formed file with no points gives an empty vector.
 std::vector<double> read_points_file(const std::string &path, FileFormat format);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -6,10 +6,7 @@
 #include <limits>
 #include <system_error>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -152,6 +149,4 @@ bool TokenCursor::next(const char *&token_begin, const char *&token_end) {
     return true;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -8,10 +8,9 @@
 #include <string_view>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "core/detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
 
@@ -53,6 +52,4 @@ struct TokenCursor {
     bool next(const char *&token_begin, const char *&token_end);
 };
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Plain-text point lists (.xyz, .txt, .pts, .asc): one point per line, the first three of any number of
 // whitespace- or comma-separated columns are x, y, z; '#' starts a comment line.
+#include "core/detail_namespace.hpp"
 #include "io/file_bytes.hpp"
 #include "io/format_readers.hpp"
 #include "io/text_scan.hpp"
@@ -10,10 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -69,6 +67,4 @@ std::vector<double> parse_xyz_text(const std::string &path, std::string_view byt
     return xyz;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END
