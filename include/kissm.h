@@ -229,6 +229,12 @@ typedef struct kissm_result {
     /* New fields are only ever appended here. */
 } kissm_result;
 
+/* Prepares a result for a registration call: writes struct_size and leaves the rest as a failed call
+ * does (valid = 0, counts 0, NaN pose). Pass sizeof(kissm_result). Optional (setting struct_size by hand
+ * is enough); fails with KISSM_ERR_NULL_ARGUMENT or KISSM_ERR_STRUCT_SIZE (below the first published
+ * layout, or above 65536) and then writes nothing. */
+KISSM_API int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
+
 /* ------------------------------------------------------------------------------------------------ */
 /* Matcher                                                                                          */
 /* ------------------------------------------------------------------------------------------------ */

@@ -16,6 +16,13 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/validity.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
 )
+# The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).
 set(KISSM_CAPI_SOURCES
-  ${CMAKE_CURRENT_LIST_DIR}/capi/kissm_capi.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/errors.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/config.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/points.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/result.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/matcher.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/features.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/files.cpp
 )

@@ -15,15 +15,9 @@
 #include "normals.hpp"
 #include "voxelize.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
-
-// Stage progress codes (equal to KISSM_STAGE_*).
-constexpr int kStageVoxelize = 1, kStageFeatures = 2, kStageMatching = 3, kStagePruning = 4, kStageSolver = 5;
 
 // FPFH neighbours are weighted by (v / d)^2: on ../shared/data (10 pairs x 4 rotations) 1/d^2 gave 38/40
 // successes and no wrong valid pose, 1/d gave 36/40 with two wrong poses marked valid (docs/parameters.md).
@@ -61,7 +55,7 @@ void voxelize_cloud(const PointsView &view, const Params &params, const std::str
                     CloudFeatures &f, RunContext &ctx) {
     f.params = params;
     Stopwatch clock;
-    ctx.checkpoint(kStageVoxelize, progress);
+    ctx.checkpoint(Stage::Voxelize, progress);
     InputCloud input = gather_points(view, params.nonfinite, name, ctx);
     f.num_points = input.num_given;
     f.num_nonfinite = input.num_nonfinite;
@@ -78,7 +72,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
                      CloudFeatures &f, RunContext &ctx) {
     Stopwatch clock;
     auto progress = [&](double part) {
-        ctx.checkpoint(kStageFeatures, progress_from + part * (progress_to - progress_from));
+        ctx.checkpoint(Stage::Features, progress_from + part * (progress_to - progress_from));
     };
     progress(0.0);
     const auto &pts = f.voxels.points;
@@ -149,7 +143,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     }
 
     Stopwatch clock;
-    ctx.checkpoint(kStageMatching, 0.0);
+    ctx.checkpoint(Stage::Matching, 0.0);
     MatchParams mp{params.ratio_test, params.max_correspondences};
     const std::vector<Correspondence> matches = match_descriptors(source.descriptors, target.descriptors, mp, ctx);
     r.num_initial_correspondences = matches.size();
@@ -159,7 +153,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         return r;
     }
 
-    ctx.checkpoint(kStagePruning, 0.0);
+    ctx.checkpoint(Stage::Pruning, 0.0);
     std::vector<Vec3f> a(matches.size()), b(matches.size());
     for (std::size_t k = 0; k < matches.size(); ++k) {
         a[k] = source.voxels.points[source.descriptors.keypoint[matches[k].source]];
@@ -183,7 +177,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         return r;
     }
 
-    ctx.checkpoint(kStageSolver, 0.0);
+    ctx.checkpoint(Stage::Solver, 0.0);
     std::vector<Eigen::Vector3d> pa(core.size()), pb(core.size());
     for (std::size_t k = 0; k < core.size(); ++k) {
         pa[k] = a[core[k]].cast<double>();
@@ -228,10 +222,28 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
             << r.num_final_inliers;
         ctx.log(LogLevel::Info, msg.str());
     }
-    ctx.checkpoint(kStageSolver, 1.0);
+    ctx.checkpoint(Stage::Solver, 1.0);
     return r;
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+Registration register_points(const PointsView &source, const PointsView &target, const Params &params,
+                             RunContext &ctx) {
+    const auto clouds = describe_pair(source, target, params, ctx);
+    Registration r = register_described(clouds.first, clouds.second, params, ctx);
+    r.time_voxelize_ms = clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
+    r.time_features_ms = clouds.first.time_features_ms + clouds.second.time_features_ms;
+    return r;
+}
+
+Registration register_features(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
+                               RunContext &ctx) {
+    for (const auto *f : {&source, &target}) {
+        if (!same_descriptor_settings(f->params, params))
+            fail(ErrorKind::FeaturesMismatch, std::string(f == &source ? "source" : "target") +
+                                                  " features were computed with descriptor settings (voxel size, "
+                                                  "radii, tau, viewpoint) that differ from the matcher's");
+    }
+    return register_described(source, target, params, ctx);
+}
+
+KISSM_DETAIL_END

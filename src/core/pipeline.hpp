@@ -8,14 +8,12 @@
 #include <utility>
 
 #include "cloud.hpp"
+#include "detail_namespace.hpp"
 #include "params.hpp"
 #include "run_context.hpp"
 #include "validity.hpp"
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 // A cloud described once: voxels (local frame) and keypoint descriptors. Immutable after construction.
 struct CloudFeatures {
@@ -59,6 +57,12 @@ bool same_descriptor_settings(const Params &a, const Params &b);
 Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
                                 RunContext &ctx);
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+// The operations behind the C API's entry points, one call each.
+// kissm_register: both clouds described, then registered; their voxelise and feature times included.
+Registration register_points(const PointsView &source, const PointsView &target, const Params &params, RunContext &ctx);
+// kissm_register_features: Failure(FeaturesMismatch) unless both were described under params' descriptor
+// settings. Voxelise and feature times are 0 (nothing was described in this call).
+Registration register_features(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
+                               RunContext &ctx);
+
+KISSM_DETAIL_END

@@ -14,10 +14,7 @@
 #  include <immintrin.h>
 #endif
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+KISSM_DETAIL_BEGIN
 
 namespace {
 
@@ -162,7 +159,7 @@ RunContext::~RunContext() { delete pool_; }
 
 bool RunContext::cancelled() const { return cancel_flag_ && cancel_flag_->load(std::memory_order_relaxed) != 0; }
 
-void RunContext::checkpoint(int stage, double fraction) {
+void RunContext::checkpoint(Stage stage, double fraction) {
     if (hooks_.progress && hooks_.progress(stage, fraction))
         fail(ErrorKind::Cancelled, "cancelled by the progress callback");
     if (cancelled()) fail(ErrorKind::Cancelled, "cancelled by kissm_cancel()");
@@ -205,6 +202,4 @@ void RunContext::parallel_for(std::size_t n, std::size_t chunk,
     if (cancelled()) fail(ErrorKind::Cancelled, "cancelled by kissm_cancel()");
 }
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

@@ -12,18 +12,20 @@
 #include <functional>
 #include <string>
 
-namespace kissm {
-// Versioned so that two kissm versions linked statically into one program never share a symbol.
-inline namespace v0_1 {
-namespace detail {
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
 
 class ThreadPool;
 
-enum class LogLevel { Error = 1, Warn = 2, Info = 3, Debug = 4 };
+enum class LogLevel { Error, Warn, Info, Debug };
+
+// The stages, in the order a registration runs them (progress never goes back).
+enum class Stage { Voxelize, Features, Matching, Pruning, Solver };
 
 struct Hooks {
     // Returns true to cancel. Called on the calling thread only.
-    std::function<bool(int stage, double fraction)> progress;
+    std::function<bool(Stage stage, double fraction)> progress;
     std::function<void(LogLevel, const std::string &)> log;
     LogLevel log_level = LogLevel::Warn;
 };
@@ -44,7 +46,7 @@ public:
     void parallel_for(std::size_t n, std::size_t chunk, const std::function<void(std::size_t, std::size_t)> &body);
 
     // Stage bookkeeping: reports progress and throws Failure(Cancelled) if asked to stop.
-    void checkpoint(int stage, double fraction);
+    void checkpoint(Stage stage, double fraction);
     bool cancelled() const;
 
     void log(LogLevel level, const std::string &message) const;
@@ -59,6 +61,4 @@ private:
     ThreadPool *pool_ = nullptr;
 };
 
-} // namespace detail
-} // namespace v0_1
-} // namespace kissm
+KISSM_DETAIL_END

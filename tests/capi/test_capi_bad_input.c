@@ -57,6 +57,8 @@ static void test_null_pointers(void) {
     CHECK(msg_has("matcher"));
     CHECK_EQ_INT(kissm_get_config(g_m, NULL), KISSM_ERR_NULL_ARGUMENT);
     CHECK(msg_has("out_config"));
+    CHECK_EQ_INT(kissm_result_init(NULL, (uint32_t)sizeof(kissm_result)), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("result"));
 
     /* kissm_register: the result is overwritten whenever it is usable. */
     scn_result_poison(&r);
@@ -716,6 +718,10 @@ static void test_struct_sizes(void) {
             c.struct_size = huge[i];
             CHECK_EQ_INT(kissm_get_config(g_m, &c), KISSM_ERR_STRUCT_SIZE);
             CHECK_EQ_INT(c.struct_size, huge[i]);
+            memset(&r, 0x5A, sizeof(r));
+            memcpy(before, &r, sizeof(r));
+            CHECK_EQ_INT(kissm_result_init(&r, huge[i]), KISSM_ERR_STRUCT_SIZE);
+            CHECK(memcmp(&r, before, sizeof(r)) == 0);
             memset(&r, 0x5A, sizeof(r));
             r.struct_size = huge[i];
             memcpy(before, &r, sizeof(r));

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* Versions, ABI sizes, config defaults, create/destroy, get_config, status and reason strings, and the
- * thread-local last error message. C99. */
+/* Versions, ABI sizes, config defaults, create/destroy, get_config, status and reason strings, the
+ * thread-local last error message and kissm_result_init. C99. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -367,6 +367,44 @@ static void test_last_error_message(void) {
     CHECK(strcmp(msg, kissm_last_error_message()) == 0);
 }
 
+/* kissm_result_init: struct_size as given, everything else as a failed call leaves it; bad sizes write nothing. */
+static void test_result_init(void) {
+    unsigned char buf[sizeof(kissm_result) + 64], before[sizeof(buf)];
+    kissm_result *r = (kissm_result *)(void *)buf;
+    size_t i;
+    const uint32_t bad_sizes[] = {0u, 4u, (uint32_t)sizeof(kissm_result) - 8u, 65537u, 0xFFFFFFFFu};
+
+    memset(buf, 0x5a, sizeof(buf));
+    CHECK_EQ_INT(kissm_result_init(r, (uint32_t)sizeof(kissm_result)), KISSM_OK);
+    CHECK(strcmp(kissm_last_error_message(), "") == 0);
+    CHECK_EQ_INT((int)r->struct_size, (int)sizeof(kissm_result));
+    CHECK_EQ_INT(r->valid, 0);
+    CHECK_EQ_INT(r->reason, KISSM_REASON_NONE);
+    for (i = 0; i < 16; ++i) CHECK(isnan(r->transform[i]));
+    for (i = 0; i < 9; ++i) CHECK(isnan(r->rotation[i]));
+    for (i = 0; i < 3; ++i) CHECK(isnan(r->translation[i]));
+    CHECK(isnan(r->residual_rms));
+    CHECK(r->num_source_points == 0 && r->num_final_inliers == 0 && r->max_core_number == 0);
+    CHECK(r->inlier_ratio == 0.0 && r->time_total_ms == 0.0);
+    CHECK(buf[sizeof(kissm_result)] == 0x5a); /* nothing written past the size given */
+
+    /* A newer caller's larger struct: its unknown tail is zeroed. */
+    memset(buf, 0x5a, sizeof(buf));
+    CHECK_EQ_INT(kissm_result_init(r, (uint32_t)sizeof(buf)), KISSM_OK);
+    CHECK_EQ_INT((int)r->struct_size, (int)sizeof(buf));
+    for (i = sizeof(kissm_result); i < sizeof(buf); ++i) CHECK(buf[i] == 0);
+
+    CHECK_EQ_INT(kissm_result_init(NULL, (uint32_t)sizeof(kissm_result)), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "kissm_result_init: result is NULL") != NULL);
+    for (i = 0; i < sizeof(bad_sizes) / sizeof(bad_sizes[0]); ++i) {
+        memset(buf, 0x33, sizeof(buf));
+        memcpy(before, buf, sizeof(buf));
+        CHECK_EQ_INT(kissm_result_init(r, bad_sizes[i]), KISSM_ERR_STRUCT_SIZE);
+        CHECK(memcmp(buf, before, sizeof(buf)) == 0);
+        CHECK(strstr(kissm_last_error_message(), "kissm_result_init: struct_size is ") != NULL);
+    }
+}
+
 int main(void) {
     RUN_TEST(test_versions);
     RUN_TEST(test_abi_sizeof);
@@ -375,5 +413,6 @@ int main(void) {
     RUN_TEST(test_status_strings);
     RUN_TEST(test_reason_strings);
     RUN_TEST(test_last_error_message);
+    RUN_TEST(test_result_init);
     return TEST_SUMMARY();
 }

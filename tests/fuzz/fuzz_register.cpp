@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
     }
     const kissm_points s = source.view(), t = target.view();
     kissm_result r;
-    r.struct_size = sizeof r;
+    if (kissm_result_init(&r, sizeof r) != KISSM_OK) std::abort();
     const int32_t st = kissm_register(m, &s, &t, &r);
     if (std::getenv("KISSM_FUZZ_VERBOSE") != nullptr) // to see what the seed corpus reaches
         std::fprintf(stderr, "  %llu / %llu points: status %d, valid %d, reason %d, %llu final inliers\n",

@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
         const int a = op % 3, b = (op / 3) % 3;
         const kissm_points pa = clouds[a].view(), pb = clouds[b].view();
         kissm_result r;
-        r.struct_size = sizeof r;
+        require(kissm_result_init(&r, sizeof r) == KISSM_OK);
         switch ((op >> 4) % 5) {
         case 0: { // register; again later must be identical
             const int32_t st = kissm_register(m, &pa, &pb, &r);

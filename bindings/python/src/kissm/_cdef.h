@@ -147,6 +147,8 @@ typedef struct kissm_result {
     double time_total_ms;
 } kissm_result;
 
+int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
+
 typedef struct kissm_matcher kissm_matcher;
 
 int32_t kissm_create(const kissm_config *config, kissm_matcher **out_matcher);

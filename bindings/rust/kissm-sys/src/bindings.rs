@@ -424,6 +424,13 @@ const _: () = {
         "Offset of field: kissm_result::time_total_ms",
     ][::core::mem::offset_of!(kissm_result, time_total_ms) - 432usize];
 };
+extern "C" {
+    /** Prepares a result for a registration call: writes struct_size and leaves the rest as a failed call
+ does (valid = 0, counts 0, NaN pose). Pass sizeof(kissm_result). Optional (setting struct_size by hand
+ is enough); fails with KISSM_ERR_NULL_ARGUMENT or KISSM_ERR_STRUCT_SIZE (below the first published
+ layout, or above 65536) and then writes nothing.*/
+    pub fn kissm_result_init(result: *mut kissm_result, struct_size: u32) -> i32;
+}
 /// Mutable; used by one thread at a time (kissm_cancel excepted). Distinct matchers run concurrently.
 #[repr(C)]
 #[derive(Debug)]

@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: MIT
+// kissm_config: defaults (from the core's Params, stated once), validation with messages naming the field,
+// and the conversion to the core's Params and Hooks.
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "capi/boundary.hpp"
+#include "capi/conversions.hpp"
+
+KISSM_DETAIL_BEGIN
+namespace capi {
+
+namespace {
+
+// The fields with one name and one meaning in kissm_config and Params: copied by name both ways.
+// (viewpoint, nonfinite_policy and viewpoint_mode have other types in the core and are converted by hand.)
+#define KISSM_SAME_FIELDS(X)                                                                                           \
+  X(num_threads)                                                                                                       \
+  X(voxel_size)                                                                                                        \
+  X(normal_radius_gain)                                                                                                \
+  X(fpfh_radius_gain)                                                                                                  \
+  X(max_linearity)                                                                                                     \
+  X(ratio_test)                                                                                                        \
+  X(prune_noise_bound_gain)                                                                                            \
+  X(solver_noise_bound_gain)                                                                                           \
+  X(noise_bound_max)                                                                                                   \
+  X(min_normal_neighbors)                                                                                              \
+  X(max_correspondences)                                                                                               \
+  X(min_inliers)
+
+// Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
+constexpr int32_t log_code(LogLevel level) {
+    switch (level) {
+    case LogLevel::Error: return KISSM_LOG_ERROR;
+    case LogLevel::Warn: return KISSM_LOG_WARN;
+    case LogLevel::Info: return KISSM_LOG_INFO;
+    case LogLevel::Debug: return KISSM_LOG_DEBUG;
+    }
+    return KISSM_LOG_WARN;
+}
+
+LogLevel log_level_of(int32_t code) {
+    switch (code) {
+    case KISSM_LOG_ERROR: return LogLevel::Error;
+    case KISSM_LOG_INFO: return LogLevel::Info;
+    case KISSM_LOG_DEBUG: return LogLevel::Debug;
+    default: return LogLevel::Warn;
+    }
+}
+
+// Stages of the core and of kissm.h, as the progress callback sees them.
+constexpr int32_t stage_code(Stage stage) {
+    switch (stage) {
+    case Stage::Voxelize: return KISSM_STAGE_VOXELIZE;
+    case Stage::Features: return KISSM_STAGE_FEATURES;
+    case Stage::Matching: return KISSM_STAGE_MATCHING;
+    case Stage::Pruning: return KISSM_STAGE_PRUNING;
+    case Stage::Solver: return KISSM_STAGE_SOLVER;
+    }
+    return KISSM_STAGE_SOLVER;
+}
+static_assert(stage_code(Stage::Voxelize) == 1 && stage_code(Stage::Solver) == 5, "stage codes are pinned");
+static_assert(log_code(LogLevel::Error) == 1 && log_code(LogLevel::Debug) == 4, "log levels are pinned");
+
+constexpr int32_t kMaxThreads = 1024;
+constexpr int32_t kMaxCorrespondences = 100000;
+
+void require_range(double v, double lo, double hi, bool lo_open, const char *field) {
+    const bool good = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi;
+    if (!good)
+        fail(ErrorKind::InvalidArgument, std::string("config.") + field + " is " + number(v) + "; it must be in " +
+                                             (lo_open ? "(" : "[") + number(lo) + ", " + number(hi) + "]");
+}
+
+void require_int(int64_t v, int64_t lo, int64_t hi, const char *field) {
+    if (v < lo || v > hi)
+        fail(ErrorKind::InvalidArgument, std::string("config.") + field + " is " + std::to_string(v) +
+                                             "; it must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                                             "]");
+}
+
+} // namespace
+
+kissm_config default_config() {
+    const Params p;
+    const Hooks h;
+    kissm_config c;
+    std::memset(&c, 0, sizeof(c)); // callbacks and user data NULL, reserved bytes zero
+    c.struct_size = sizeof(kissm_config);
+#define KISSM_FROM_PARAMS(field) c.field = p.field;
+    KISSM_SAME_FIELDS(KISSM_FROM_PARAMS)
+#undef KISSM_FROM_PARAMS
+    for (int i = 0; i < 3; ++i) c.viewpoint[i] = p.viewpoint[static_cast<std::size_t>(i)];
+    c.nonfinite_policy = p.nonfinite == NonFinitePolicy::Drop ? KISSM_NONFINITE_DROP : KISSM_NONFINITE_REJECT;
+    c.viewpoint_mode =
+        p.viewpoint_mode == ViewpointMode::CloudCenter ? KISSM_VIEWPOINT_CLOUD_CENTER : KISSM_VIEWPOINT_FIXED;
+    c.log_level = log_code(h.log_level);
+    return c;
+}
+
+kissm_config validated_config(const kissm_config *given) {
+    kissm_config c = default_config();
+    if (given == nullptr) return c;
+    check_struct_size("config->struct_size", given->struct_size, sizeof(kissm_config), "kissm_config", given);
+    std::memcpy(&c, given, sizeof(kissm_config));
+    c.struct_size = sizeof(kissm_config);
+
+    require_int(c.num_threads, 0, kMaxThreads, "num_threads");
+    if (!(std::isfinite(c.voxel_size) && c.voxel_size > 0.0))
+        fail(ErrorKind::InvalidArgument,
+             "config.voxel_size is " + number(c.voxel_size) + "; it must be a finite length > 0");
+    require_range(c.fpfh_radius_gain, 1.5, 50.0, false, "fpfh_radius_gain");
+    require_range(c.normal_radius_gain, 0.0, c.fpfh_radius_gain, true, "normal_radius_gain");
+    require_range(c.max_linearity, 0.0, 1.0, true, "max_linearity");
+    require_range(c.ratio_test, 0.0, 1.0, true, "ratio_test");
+    require_range(c.prune_noise_bound_gain, 0.0, 1e6, true, "prune_noise_bound_gain");
+    require_range(c.solver_noise_bound_gain, 0.0, 1e6, true, "solver_noise_bound_gain");
+    require_range(c.noise_bound_max, 0.0, 1e300, false, "noise_bound_max");
+    for (int i = 0; i < 3; ++i)
+        if (!std::isfinite(c.viewpoint[i]))
+            fail(ErrorKind::InvalidArgument, "config.viewpoint[" + std::to_string(i) + "] is not finite");
+    require_int(c.min_normal_neighbors, 3, 100000, "min_normal_neighbors");
+    require_int(c.max_correspondences, 3, kMaxCorrespondences, "max_correspondences");
+    require_int(c.min_inliers, 3, kMaxCorrespondences, "min_inliers");
+    require_int(c.nonfinite_policy, KISSM_NONFINITE_REJECT, KISSM_NONFINITE_DROP, "nonfinite_policy");
+    require_int(c.viewpoint_mode, KISSM_VIEWPOINT_FIXED, KISSM_VIEWPOINT_CLOUD_CENTER, "viewpoint_mode");
+    require_int(c.log_level, 0, KISSM_LOG_DEBUG, "log_level");
+    return c;
+}
+
+Params to_params(const kissm_config &c) {
+    Params p;
+#define KISSM_TO_PARAMS(field) p.field = c.field;
+    KISSM_SAME_FIELDS(KISSM_TO_PARAMS)
+#undef KISSM_TO_PARAMS
+    p.viewpoint = {{c.viewpoint[0], c.viewpoint[1], c.viewpoint[2]}};
+    p.nonfinite = c.nonfinite_policy == KISSM_NONFINITE_DROP ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
+    p.viewpoint_mode =
+        c.viewpoint_mode == KISSM_VIEWPOINT_CLOUD_CENTER ? ViewpointMode::CloudCenter : ViewpointMode::Fixed;
+    return p;
+}
+
+Hooks hooks_of(const kissm_config &c) {
+    Hooks h;
+    if (c.log_fn != nullptr && c.log_level > 0) {
+        kissm_log_fn fn = c.log_fn;
+        void *user = c.log_user_data;
+        h.log = [fn, user](LogLevel level, const std::string &message) { fn(user, log_code(level), message.c_str()); };
+        h.log_level = log_level_of(c.log_level);
+    }
+    if (c.progress_fn != nullptr) {
+        kissm_progress_fn fn = c.progress_fn;
+        void *user = c.progress_user_data;
+        h.progress = [fn, user](Stage stage, double fraction) { return fn(user, stage_code(stage), fraction) != 0; };
+    }
+    return h;
+}
+
+#undef KISSM_SAME_FIELDS
+
+} // namespace capi
+KISSM_DETAIL_END
+
+using namespace kissm::detail::capi;
+
+extern "C" {
+
+int32_t kissm_config_init(kissm_config *config, uint32_t struct_size) {
+    return guarded("kissm_config_init", [&] {
+        require_non_null(config, "config");
+        check_struct_size("struct_size", struct_size, sizeof(kissm_config), "kissm_config");
+        const kissm_config c = default_config();
+        std::memset(static_cast<void *>(config), 0, struct_size); // a newer caller's unknown tail: zero = default
+        std::memcpy(static_cast<void *>(config), &c, sizeof(c));
+        config->struct_size = struct_size;
+        return ok();
+    });
+}
+
+int32_t kissm_config_validate(const kissm_config *config) {
+    return guarded("kissm_config_validate", [&] {
+        require_non_null(config, "config");
+        (void)validated_config(config);
+        return ok();
+    });
+}
+
+} // extern "C"

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: MIT
+// The features handle: a cloud described once (voxels, descriptors), registered against many.
+#include <memory>
+
+#include "capi/boundary.hpp"
+#include "capi/conversions.hpp"
+#include "capi/handles.hpp"
+
+using namespace kissm::detail::capi;
+namespace core = kissm::detail;
+
+extern "C" {
+
+int32_t kissm_features_compute(kissm_matcher *matcher, const kissm_points *cloud, kissm_features **out_features) {
+    return guarded("kissm_features_compute", [&] {
+        require_non_null(matcher, "matcher");
+        require_non_null(out_features, "out_features");
+        const core::PointsView v = points_view(cloud, "cloud");
+        core::RunContext ctx = matcher->begin_call();
+        auto f = std::make_unique<kissm_features>();
+        f->data = core::describe_cloud(v, matcher->params, "cloud", ctx);
+        *out_features = f.release();
+        return ok();
+    });
+}
+
+void kissm_features_destroy(kissm_features *features) { delete features; }
+
+uint64_t kissm_features_num_points(const kissm_features *f) { return f ? f->data.num_points : 0; }
+uint64_t kissm_features_num_voxels(const kissm_features *f) { return f ? f->data.voxels.points.size() : 0; }
+uint64_t kissm_features_num_keypoints(const kissm_features *f) { return f ? f->data.descriptors.keypoint.size() : 0; }
+
+int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source, const kissm_features *target,
+                                kissm_result *result) {
+    return with_result("kissm_register_features", result, [&] {
+        require_non_null(matcher, "matcher");
+        require_non_null(source, "source");
+        require_non_null(target, "target");
+        core::RunContext ctx = matcher->begin_call();
+        fill_result(core::register_features(source->data, target->data, matcher->params, ctx), result);
+        return ok();
+    });
+}
+
+} // extern "C"
