@@ -27,10 +27,13 @@ fn golden_file_matches_bit_for_bit() {
     assert!(!cases.is_empty());
     for case in cases {
         let name = case.get("name").str();
-        let source32: Vec<[f32; 3]> = source.as_slice().iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
-        let target32: Vec<[f32; 3]> = target.as_slice().iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
+        let source32: Vec<[f32; 3]> =
+            source.as_slice().iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
+        let target32: Vec<[f32; 3]> =
+            target.as_slice().iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
         for threads in [1, 2] {
-            let config = Config::builder().voxel_size(case.get("voxel_size").num()).num_threads(threads).build().unwrap();
+            let config =
+                Config::builder().voxel_size(case.get("voxel_size").num()).num_threads(threads).build().unwrap();
             let mut matcher = Matcher::new(&config).unwrap();
             let reg = if case.get("scalar").str() == "float32" {
                 matcher.register(&source32, &target32).unwrap()
