@@ -47,7 +47,9 @@ use std::sync::OnceLock;
 pub use kissm_sys;
 use kissm_sys as sys;
 
-pub use config::{Config, ConfigBuilder, NonfinitePolicy, Viewpoint};
+#[allow(deprecated)] // the former name, kept as an alias
+pub use config::NonfinitePolicy;
+pub use config::{Config, ConfigBuilder, NonFinitePolicy, Viewpoint};
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher};
 pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};

@@ -6,7 +6,7 @@ mod common;
 use std::io::Write as _;
 
 use kissm::{
-    AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonfinitePolicy, PointsView,
+    AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonFinitePolicy, PointsView,
     Reason, Viewpoint,
 };
 use kissm_sys as sys;
@@ -50,7 +50,11 @@ fn config_defaults_are_the_documented_ones() {
     assert_eq!(c.min_normal_neighbors(), 3);
     assert_eq!(c.max_correspondences(), 5000);
     assert_eq!(c.min_inliers(), 15);
-    assert_eq!(c.nonfinite_policy(), NonfinitePolicy::Reject);
+    assert_eq!(c.nonfinite_policy(), NonFinitePolicy::Reject);
+    // The former spelling still names the same type.
+    #[allow(deprecated)]
+    let former: kissm::NonfinitePolicy = NonFinitePolicy::Drop;
+    assert_eq!(Config::builder().nonfinite_policy(former).build().unwrap().nonfinite_policy(), NonFinitePolicy::Drop);
     c.validate().expect("defaults are valid");
     // The builder starts from the same values.
     let built = Config::builder().build().unwrap();
@@ -74,7 +78,7 @@ fn builder_sets_every_field() {
         .min_normal_neighbors(5)
         .max_correspondences(1000)
         .min_inliers(12)
-        .nonfinite_policy(NonfinitePolicy::Drop)
+        .nonfinite_policy(NonFinitePolicy::Drop)
         .build()
         .unwrap();
     assert_eq!(c.num_threads(), 3);
@@ -90,7 +94,7 @@ fn builder_sets_every_field() {
     assert_eq!(c.min_normal_neighbors(), 5);
     assert_eq!(c.max_correspondences(), 1000);
     assert_eq!(c.min_inliers(), 12);
-    assert_eq!(c.nonfinite_policy(), NonfinitePolicy::Drop);
+    assert_eq!(c.nonfinite_policy(), NonFinitePolicy::Drop);
     let center = c.to_builder().viewpoint(Viewpoint::CloudCenter).build().unwrap();
     assert_eq!(center.viewpoint(), Viewpoint::CloudCenter);
     assert_eq!(center.min_inliers(), 12);
@@ -213,7 +217,7 @@ fn registration_errors_carry_code_and_message() {
 
     let all_nan = register_err(
         &|| vec![[f64::NAN; 3]; 50],
-        &config.to_builder().nonfinite_policy(NonfinitePolicy::Drop).build().unwrap(),
+        &config.to_builder().nonfinite_policy(NonFinitePolicy::Drop).build().unwrap(),
     );
     assert_eq!(all_nan.kind(), ErrorKind::EmptyInput, "{all_nan}");
 
@@ -233,7 +237,7 @@ fn registration_errors_carry_code_and_message() {
 
 #[test]
 fn nonfinite_points_are_dropped_and_counted() {
-    let config = Config::builder().nonfinite_policy(NonfinitePolicy::Drop).build().unwrap();
+    let config = Config::builder().nonfinite_policy(NonFinitePolicy::Drop).build().unwrap();
     let mut m = Matcher::new(&config).unwrap();
     let mut source = common::yard(7, 5.0);
     source[3] = [f64::NAN, 0.0, 0.0];
