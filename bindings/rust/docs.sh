@@ -15,17 +15,9 @@ if [[ $# -ne 1 || -z $1 ]]; then
   exit 2
 fi
 out=$1
-here=$(cd "$(dirname "$0")" && pwd)
-repo=$(cd "$here/../.." && pwd)
-build=${KISSM_BUILD_DIR:-$repo/build}
-export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$build/cargo-target}
-export CARGO_TERM_COLOR=never
-if ! command -v cargo >/dev/null 2>&1 && [[ -x $HOME/.cargo/bin/cargo ]]; then
-  export PATH="$HOME/.cargo/bin:$PATH"
-fi
-if [[ -f $build/libkissm.a ]]; then
-  export KISSM_LIB_DIR=$build KISSM_STATIC=1
-fi
+# shellcheck source=common.sh
+source "$(dirname "$0")/common.sh"
+link_cmake_build
 cd "$here"
 # The docs of earlier runs (other crates, removed items) must not end up in OUTDIR.
 rm -rf "$CARGO_TARGET_DIR/doc"

@@ -10,18 +10,10 @@
 # Environment: KISSM_BUILD_DIR (a CMake build holding libkissm.a: linked instead of building the C++ core
 # again; default build/), CARGO_TARGET_DIR (default $KISSM_BUILD_DIR/cargo-target).
 set -euo pipefail
-here=$(cd "$(dirname "$0")" && pwd)
-repo=$(cd "$here/../.." && pwd)
-build=${KISSM_BUILD_DIR:-$repo/build}
-export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$build/cargo-target}
-export CARGO_TERM_COLOR=never
-if ! command -v cargo >/dev/null 2>&1 && [[ -x $HOME/.cargo/bin/cargo ]]; then
-  export PATH="$HOME/.cargo/bin:$PATH"
-fi
+# shellcheck source=common.sh
+source "$(dirname "$0")/common.sh"
 # Clippy only type-checks, so the already built static library saves building the C++ core here.
-if [[ -f $build/libkissm.a ]]; then
-  export KISSM_LIB_DIR=$build KISSM_STATIC=1
-fi
+link_cmake_build
 cd "$here"
 
 echo "== rust lint: cargo fmt --check =="
@@ -46,7 +38,7 @@ fi
 
 echo "== rust lint: shellcheck =="
 if command -v shellcheck >/dev/null 2>&1; then
-  shellcheck ./*.sh kissm-sys/*.sh
+  shellcheck -x ./*.sh kissm-sys/*.sh
 else
   echo "SKIP shellcheck: not installed (apt-get install shellcheck)"
 fi
