@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Config`] and its [`ConfigBuilder`].
 
 use std::fmt;

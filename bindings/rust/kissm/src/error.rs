@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Error`]: a failed call's status code and message.
 
 use std::ffi::{c_char, CStr};

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Fast, robust, deterministic global 3D point cloud registration.
 //!
 //! `kissm` registers two point clouds that overlap in an unknown relative pose (no initial guess, large

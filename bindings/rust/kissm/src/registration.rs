@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Registration`]: the pose and every number behind the decision to trust it.
 
 use kissm_sys as sys;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! API surface without registrations of real size: versions, config defaults and validation, error
 //! mapping for every reachable status code, point views, file reading, and the Send/Sync contract.
 

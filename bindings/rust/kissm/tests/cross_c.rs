@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Rust results bit for bit equal to the C library's on the same input: the `kissm` tool's
 //! `register --json` output (which prints every double so that it reads back exactly) against this
 //! crate's registration of the same files read with `kissm::read_points`.

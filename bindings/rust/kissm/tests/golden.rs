@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Cross-language round trip, Rust side: the clouds of `tests/data` (or `KISSM_TEST_DATA`) registered as
 //! listed in `tests/data/golden.json` (written by the C library) give the same result bit for bit. The C
 //! suite (`tests/roundtrip`) and the Python suite (`tests/test_golden.py`) check the same file.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! The Rust declarations' struct layout equals the C ABI's committed layout (`tests/abi/layout.json`,
 //! checked against the compiled header by the C suite; or the file `KISSM_ABI_LAYOUT` names) and the linked
 //! library's `kissm_abi_sizeof`.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Registrations of the shared test scene (the committed pair of `tests/data`, or `KISSM_TEST_DATA`) and
 //! of variations of it: accuracy against the ground truth, every input form, determinism across thread
 //! counts, matcher reuse and point order, feature reuse, threads, and cancellation.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Helpers shared by the integration tests: the shared test scene (the committed pair of `tests/data`)
 //! and variations of it, pose maths, skip messages, the data and CLI locations, and a small JSON reader
 //! for the `kissm` tool's output.
