@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 //! The README example is the crate documentation's doc test (`src/lib.rs`, run by `cargo test --doc` on
 //! the shared test scene): the visible lines of that doc test must equal the `rust` block of this
-//! crate's README.md and of the repository's README.md (its "Rust" section), so that a change to either
-//! README that the doc test does not carry fails here. The repository's README is only absent outside a
-//! source checkout (a packaged crate); that comparison alone is skipped then.
+//! crate's README.md, of the repository's README.md (its "Rust" section) and of bindings/rust/README.md,
+//! so that a change to any README that the doc test does not carry fails here. The last two are only
+//! absent outside a source checkout (a packaged crate); those comparisons alone are skipped then.
 
 mod common;
 
@@ -67,14 +67,23 @@ fn crate_readme_example_is_the_doc_test() {
     assert_same(&doc, &readme_lines(&readme, "## Example"), "kissm/README.md's example");
 }
 
+/// The repository's root, or `None` outside a source checkout (a packaged crate, which has no
+/// repository README; the crate's own is checked above).
+fn repository() -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../..");
+    root.join("include/kissm.h").is_file().then_some(root)
+}
+
 #[test]
 fn repository_readme_example_is_the_doc_test() {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../..");
-    let readme = root.join("README.md");
-    if !readme.is_file() || !root.join("include/kissm.h").is_file() {
-        // Outside a source checkout there is no repository README; the crate's own is checked above.
-        common::skip("repository_readme_example_is_the_doc_test", "no repository README.md (a packaged crate)");
+    let Some(root) = repository() else {
+        common::skip("repository_readme_example_is_the_doc_test", "not in a source checkout (a packaged crate)");
         return;
-    }
-    assert_same(&doc_test_lines(), &readme_lines(&readme, "## Rust"), "the repository's README.md Rust example");
+    };
+    assert_same(&doc_test_lines(), &readme_lines(&root.join("README.md"), "## Rust"), "README.md's Rust example");
+    assert_same(
+        &doc_test_lines(),
+        &readme_lines(&root.join("bindings/rust/README.md"), "# kissm for Rust"),
+        "bindings/rust/README.md's example",
+    );
 }
