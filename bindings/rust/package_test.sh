@@ -120,8 +120,19 @@ else
   echo "rust package: WARNING: $build/kissm not found; the comparisons with the C tool will be skipped"
   unset KISSM_CLI || true
 fi
+# The tests' results (stdout) and the SKIP lines and build output (stderr) apart: interleaved, a SKIP line
+# can split a result line that the checks below look for.
 log=$work/test.log
-(cd "$work/crates" && cargo test --release --locked --workspace 2>&1) | tee "$log"
+errlog=$work/test.stderr.log
+set +e
+(cd "$work/crates" && cargo test --release --locked --workspace >"$log" 2>"$errlog")
+status=$?
+set -e
+cat "$errlog" "$log"
+if [[ $status -ne 0 ]]; then
+  echo "rust package: FAIL: cargo test in the unpacked crates (exit status $status)" >&2
+  exit 1
+fi
 
 # The core was built from the archive's vendor/kissm, not from anything else.
 if ! grep -qs "CMAKE_HOME_DIRECTORY:INTERNAL=$work/crates/$sys_name/vendor/kissm" \
@@ -141,5 +152,5 @@ if ! grep -Eq "^test $safe_name/src/lib.rs - \(line [0-9]+\) \.\.\. ok$|^test sr
   exit 1
 fi
 echo "rust package: skipped in the archive run:"
-grep '^SKIP' "$log" | sed 's/^/  /' || echo "  (nothing)"
+grep '^SKIP' "$errlog" | sed 's/^/  /' || echo "  (nothing)"
 echo "rust package: both crates build and pass from their archives in $((SECONDS - t0)) s"
