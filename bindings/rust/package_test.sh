@@ -19,7 +19,8 @@
 #      present. Only the comparison with the repository's README.md is skipped there (it has no README).
 #
 # Environment: KISSM_BUILD_DIR (default build/; for the kissm tool), KISSM_DATA_DIR (default
-# ../shared/data), CARGO_TARGET_DIR (default $KISSM_BUILD_DIR/cargo-target; shared with run_tests.sh).
+# ../shared/data), CARGO_TARGET_DIR (default $KISSM_BUILD_DIR/cargo-target; only `cargo package` writes
+# there, the build and tests use a target folder inside the temporary folder).
 set -euo pipefail
 # shellcheck source=common.sh
 source "$(dirname "$0")/common.sh"
@@ -32,13 +33,6 @@ fi
 work=$(mktemp -d "${TMPDIR:-/tmp}/kissm-crates.XXXXXX")
 cleanup() {
   bash "$here/kissm-sys/vendor.sh" --clean >/dev/null
-  # This run's build of the core is keyed to the temporary path: never reused, so not kept.
-  local cache
-  for cache in "$CARGO_TARGET_DIR"/release/build/kissm-sys-*/out/build/CMakeCache.txt; do
-    if [[ -f $cache ]] && grep -q "CMAKE_HOME_DIRECTORY:INTERNAL=$work/" "$cache"; then
-      rm -rf "$(dirname "$(dirname "$(dirname "$cache")")")"
-    fi
-  done
   rm -rf "$work"
 }
 trap cleanup EXIT
@@ -125,7 +119,9 @@ fi
 log=$work/test.log
 errlog=$work/test.stderr.log
 set +e
-(cd "$work/crates" && cargo test --release --locked --workspace >"$log" 2>"$errlog")
+# A target folder of its own inside the temporary folder: builds keyed to this run's temporary path are
+# never reused, so they go with it (the C++ core is built again every run, as a user's build would).
+(cd "$work/crates" && CARGO_TARGET_DIR=$work/target cargo test --release --locked --workspace >"$log" 2>"$errlog")
 status=$?
 set -e
 cat "$errlog" "$log"
@@ -136,7 +132,7 @@ fi
 
 # The core was built from the archive's vendor/kissm, not from anything else.
 if ! grep -qs "CMAKE_HOME_DIRECTORY:INTERNAL=$work/crates/$sys_name/vendor/kissm" \
-     "$CARGO_TARGET_DIR"/release/build/kissm-sys-*/out/build/CMakeCache.txt; then
+     "$work"/target/release/build/kissm-sys-*/out/build/CMakeCache.txt; then
   echo "rust package: FAIL: no CMake build of $work/crates/$sys_name/vendor/kissm was found" >&2
   exit 1
 fi
