@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The Rust binding's tests, run by tools/test.sh (and so by CI) after the C build:
-#   1. cargo test --release: the workspace's tests (API, errors, synthetic and real-data registrations,
-#      feature reuse, threads, cancellation, bitwise equality with the C tool) and doc tests;
+#   1. cargo test --release: the workspace's tests (API, errors, registrations of the shared test scene of
+#      tests/data and of variations of it, real-data registrations, feature reuse, threads, cancellation,
+#      bitwise equality with the C tool and with tests/data/golden.json, the README example as a doc test
+#      and its drift check); KISSM_REQUIRE_TEST_DATA=1 makes a missing tests/data a failure, not a skip;
 #   2. the register example against the C tool on the demo clouds (and a KITTI pair when the data is
 #      there): same transform bit for bit, same valid and final_inliers;
 #   3. the bindgen drift check: regenerates the bindings from include/kissm.h and fails if they differ
@@ -17,6 +20,8 @@ build=$(cd "${KISSM_BUILD_DIR:-$repo/build}" 2>/dev/null && pwd || echo "${KISSM
 export KISSM_DATA_DIR=${KISSM_DATA_DIR:-$repo/../shared/data}
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$build/cargo-target}
 export CARGO_TERM_COLOR=never
+# tests/data is part of the checkout: the tests that read it must not skip here.
+export KISSM_REQUIRE_TEST_DATA=1
 
 # ---------------------------------------------------------------------------------------------------
 # Toolchain

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Regenerates src/bindings.rs from include/kissm.h with the exact bindgen options of build.rs (feature
 # "bindgen"; needs libclang, e.g. Debian's libclang-dev). Commit the result; the drift check
 # (tests/bindings_drift.rs, run by bindings/rust/run_tests.sh) fails whenever the two differ.

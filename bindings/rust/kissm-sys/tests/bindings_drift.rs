@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! The committed `src/bindings.rs` must be exactly what bindgen makes of `include/kissm.h` with the
 //! options in `build.rs`. Runs only with the `bindgen` feature (which needs libclang):
 //!

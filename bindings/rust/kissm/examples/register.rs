@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Registers two point files and prints the result, like `kissm register`.
 //!
 //! ```text

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Config`] and its [`ConfigBuilder`].
 
 use std::fmt;
@@ -9,7 +10,7 @@ use crate::error::Error;
 
 /// What a registration does with NaN or infinite coordinates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
-pub enum NonfinitePolicy {
+pub enum NonFinitePolicy {
     /// Such a point fails the call with [`ErrorKind::NonFinite`](crate::ErrorKind::NonFinite) (the default).
     #[default]
     Reject,
@@ -17,6 +18,11 @@ pub enum NonfinitePolicy {
     /// and [`Counts::target_nonfinite`](crate::Counts::target_nonfinite).
     Drop,
 }
+
+/// The former name of [`NonFinitePolicy`] ("non-finite" is spelt `NonFinite` in type names, as in
+/// [`ErrorKind::NonFinite`](crate::ErrorKind::NonFinite)).
+#[deprecated(since = "0.1.0", note = "renamed to `NonFinitePolicy`")]
+pub type NonfinitePolicy = NonFinitePolicy;
 
 /// Where surface normals are oriented toward.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -168,11 +174,11 @@ impl Config {
         usize::try_from(self.raw.min_inliers).unwrap_or(0)
     }
     /// What happens to NaN and infinite coordinates.
-    pub fn nonfinite_policy(&self) -> NonfinitePolicy {
+    pub fn nonfinite_policy(&self) -> NonFinitePolicy {
         if self.raw.nonfinite_policy == sys::KISSM_NONFINITE_DROP {
-            NonfinitePolicy::Drop
+            NonFinitePolicy::Drop
         } else {
-            NonfinitePolicy::Reject
+            NonFinitePolicy::Reject
         }
     }
 }
@@ -209,11 +215,11 @@ impl fmt::Debug for Config {
 /// returns an [`Error`] naming the first invalid one. Setters never fail or panic.
 ///
 /// ```
-/// use kissm::{Config, ErrorKind, NonfinitePolicy, Viewpoint};
+/// use kissm::{Config, ErrorKind, NonFinitePolicy, Viewpoint};
 /// let config = Config::builder()
 ///     .voxel_size(0.05)
 ///     .viewpoint(Viewpoint::CloudCenter)
-///     .nonfinite_policy(NonfinitePolicy::Drop)
+///     .nonfinite_policy(NonFinitePolicy::Drop)
 ///     .min_inliers(20)
 ///     .build()?;
 /// assert_eq!(config.min_inliers(), 20);
@@ -313,11 +319,11 @@ impl ConfigBuilder {
         self.raw.min_inliers = to_i32(count);
         self
     }
-    /// What happens to NaN and infinite coordinates (default [`NonfinitePolicy::Reject`]).
-    pub fn nonfinite_policy(mut self, policy: NonfinitePolicy) -> Self {
+    /// What happens to NaN and infinite coordinates (default [`NonFinitePolicy::Reject`]).
+    pub fn nonfinite_policy(mut self, policy: NonFinitePolicy) -> Self {
         self.raw.nonfinite_policy = match policy {
-            NonfinitePolicy::Reject => sys::KISSM_NONFINITE_REJECT,
-            NonfinitePolicy::Drop => sys::KISSM_NONFINITE_DROP,
+            NonFinitePolicy::Reject => sys::KISSM_NONFINITE_REJECT,
+            NonFinitePolicy::Drop => sys::KISSM_NONFINITE_DROP,
         };
         self
     }

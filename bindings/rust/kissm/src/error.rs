@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Error`]: a failed call's status code and message.
 
 use std::ffi::{c_char, CStr};
@@ -38,7 +39,7 @@ pub enum ErrorKind {
     EmptyInput,
     /// `KISSM_ERR_TOO_FEW_POINTS`: a cloud has fewer than [`MIN_POINTS`](crate::MIN_POINTS) points.
     TooFewPoints,
-    /// `KISSM_ERR_NONFINITE`: a NaN or infinite coordinate under [`NonfinitePolicy::Reject`](crate::NonfinitePolicy::Reject).
+    /// `KISSM_ERR_NONFINITE`: a NaN or infinite coordinate under [`NonFinitePolicy::Reject`](crate::NonFinitePolicy::Reject).
     NonFinite,
     /// `KISSM_ERR_VOXEL_RANGE`: the voxel size is too small for the cloud's extent.
     VoxelRange,

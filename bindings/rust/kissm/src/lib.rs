@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Fast, robust, deterministic global 3D point cloud registration.
 //!
 //! `kissm` registers two point clouds that overlap in an unknown relative pose (no initial guess, large
@@ -5,21 +6,61 @@
 //! whether that pose can be trusted, and every number behind that decision. This crate is the safe Rust
 //! API over the kissm C library (through [`kissm_sys`]).
 //!
-//! ```no_run
+//! # Example
+//!
+//! This is the example of the repository's README (`tests/readme.rs` fails when the two differ), run as a
+//! doc test on the shared test scene: `source.ply` is `tests/data/roundtrip_source.ply` and `target.bin`
+//! the target of that pair as raw float32 xyz (the hidden lines set them up in a temporary folder).
+//!
+//! ```
+//! # // Setup: the committed pair of tests/data (or KISSM_TEST_DATA) as source.ply and target.bin.
+//! # use std::path::PathBuf;
+//! # let data = match std::env::var_os("KISSM_TEST_DATA") {
+//! #     Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+//! #     _ => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../tests/data"),
+//! # };
+//! # if !data.join("roundtrip_source.ply").is_file() {
+//! #     let why = "SKIP README example: the test scene was not found (set KISSM_TEST_DATA)";
+//! #     assert!(!matches!(std::env::var("KISSM_REQUIRE_TEST_DATA").as_deref(), Ok("1")), "{why}");
+//! #     eprintln!("{why}");
+//! #     return Ok(());
+//! # }
+//! # let work = std::env::temp_dir().join(format!("kissm-readme-example-{}", std::process::id()));
+//! # std::fs::create_dir_all(&work)?;
+//! # std::fs::copy(data.join("roundtrip_source.ply"), work.join("source.ply"))?;
+//! # let target_xyz: Vec<u8> = kissm::read_points(data.join("roundtrip_target.ply"))?
+//! #     .as_slice()
+//! #     .iter()
+//! #     .flat_map(|p| p.iter().flat_map(|&v| (v as f32).to_le_bytes()))
+//! #     .collect();
+//! # std::fs::write(work.join("target.bin"), target_xyz)?;
+//! # std::env::set_current_dir(&work)?;
 //! use kissm::{Config, Format, Matcher};
 //!
 //! let source = kissm::read_points("source.ply")?;
-//! let target = kissm::read_points_with_format("target.bin", Format::BinXyz)?;
-//!
-//! let config = Config::builder().voxel_size(0.5).num_threads(2).build()?;
-//! let mut matcher = Matcher::new(&config)?;
-//! let reg = matcher.register(&source, &target)?;
+//! let target = kissm::read_points_with_format("target.bin", Format::BinXyz)?; // or &[[f32; 3]], &[[f64; 3]]
+//! let mut matcher = Matcher::new(&Config::builder().voxel_size(0.5).num_threads(2).build()?)?;
+//! let reg = matcher.register(&source, &target)?;        // Err(kissm::Error { code, message }) on bad input
 //! if reg.valid {
-//!     println!("p_target = R p_source + t: {:?}", reg.transform);
+//!     println!("{:?}", reg.transform);                  // [[f64; 4]; 4], maps source into target
 //! } else {
 //!     println!("no trustworthy pose: {}", reg.reason);
 //! }
-//! # Ok::<(), kissm::Error>(())
+//! # // Checks: the pose is the ground truth's (rotation within 2 degrees, translation within 0.3).
+//! # let truth: Vec<f64> = std::fs::read_to_string(data.join("roundtrip_ground_truth.txt"))?
+//! #     .lines()
+//! #     .filter(|l| !l.starts_with('#'))
+//! #     .flat_map(str::split_whitespace)
+//! #     .map(|v| v.parse::<f64>())
+//! #     .collect::<Result<_, _>>()?;
+//! # assert!(reg.valid, "{}", reg.reason);
+//! # let trace: f64 = (0..3).flat_map(|i| (0..3).map(move |k| (i, k))).map(|(i, k)| truth[4 * k + i] * reg.transform[k][i]).sum();
+//! # let angle = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+//! # let shift = (0..3).map(|i| (reg.transform[i][3] - truth[4 * i + 3]).powi(2)).sum::<f64>().sqrt();
+//! # assert!(angle < 2.0 && shift < 0.3, "rotation error {angle} deg, translation error {shift}");
+//! # std::env::set_current_dir(std::env::temp_dir())?;
+//! # std::fs::remove_dir_all(&work)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! - **Input**: `&[[f32; 3]]`, `&[[f64; 3]]`, their `Vec`s, strided flat slices ([`PointsView`]) and
@@ -47,7 +88,9 @@ use std::sync::OnceLock;
 pub use kissm_sys;
 use kissm_sys as sys;
 
-pub use config::{Config, ConfigBuilder, NonfinitePolicy, Viewpoint};
+#[allow(deprecated)] // the former name, kept as an alias
+pub use config::NonfinitePolicy;
+pub use config::{Config, ConfigBuilder, NonFinitePolicy, Viewpoint};
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher};
 pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};

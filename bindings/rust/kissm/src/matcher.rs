@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Matcher`], [`Features`] and [`CancelHandle`].
 
 use std::cell::Cell;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Point input ([`PointsView`], [`AsPoints`]) and point files ([`Cloud`], [`read_points`]).
 
 use std::ffi::CString;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! [`Registration`]: the pose and every number behind the decision to trust it.
 
 use kissm_sys as sys;
@@ -78,7 +79,7 @@ pub struct Counts {
     pub source_points: u64,
     /// Target points given.
     pub target_points: u64,
-    /// Source points dropped as non-finite (under [`NonfinitePolicy::Drop`](crate::NonfinitePolicy::Drop)).
+    /// Source points dropped as non-finite (under [`NonFinitePolicy::Drop`](crate::NonFinitePolicy::Drop)).
     pub source_nonfinite: u64,
     /// Target points dropped as non-finite.
     pub target_nonfinite: u64,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! API surface without registrations of real size: versions, config defaults and validation, error
 //! mapping for every reachable status code, point views, file reading, and the Send/Sync contract.
 
@@ -6,7 +7,7 @@ mod common;
 use std::io::Write as _;
 
 use kissm::{
-    AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonfinitePolicy, PointsView,
+    AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonFinitePolicy, PointsView,
     Reason, Viewpoint,
 };
 use kissm_sys as sys;
@@ -50,7 +51,11 @@ fn config_defaults_are_the_documented_ones() {
     assert_eq!(c.min_normal_neighbors(), 3);
     assert_eq!(c.max_correspondences(), 5000);
     assert_eq!(c.min_inliers(), 15);
-    assert_eq!(c.nonfinite_policy(), NonfinitePolicy::Reject);
+    assert_eq!(c.nonfinite_policy(), NonFinitePolicy::Reject);
+    // The former spelling still names the same type.
+    #[allow(deprecated)]
+    let former: kissm::NonfinitePolicy = NonFinitePolicy::Drop;
+    assert_eq!(Config::builder().nonfinite_policy(former).build().unwrap().nonfinite_policy(), NonFinitePolicy::Drop);
     c.validate().expect("defaults are valid");
     // The builder starts from the same values.
     let built = Config::builder().build().unwrap();
@@ -74,7 +79,7 @@ fn builder_sets_every_field() {
         .min_normal_neighbors(5)
         .max_correspondences(1000)
         .min_inliers(12)
-        .nonfinite_policy(NonfinitePolicy::Drop)
+        .nonfinite_policy(NonFinitePolicy::Drop)
         .build()
         .unwrap();
     assert_eq!(c.num_threads(), 3);
@@ -90,7 +95,7 @@ fn builder_sets_every_field() {
     assert_eq!(c.min_normal_neighbors(), 5);
     assert_eq!(c.max_correspondences(), 1000);
     assert_eq!(c.min_inliers(), 12);
-    assert_eq!(c.nonfinite_policy(), NonfinitePolicy::Drop);
+    assert_eq!(c.nonfinite_policy(), NonFinitePolicy::Drop);
     let center = c.to_builder().viewpoint(Viewpoint::CloudCenter).build().unwrap();
     assert_eq!(center.viewpoint(), Viewpoint::CloudCenter);
     assert_eq!(center.min_inliers(), 12);
@@ -184,20 +189,21 @@ fn line(n: usize) -> Vec<[f64; 3]> {
     (0..n).map(|i| [i as f64 * 0.1, (i % 7) as f64 * 0.13, (i % 3) as f64 * 0.2]).collect()
 }
 
-fn register_err(source: &dyn Fn() -> Vec<[f64; 3]>, config: &Config) -> Error {
+fn register_err(source: &dyn Fn() -> Vec<[f64; 3]>, config: &Config, good: &[[f64; 3]]) -> Error {
     let mut m = Matcher::new(config).unwrap();
-    let good = common::yard(5, 5.0);
-    m.register(&source(), &good).expect_err("the registration fails")
+    m.register(&source(), good).expect_err("the registration fails")
 }
 
 #[test]
 fn registration_errors_carry_code_and_message() {
+    let Some(scene) = common::scene("registration_errors_carry_code_and_message") else { return };
+    let good = &scene.target;
     let config = Config::default();
-    let empty = register_err(&Vec::new, &config);
+    let empty = register_err(&Vec::new, &config, good);
     assert_eq!(empty.kind(), ErrorKind::EmptyInput, "{empty}");
     assert!(!empty.message().is_empty());
 
-    let few = register_err(&|| line(3), &config);
+    let few = register_err(&|| line(3), &config, good);
     assert_eq!(few.kind(), ErrorKind::TooFewPoints, "{few}");
     assert_eq!(few.code(), sys::KISSM_ERR_TOO_FEW_POINTS);
 
@@ -208,48 +214,63 @@ fn registration_errors_carry_code_and_message() {
             p
         },
         &config,
+        good,
     );
     assert_eq!(nan.kind(), ErrorKind::NonFinite, "{nan}");
 
     let all_nan = register_err(
         &|| vec![[f64::NAN; 3]; 50],
-        &config.to_builder().nonfinite_policy(NonfinitePolicy::Drop).build().unwrap(),
+        &config.to_builder().nonfinite_policy(NonFinitePolicy::Drop).build().unwrap(),
+        good,
     );
     assert_eq!(all_nan.kind(), ErrorKind::EmptyInput, "{all_nan}");
 
     let huge = register_err(
         &|| vec![[0.0, 0.0, 0.0], [1e4, 0.0, 0.0], [0.0, 1e4, 0.0], [0.0, 0.0, 1e4], [5.0, 5.0, 5.0]],
         &Config::builder().voxel_size(0.001).build().unwrap(),
+        good,
     );
     assert_eq!(huge.kind(), ErrorKind::VoxelRange, "{huge}");
 
     // The error belongs to the failing call, and the next successful call is not affected.
     let mut m = Matcher::new(&config).unwrap();
-    let pts = common::yard(5, 5.0);
-    assert!(m.register(&line(2), &pts).is_err());
-    let ok = m.register(&pts, &pts).expect("a good call after a failed one");
+    let pts = &scene.source;
+    assert!(m.register(&line(2), pts).is_err());
+    let ok = m.register(pts, pts).expect("a good call after a failed one");
     assert!(ok.counts.source_points > 0);
 }
 
 #[test]
 fn nonfinite_points_are_dropped_and_counted() {
-    let config = Config::builder().nonfinite_policy(NonfinitePolicy::Drop).build().unwrap();
+    let Some(scene) = common::scene("nonfinite_points_are_dropped_and_counted") else { return };
+    let config = Config::builder().nonfinite_policy(NonFinitePolicy::Drop).build().unwrap();
     let mut m = Matcher::new(&config).unwrap();
-    let mut source = common::yard(7, 5.0);
+    let mut source = scene.source.clone();
     source[3] = [f64::NAN, 0.0, 0.0];
     source[10] = [0.0, f64::INFINITY, 0.0];
-    let target = common::yard(8, 5.0);
+    let mut target = scene.target.clone();
+    target[0][2] = f64::NEG_INFINITY;
     let reg = m.register(&source, &target).unwrap();
     assert_eq!(reg.counts.source_nonfinite, 2);
-    assert_eq!(reg.counts.target_nonfinite, 0);
+    assert_eq!(reg.counts.target_nonfinite, 1);
     assert_eq!(reg.counts.source_points, source.len() as u64);
+    assert!(reg.valid, "two dropped points do not spoil the scene: {}", reg.reason);
+    // Under the default policy the same input is an error.
+    let err = Matcher::new(&Config::default()).unwrap().register(&source, &scene.target).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::NonFinite, "{err}");
+    assert_eq!(err.code(), sys::KISSM_ERR_NONFINITE);
 }
 
 #[test]
 fn degenerate_input_is_invalid_not_an_error() {
-    // A flat, featureless plane: accepted, but no trustworthy pose.
-    let mut rng = common::Rng::new(3);
-    let plane: Vec<[f64; 3]> = (0..5000).map(|_| [rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), 0.0]).collect();
+    // A flat, featureless plane (a 71 x 71 grid, 0.14 apart, nudged by a fixed formula so it is not a
+    // perfect lattice): accepted, but no trustworthy pose.
+    let plane: Vec<[f64; 3]> = (0..71 * 71)
+        .map(|i| {
+            let (x, y) = ((i % 71) as f64, (i / 71) as f64);
+            [-5.0 + 0.14 * x + 0.03 * (1.7 * y).sin(), -5.0 + 0.14 * y + 0.03 * (2.3 * x).cos(), 0.0]
+        })
+        .collect();
     let mut m = Matcher::with_voxel_size(0.3).unwrap();
     let reg = m.register(&plane, &plane).expect("well-formed input is not an error");
     assert!(!reg.valid);
@@ -258,11 +279,12 @@ fn degenerate_input_is_invalid_not_an_error() {
 
 #[test]
 fn features_from_another_config_are_rejected() {
-    let cloud = common::yard(9, 5.0);
+    let Some(scene) = common::scene("features_from_another_config_are_rejected") else { return };
+    let cloud = &scene.source;
     let mut a = Matcher::with_voxel_size(0.3).unwrap();
     let mut b = Matcher::with_voxel_size(0.5).unwrap();
-    let fa = a.compute_features(&cloud).unwrap();
-    let fb = b.compute_features(&cloud).unwrap();
+    let fa = a.compute_features(cloud).unwrap();
+    let fb = b.compute_features(cloud).unwrap();
     assert_eq!(fa.num_points(), cloud.len() as u64);
     assert!(fa.num_keypoints() > 0 && fa.num_keypoints() <= fa.num_voxels());
     let err = a.register_features(&fa, &fb).unwrap_err();

@@ -1,8 +1,10 @@
+// SPDX-License-Identifier: MIT
 //! Rust results bit for bit equal to the C library's on the same input: the `kissm` tool's
 //! `register --json` output (which prints every double so that it reads back exactly) against this
 //! crate's registration of the same files read with `kissm::read_points`.
 //!
-//! Data-free: the demo's clouds (`kissm demo --out DIR`, float64 PLY). Real data: KITTI 07 keyframes
+//! The demo's clouds (`kissm demo --out DIR`, float64 PLY) and the shared test scene of `tests/data`
+//! (or `KISSM_TEST_DATA`). Real data: KITTI 07 keyframes
 //! 000001 -> 000000 (raw float32 xyz, voxel 0.5), skipped when `../shared/data` is absent. Both need
 //! the tool: `KISSM_CLI`, `KISSM_BUILD_DIR/kissm` or the repository's `build/kissm` (skipped otherwise).
 
@@ -63,6 +65,20 @@ fn demo_clouds_match_the_c_tool_bitwise() {
     );
     check_against_cli(&cli, &dir.join("source.ply"), &dir.join("target.ply"), Format::Auto, "auto", 0.3);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn shared_scene_matches_the_c_tool_bitwise() {
+    let Some(cli) = common::cli() else {
+        skip("shared_scene_matches_the_c_tool_bitwise", "the kissm tool was not found (set KISSM_CLI)");
+        return;
+    };
+    if common::scene("shared_scene_matches_the_c_tool_bitwise").is_none() {
+        return;
+    }
+    let dir = common::test_data_dir().expect("the scene was found");
+    let (source, target) = (dir.join("roundtrip_source.ply"), dir.join("roundtrip_target.ply"));
+    check_against_cli(&cli, &source, &target, Format::Auto, "auto", common::SCENE_VOXEL);
 }
 
 #[test]

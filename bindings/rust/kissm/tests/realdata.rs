@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 //! Real scans with ground truth from `../shared/data` (or `KISSM_DATA_DIR`); skipped when absent.
 //!
 //! Every LiDAR and indoor pair of `index.tsv` that SPEC section 7 says must succeed, raw and with the

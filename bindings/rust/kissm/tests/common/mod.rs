@@ -1,5 +1,7 @@
-//! Helpers shared by the integration tests: a deterministic synthetic scene, pose maths, skip messages,
-//! the data and CLI locations, and a small JSON reader for the `kissm` tool's output.
+// SPDX-License-Identifier: MIT
+//! Helpers shared by the integration tests: the shared test scene (the committed pair of `tests/data`)
+//! and variations of it, pose maths, skip messages, the data and CLI locations, and a small JSON reader
+//! for the `kissm` tool's output.
 #![allow(dead_code, clippy::needless_range_loop)]
 
 use std::io::Write as _;
@@ -36,99 +38,6 @@ pub fn temp_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create a temporary folder");
     dir
-}
-
-// ------------------------------------------------------------------------------------------------
-// Random numbers (splitmix64) and the synthetic scene
-// ------------------------------------------------------------------------------------------------
-
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1) with 53 random bits.
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    /// Standard normal (Box-Muller).
-    pub fn gauss(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform();
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-}
-
-/// Samples a walled yard (about 24 m x 16 m, ground 1.7 m below the origin) with boxes, poles and a
-/// ramp, at about `density` points per square metre with 1 cm noise. Deterministic in `seed`.
-pub fn yard(seed: u64, density: f64) -> Vec<[f64; 3]> {
-    let mut rng = Rng::new(seed);
-    let mut pts = Vec::new();
-    let ground = -1.7;
-    // An axis-aligned rectangle: origin o, edge vectors u and v.
-    let quad = |rng: &mut Rng, pts: &mut Vec<[f64; 3]>, o: [f64; 3], u: [f64; 3], v: [f64; 3]| {
-        let cross = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-        let area = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
-        let n = (area * density).round() as usize;
-        for _ in 0..n {
-            let (a, b) = (rng.uniform(), rng.uniform());
-            let mut p = [0.0; 3];
-            for k in 0..3 {
-                p[k] = o[k] + a * u[k] + b * v[k] + 0.01 * rng.gauss();
-            }
-            pts.push(p);
-        }
-    };
-    // Ground and three walls of different heights.
-    quad(&mut rng, &mut pts, [-12.0, -8.0, ground], [24.0, 0.0, 0.0], [0.0, 16.0, 0.0]);
-    quad(&mut rng, &mut pts, [-12.0, 8.0, ground], [24.0, 0.0, 0.0], [0.0, 0.0, 4.0]);
-    quad(&mut rng, &mut pts, [12.0, -8.0, ground], [0.0, 16.0, 0.0], [0.0, 0.0, 3.0]);
-    quad(&mut rng, &mut pts, [-12.0, -8.0, ground], [0.0, 9.0, 0.0], [0.0, 0.0, 2.5]);
-    // Boxes: (centre x, centre y, size x, size y, height).
-    let boxes = [
-        (-6.0, 3.0, 2.0, 1.2, 1.5),
-        (4.0, -4.0, 1.0, 3.0, 2.2),
-        (7.5, 5.0, 2.5, 2.5, 0.8),
-        (-2.0, -5.5, 1.4, 0.8, 1.1),
-        (1.0, 4.5, 0.7, 0.7, 2.8),
-    ];
-    for &(cx, cy, sx, sy, h) in &boxes {
-        let (x0, y0) = (cx - sx / 2.0, cy - sy / 2.0);
-        quad(&mut rng, &mut pts, [x0, y0, ground], [sx, 0.0, 0.0], [0.0, 0.0, h]);
-        quad(&mut rng, &mut pts, [x0, y0 + sy, ground], [sx, 0.0, 0.0], [0.0, 0.0, h]);
-        quad(&mut rng, &mut pts, [x0, y0, ground], [0.0, sy, 0.0], [0.0, 0.0, h]);
-        quad(&mut rng, &mut pts, [x0 + sx, y0, ground], [0.0, sy, 0.0], [0.0, 0.0, h]);
-        quad(&mut rng, &mut pts, [x0, y0, ground + h], [sx, 0.0, 0.0], [0.0, sy, 0.0]);
-    }
-    // A ramp.
-    quad(&mut rng, &mut pts, [-9.0, -6.0, ground], [4.0, 0.0, 1.2], [0.0, 2.5, 0.0]);
-    // Poles: (x, y, radius, height).
-    for &(x, y, r, h) in
-        &[(-3.0, 0.5, 0.15, 3.5), (5.5, 1.0, 0.25, 2.5), (9.0, -6.0, 0.12, 4.0), (-10.0, 6.0, 0.3, 2.0)]
-    {
-        let n = (2.0 * std::f64::consts::PI * r * h * density).round() as usize;
-        for _ in 0..n {
-            let a = rng.range(0.0, 2.0 * std::f64::consts::PI);
-            let z = rng.range(0.0, h);
-            pts.push([
-                x + r * a.cos() + 0.01 * rng.gauss(),
-                y + r * a.sin() + 0.01 * rng.gauss(),
-                ground + z + 0.01 * rng.gauss(),
-            ]);
-        }
-    }
-    pts
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -212,26 +121,101 @@ impl Pose {
     }
 }
 
-/// The synthetic pair: the yard sampled twice with different seeds, the second copy moved by `truth`
-/// (a 130 degree yaw with some tilt and a 6 m shift), so `truth` maps source into target.
-pub struct SyntheticPair {
+// ------------------------------------------------------------------------------------------------
+// The shared test scene: the committed pair of tests/data (the C and Python suites read the same files)
+// ------------------------------------------------------------------------------------------------
+
+/// The folder with the committed test data (`roundtrip_source.ply`, `roundtrip_target.ply`,
+/// `roundtrip_ground_truth.txt`, `golden.json`): `KISSM_TEST_DATA`, else the repository's `tests/data`;
+/// `None` when it does not hold the pair.
+pub fn test_data_dir() -> Option<PathBuf> {
+    let dir = match std::env::var_os("KISSM_TEST_DATA") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../tests/data"),
+    };
+    dir.join("roundtrip_source.ply").is_file().then_some(dir)
+}
+
+/// Whether missing test data is a failure instead of a skip (`KISSM_REQUIRE_TEST_DATA=1`, set by
+/// run_tests.sh and package_test.sh so that those runs cannot pass by skipping).
+pub fn test_data_required() -> bool {
+    std::env::var_os("KISSM_REQUIRE_TEST_DATA").is_some_and(|v| v == "1")
+}
+
+/// The shared scene: source, target and the ground-truth pose that maps source into target.
+pub struct Scene {
     pub source: Vec<[f64; 3]>,
     pub target: Vec<[f64; 3]>,
     pub truth: Pose,
 }
 
-pub fn synthetic_pair() -> &'static SyntheticPair {
-    static PAIR: OnceLock<SyntheticPair> = OnceLock::new();
-    PAIR.get_or_init(|| {
-        let truth = Pose::axis_angle([0.05, -0.03, 1.0], 130.0, [3.5, -4.0, 0.3]);
-        let source = yard(1, 30.0);
-        let target = yard(2, 30.0).into_iter().map(|p| truth.apply(p)).collect();
-        SyntheticPair { source, target, truth }
-    })
+/// The voxel size the scene is registered with (that of the golden file's float64 case).
+pub const SCENE_VOXEL: f64 = 0.25;
+
+/// Reads `roundtrip_ground_truth.txt`: `#` comment lines, then four rows of four numbers.
+pub fn read_ground_truth(path: &std::path::Path) -> Pose {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()));
+    let values: Vec<f64> = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with('#'))
+        .flat_map(str::split_whitespace)
+        .map(|v| v.parse().unwrap_or_else(|e| panic!("{}: {v:?}: {e}", path.display())))
+        .collect();
+    assert_eq!(values.len(), 16, "{}: 16 numbers expected", path.display());
+    assert_eq!(&values[12..], &[0.0, 0.0, 0.0, 1.0], "{}: last row", path.display());
+    let mut m = [[0.0; 4]; 4];
+    for (i, v) in values.into_iter().enumerate() {
+        m[i / 4][i % 4] = v;
+    }
+    Pose::from_matrix(&m)
 }
 
-/// The voxel size used with the synthetic pair.
-pub const SYNTHETIC_VOXEL: f64 = 0.3;
+/// The shared scene, read once per test binary. `None` (after a SKIP line naming `test`) when the data is
+/// absent, unless [`test_data_required`], which panics instead.
+pub fn scene(test: &str) -> Option<&'static Scene> {
+    static SCENE: OnceLock<Option<Scene>> = OnceLock::new();
+    let scene = SCENE.get_or_init(|| {
+        let dir = test_data_dir()?;
+        let read =
+            |name: &str| kissm::read_points(dir.join(name)).unwrap_or_else(|e| panic!("read {name}: {e}")).to_vec();
+        Some(Scene {
+            source: read("roundtrip_source.ply"),
+            target: read("roundtrip_target.ply"),
+            truth: read_ground_truth(&dir.join("roundtrip_ground_truth.txt")),
+        })
+    });
+    if scene.is_none() {
+        let why = "the test scene was not found (tests/data of the repository, or set KISSM_TEST_DATA)";
+        assert!(!test_data_required(), "{test}: {why}, and KISSM_REQUIRE_TEST_DATA=1");
+        skip(test, why);
+    }
+    scene.as_ref()
+}
+
+/// `points` moved by `pose`.
+pub fn moved(points: &[[f64; 3]], pose: &Pose) -> Vec<[f64; 3]> {
+    points.iter().map(|&p| pose.apply(p)).collect()
+}
+
+/// `points` reordered by a fixed formula: element `i` is `points[(i * step + offset) % n]` with `step`
+/// the first number from about 0.618 n up that is coprime to n, so every point appears exactly once.
+pub fn permuted(points: &[[f64; 3]], offset: usize) -> Vec<[f64; 3]> {
+    let n = points.len();
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let step = (n * 618 / 1000..).find(|&s| s > 0 && gcd(s, n) == 1).expect("a coprime step");
+    (0..n).map(|i| points[(i * step + offset) % n]).collect()
+}
+
+/// `copies` copies of `points`, copy `k` shifted by `k * spacing` along x: a larger cloud of the same
+/// surfaces (for calls that must run long enough to be cancelled).
+pub fn tiled(points: &[[f64; 3]], copies: usize, spacing: f64) -> Vec<[f64; 3]> {
+    (0..copies).flat_map(|k| points.iter().map(move |p| [p[0] + k as f64 * spacing, p[1], p[2]])).collect()
+}
 
 // ------------------------------------------------------------------------------------------------
 // A small JSON reader (enough for the kissm tool's output; numbers parse to the exact doubles)
