@@ -66,8 +66,9 @@ def cli() -> Path:
 def demo_clouds(cli: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """source.ply and target.ply (binary float64 PLY) written by `kissm demo`: no real data needed."""
     out = tmp_path_factory.mktemp("demo")
-    subprocess.run([str(cli), "demo", "--out", str(out), "--threads", "2"], check=True, capture_output=True,
-                   timeout=300)
+    subprocess.run(
+        [str(cli), "demo", "--out", str(out), "--threads", "2"], check=True, capture_output=True, timeout=300
+    )
     return out / "source.ply", out / "target.ply"
 
 

@@ -34,9 +34,12 @@ def _box(rng: np.random.Generator, lo, size, density: float) -> np.ndarray:
     lo = np.asarray(lo, dtype=float)
     sx, sy, sz = size
     faces = [
-        (lo, (sx, 0, 0), (0, sy, 0)), (lo + (0, 0, sz), (sx, 0, 0), (0, sy, 0)),
-        (lo, (sx, 0, 0), (0, 0, sz)), (lo + (0, sy, 0), (sx, 0, 0), (0, 0, sz)),
-        (lo, (0, sy, 0), (0, 0, sz)), (lo + (sx, 0, 0), (0, sy, 0), (0, 0, sz)),
+        (lo, (sx, 0, 0), (0, sy, 0)),
+        (lo + (0, 0, sz), (sx, 0, 0), (0, sy, 0)),
+        (lo, (sx, 0, 0), (0, 0, sz)),
+        (lo + (0, sy, 0), (sx, 0, 0), (0, 0, sz)),
+        (lo, (0, sy, 0), (0, 0, sz)),
+        (lo + (sx, 0, 0), (0, sy, 0), (0, 0, sz)),
     ]
     return np.concatenate([_plane(rng, o, u, v, density) for o, u, v in faces])
 
@@ -60,10 +63,10 @@ def yard(seed: int, density: float = 60.0, noise: float = 0.01) -> np.ndarray:
     g = -1.7
     parts = [
         _plane(rng, (-12, -8, g), (24, 0, 0), (0, 16, 0), density * 0.5),
-        _plane(rng, (-12, 8, g), (24, 0, 0), (0, 0, 4), density),     # north wall
-        _plane(rng, (-12, -8, g), (0, 16, 0), (0, 0, 3), density),    # west wall
-        _plane(rng, (12, -8, g), (0, 10, 0), (0, 0, 5), density),     # east wall, with a gap
-        _plane(rng, (2, -6, g), (5, 0, 0), (0, 2, 1.2), density),     # ramp
+        _plane(rng, (-12, 8, g), (24, 0, 0), (0, 0, 4), density),  # north wall
+        _plane(rng, (-12, -8, g), (0, 16, 0), (0, 0, 3), density),  # west wall
+        _plane(rng, (12, -8, g), (0, 10, 0), (0, 0, 5), density),  # east wall, with a gap
+        _plane(rng, (2, -6, g), (5, 0, 0), (0, 2, 1.2), density),  # ramp
     ]
     for _ in range(9):
         lo = (layout.uniform(-10, 9), layout.uniform(-7, 6), g)

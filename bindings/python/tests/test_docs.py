@@ -16,8 +16,10 @@ DOCS = [PACKAGE_ROOT / "README_SECTION.md", PACKAGE_ROOT / "README.md"]
 
 
 def write_ply(path: Path, xyz: np.ndarray) -> None:
-    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(xyz)}\n"
-              "property double x\nproperty double y\nproperty double z\nend_header\n")
+    header = (
+        f"ply\nformat binary_little_endian 1.0\nelement vertex {len(xyz)}\n"
+        "property double x\nproperty double y\nproperty double z\nend_header\n"
+    )
     path.write_bytes(header.encode() + np.ascontiguousarray(xyz, dtype="<f8").tobytes())
 
 

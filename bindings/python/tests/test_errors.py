@@ -14,11 +14,20 @@ import kissm
 from kissm import _errors, _ffi
 
 DOCUMENTED_BASES = {
-    kissm.InvalidArgumentError: ValueError, kissm.NullArgumentError: ValueError, kissm.EmptyInputError: ValueError,
-    kissm.TooFewPointsError: ValueError, kissm.NonFiniteError: ValueError, kissm.VoxelRangeError: ValueError,
-    kissm.StructSizeError: None, kissm.OutOfMemoryError: MemoryError, kissm.CancelledError: None,
-    kissm.FeaturesMismatchError: ValueError, kissm.IoError: OSError, kissm.ParseError: ValueError,
-    kissm.UnsupportedFormatError: ValueError, kissm.InternalError: None,
+    kissm.InvalidArgumentError: ValueError,
+    kissm.NullArgumentError: ValueError,
+    kissm.EmptyInputError: ValueError,
+    kissm.TooFewPointsError: ValueError,
+    kissm.NonFiniteError: ValueError,
+    kissm.VoxelRangeError: ValueError,
+    kissm.StructSizeError: None,
+    kissm.OutOfMemoryError: MemoryError,
+    kissm.CancelledError: None,
+    kissm.FeaturesMismatchError: ValueError,
+    kissm.IoError: OSError,
+    kissm.ParseError: ValueError,
+    kissm.UnsupportedFormatError: ValueError,
+    kissm.InternalError: None,
 }
 
 
@@ -127,8 +136,10 @@ def test_io_error(tmp_path) -> None:
 
 def test_parse_error(tmp_path) -> None:
     bad = tmp_path / "bad.ply"
-    bad.write_text("ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\nproperty float y\n"
-                   "property float z\nend_header\n1 2 3\n")
+    bad.write_text(
+        "ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n1 2 3\n"
+    )
     with pytest.raises(kissm.ParseError, match=re.escape(f"kissm_read_points: {bad}: ")):
         kissm.read_points(bad)
 
@@ -175,8 +186,10 @@ def test_errors_in_one_thread_do_not_leak_into_another(pair) -> None:
         except kissm.Error as e:
             messages[name] = str(e)
 
-    threads = [threading.Thread(target=fail, args=("few", pair.source[:2])),
-               threading.Thread(target=fail, args=("empty", np.empty((0, 3))))]
+    threads = [
+        threading.Thread(target=fail, args=("few", pair.source[:2])),
+        threading.Thread(target=fail, args=("empty", np.empty((0, 3)))),
+    ]
     for t in threads:
         t.start()
     for t in threads:

@@ -17,9 +17,17 @@ DATA = Path(__file__).resolve().parents[3] / "tests" / "data"
 GOLDEN = json.loads((DATA / "golden.json").read_text()) if (DATA / "golden.json").exists() else None
 
 COUNTS = [
-    "num_source_points", "num_target_points", "num_source_voxels", "num_target_voxels",
-    "num_source_keypoints", "num_target_keypoints", "num_initial_correspondences",
-    "num_pruned_correspondences", "num_rotation_inliers", "num_final_inliers", "max_core_number",
+    "num_source_points",
+    "num_target_points",
+    "num_source_voxels",
+    "num_target_voxels",
+    "num_source_keypoints",
+    "num_target_keypoints",
+    "num_initial_correspondences",
+    "num_pruned_correspondences",
+    "num_rotation_inliers",
+    "num_final_inliers",
+    "max_core_number",
 ]
 
 

@@ -111,8 +111,8 @@ def test_lists_integers_and_byte_order(pair) -> None:
     assert np.array_equal(as_point_array(big_endian), pair.source)
     small = pair.source[:2000]
     assert_same_result(
-        kissm.register(small.tolist(), small, voxel_size=0.3),
-        kissm.register(small, small, voxel_size=0.3))
+        kissm.register(small.tolist(), small, voxel_size=0.3), kissm.register(small, small, voxel_size=0.3)
+    )
 
 
 def test_float32_input_equals_the_same_values_in_float64(pair) -> None:
@@ -146,8 +146,15 @@ def test_open3d_point_clouds_when_installed(pair, reference) -> None:
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros((10, 2)), np.zeros((10, 4)), np.zeros(30), np.zeros((2, 5, 3)), np.zeros(()), [[1, 2], [3, 4]],
-     [[1, 2, 3], [4, 5]]],
+    [
+        np.zeros((10, 2)),
+        np.zeros((10, 4)),
+        np.zeros(30),
+        np.zeros((2, 5, 3)),
+        np.zeros(()),
+        [[1, 2], [3, 4]],
+        [[1, 2, 3], [4, 5]],
+    ],
     ids=["n2", "n4", "flat", "3d", "scalar", "list-n2", "ragged"],
 )
 def test_wrong_shapes_are_valueerrors(bad) -> None:
@@ -164,8 +171,14 @@ def test_wide_rows_error_suggests_a_view() -> None:
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros((10, 3), dtype=bool), np.zeros((10, 3), dtype=complex), np.zeros((10, 3), dtype=object),
-     np.array([["a", "b", "c"]] * 5), [[None, None, None]] * 5, np.zeros((10, 3), dtype="datetime64[s]")],
+    [
+        np.zeros((10, 3), dtype=bool),
+        np.zeros((10, 3), dtype=complex),
+        np.zeros((10, 3), dtype=object),
+        np.array([["a", "b", "c"]] * 5),
+        [[None, None, None]] * 5,
+        np.zeros((10, 3), dtype="datetime64[s]"),
+    ],
     ids=["bool", "complex", "object", "str", "none", "datetime"],
 )
 def test_wrong_dtypes_are_typeerrors(bad) -> None:

@@ -60,8 +60,13 @@ def test_real_pair_against_ground_truth(real_pairs: dict[str, RealPair], name: s
 @pytest.mark.parametrize("name", NAMES)
 def test_real_pair_bitwise_equals_cli(real_pairs: dict[str, RealPair], cli: Path, name: str) -> None:
     pair = real_pairs[name]
-    expected = run_cli(cli, pair.source, pair.target, pair.kind.voxel,
-                       ["--format-src", pair.source_format, "--format-tgt", pair.target_format])
+    expected = run_cli(
+        cli,
+        pair.source,
+        pair.target,
+        pair.kind.voxel,
+        ["--format-src", pair.source_format, "--format-tgt", pair.target_format],
+    )
     assert_matches_cli(_register(name, pair), expected)
 
 

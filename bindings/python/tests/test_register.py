@@ -49,8 +49,13 @@ def test_result_fields(pair, result) -> None:
     assert 0 < result.residual_rms < result.noise_bound == pytest.approx(0.75 * pair.voxel_size)
     for name in TIME_FIELDS:
         assert getattr(result, name) >= 0
-    parts = (result.time_voxelize_ms + result.time_features_ms + result.time_matching_ms
-             + result.time_pruning_ms + result.time_solver_ms)
+    parts = (
+        result.time_voxelize_ms
+        + result.time_features_ms
+        + result.time_matching_ms
+        + result.time_pruning_ms
+        + result.time_solver_ms
+    )
     assert result.time_total_ms == pytest.approx(parts)
     for field in dataclasses.fields(kissm.Result):  # plain Python types, not cdata
         value = getattr(result, field.name)

@@ -40,8 +40,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         import cffi
     except ImportError:
-        sys.stderr.write(f"error: {sys.executable} has no cffi; build the package with pip (pip install "
-                         f"./bindings/python), or install cffi for this interpreter\n")
+        sys.stderr.write(
+            f"error: {sys.executable} has no cffi; build the package with pip (pip install "
+            f"./bindings/python), or install cffi for this interpreter\n"
+        )
         return 1
 
     ffi = cffi.FFI()

@@ -18,8 +18,16 @@ NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "dro
 VIEWPOINT_MODES: dict[str, int] = {"fixed": lib.KISSM_VIEWPOINT_FIXED, "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER}
 _ENUMS: dict[str, dict[str, int]] = {"nonfinite_policy": NONFINITE_POLICIES, "viewpoint_mode": VIEWPOINT_MODES}
 
-_FLOAT_FIELDS = ("voxel_size", "normal_radius_gain", "fpfh_radius_gain", "max_linearity", "ratio_test",
-                 "prune_noise_bound_gain", "solver_noise_bound_gain", "noise_bound_max")
+_FLOAT_FIELDS = (
+    "voxel_size",
+    "normal_radius_gain",
+    "fpfh_radius_gain",
+    "max_linearity",
+    "ratio_test",
+    "prune_noise_bound_gain",
+    "solver_noise_bound_gain",
+    "noise_bound_max",
+)
 _INT_FIELDS = ("num_threads", "min_normal_neighbors", "max_correspondences", "min_inliers", "log_level")
 
 

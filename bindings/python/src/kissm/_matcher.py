@@ -41,12 +41,13 @@ class Features:
         return self
 
     def __repr__(self) -> str:
-        return (f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, "
-                f"{self.num_keypoints} keypoints>")
+        return f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, {self.num_keypoints} keypoints>"
 
     def __reduce__(self) -> NoReturn:
-        raise TypeError("kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
-                        "and call Matcher.features() again")
+        raise TypeError(
+            "kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
+            "and call Matcher.features() again"
+        )
 
 
 class Matcher:

@@ -11,14 +11,29 @@ import numpy as np
 from ._ffi import ffi, lib, text
 
 _COUNT_FIELDS = (
-    "num_source_points", "num_target_points", "num_source_nonfinite", "num_target_nonfinite",
-    "num_source_voxels", "num_target_voxels", "num_source_keypoints", "num_target_keypoints",
-    "num_initial_correspondences", "num_pruned_correspondences", "num_rotation_inliers", "num_final_inliers",
+    "num_source_points",
+    "num_target_points",
+    "num_source_nonfinite",
+    "num_target_nonfinite",
+    "num_source_voxels",
+    "num_target_voxels",
+    "num_source_keypoints",
+    "num_target_keypoints",
+    "num_initial_correspondences",
+    "num_pruned_correspondences",
+    "num_rotation_inliers",
+    "num_final_inliers",
     "max_core_number",
 )
 _FLOAT_FIELDS = ("inlier_ratio", "residual_rms", "noise_bound")
-_TIME_FIELDS = ("time_voxelize_ms", "time_features_ms", "time_matching_ms", "time_pruning_ms", "time_solver_ms",
-                "time_total_ms")
+_TIME_FIELDS = (
+    "time_voxelize_ms",
+    "time_features_ms",
+    "time_matching_ms",
+    "time_pruning_ms",
+    "time_solver_ms",
+    "time_total_ms",
+)
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -93,8 +108,10 @@ class Result:
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as plain Python values (nested lists for the arrays), e.g. for JSON."""
-        return {f.name: (v.tolist() if isinstance(v := getattr(self, f.name), np.ndarray) else v)
-                for f in dataclasses.fields(self)}
+        return {
+            f.name: (v.tolist() if isinstance(v := getattr(self, f.name), np.ndarray) else v)
+            for f in dataclasses.fields(self)
+        }
 
     def __repr__(self) -> str:
         head = "kissm.Result("
@@ -107,11 +124,12 @@ class Result:
             f"{self.time_total_ms:.1f} ms,",
         ]
         if self.has_pose:
-            lines.append(f"{pad}rotation {self.rotation_angle_deg:.2f} deg, "
-                         f"translation {float(np.linalg.norm(self.translation)):.4g},")
+            lines.append(
+                f"{pad}rotation {self.rotation_angle_deg:.2f} deg, "
+                f"translation {float(np.linalg.norm(self.translation)):.4g},"
+            )
             prefix = f"{pad}transform="
-            matrix = np.array2string(self.transform, precision=6, suppress_small=True, separator=", ",
-                                     prefix=prefix)
+            matrix = np.array2string(self.transform, precision=6, suppress_small=True, separator=", ", prefix=prefix)
             lines.append(f"{prefix}{matrix})")
         else:
             lines.append(f"{pad}no pose)")
