@@ -1,4 +1,4 @@
-"""Shared fixtures: the repository, the real data, the kissm CLI, synthetic pairs."""
+"""Shared fixtures: the repository, the real data, the kissm CLI, the committed test pair."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/scenes.py, tests/helpers.py
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/testdata.py, tests/helpers.py
 
 import kissm  # noqa: E402
 
-import scenes  # noqa: E402
+import testdata  # noqa: E402
 
 TESTS_DIR = Path(__file__).resolve().parent
 PACKAGE_ROOT = TESTS_DIR.parent  # bindings/python
@@ -73,13 +73,15 @@ def demo_clouds(cli: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Pa
 
 
 @pytest.fixture(scope="session")
-def pair() -> scenes.Pair:
-    return scenes.yard_pair(130.0)
+def pair() -> testdata.Pair:
+    """The committed pair of tests/data (shared with the C and Rust suites)."""
+    return testdata.committed_pair()
 
 
 @pytest.fixture(scope="session")
-def pairs() -> list[scenes.Pair]:
-    return [scenes.yard_pair(yaw, seed) for yaw, seed in ((130.0, 7), (25.0, 11), (-95.0, 13), (170.0, 17))]
+def pairs(pair: testdata.Pair) -> list[testdata.Pair]:
+    """The committed pair and three moved, shuffled or noisy variations of it."""
+    return testdata.variations(pair)
 
 
 @pytest.fixture()

@@ -21,7 +21,9 @@ def test_demo_clouds_bitwise_equal_cli(cli: Path, demo_clouds: tuple[Path, Path]
     for threads in (1, 2):
         with kissm.Matcher(voxel_size=0.3, num_threads=threads) as matcher:
             assert_matches_cli(matcher.register(source, target), expected)
-            assert_matches_cli(matcher.register_features(matcher.features(source), matcher.features(target)), expected)
+            assert_matches_cli(
+                matcher.register_features(matcher.compute_features(source), matcher.compute_features(target)), expected
+            )
 
 
 def test_python_arrays_bitwise_equal_cli_on_the_same_values(cli: Path, pair, tmp_path: Path) -> None:

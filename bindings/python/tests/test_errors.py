@@ -100,7 +100,7 @@ def test_too_few_points(pair) -> None:
     with pytest.raises(kissm.TooFewPointsError, match=f"target has 3 points; at least {kissm.MIN_POINTS}"):
         kissm.register(pair.source, pair.target[:3], voxel_size=0.3)
     with kissm.Matcher() as matcher, pytest.raises(kissm.TooFewPointsError, match="cloud has 1 points"):
-        matcher.features(pair.source[:1])
+        matcher.compute_features(pair.source[:1])
 
 
 def test_nonfinite(pair) -> None:
@@ -120,7 +120,7 @@ def test_voxel_range(pair) -> None:
 
 def test_features_mismatch(pair) -> None:
     with kissm.Matcher(voxel_size=0.3) as a, kissm.Matcher(voxel_size=0.5) as b:
-        source, target = a.features(pair.source), a.features(pair.target)
+        source, target = a.compute_features(pair.source), a.compute_features(pair.target)
         with pytest.raises(kissm.FeaturesMismatchError, match="^kissm_register_features: source features"):
             b.register_features(source, target)
         assert a.register_features(source, target).valid

@@ -6,15 +6,16 @@ from __future__ import annotations
 
 import json
 import struct
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import kissm
 
-DATA = Path(__file__).resolve().parents[3] / "tests" / "data"
-GOLDEN = json.loads((DATA / "golden.json").read_text()) if (DATA / "golden.json").exists() else None
+import testdata
+
+DATA = testdata.data_dir()  # the committed pair and golden.json, from tests/data
+GOLDEN = json.loads((DATA / "golden.json").read_text())
 
 COUNTS = [
     "num_source_points",
@@ -35,8 +36,7 @@ def bits(x: float) -> bytes:
     return struct.pack("<d", x)
 
 
-@pytest.mark.skipif(GOLDEN is None, reason="tests/data/golden.json not found (not a source checkout)")
-@pytest.mark.parametrize("case", GOLDEN["cases"] if GOLDEN else [], ids=lambda c: c["name"])
+@pytest.mark.parametrize("case", GOLDEN["cases"], ids=lambda c: c["name"])
 @pytest.mark.parametrize("threads", [1, 2])
 def test_golden(case: dict, threads: int) -> None:
     source = kissm.read_points(DATA / GOLDEN["source"])

@@ -189,6 +189,6 @@ def test_wrong_dtypes_are_typeerrors(bad) -> None:
 def test_features_argument_checks() -> None:
     with kissm.Matcher() as matcher:
         with pytest.raises(ValueError, match="cloud must have shape"):
-            matcher.features(np.zeros((5, 2)))
+            matcher.compute_features(np.zeros((5, 2)))
         with pytest.raises(TypeError, match="source must be kissm.Features"):
             matcher.register_features(np.zeros((5, 3)), np.zeros((5, 3)))  # type: ignore[arg-type]

@@ -17,7 +17,7 @@ from cli_json import assert_matches_cli, run_cli
 from conftest import data_dir
 from helpers import assert_same_result
 from realdata import RealPair, load_pairs, pair_names
-from scenes import rotation_error_deg
+from testdata import rotation_error_deg
 
 NAMES = pair_names(data_dir()) or ["(no real data)"]
 

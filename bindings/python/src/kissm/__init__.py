@@ -9,9 +9,9 @@ A thin Python layer over the kissm C library (loaded through cffi in ABI mode)::
         aligned = source_xyz @ result.rotation.T + result.translation
 
     with kissm.Matcher(voxel_size=0.5, num_threads=2) as matcher:     # reuse settings and threads
-        target = matcher.features(target_xyz)                       # describe a map once...
-        for scan in scans:
-            print(matcher.register_features(matcher.features(scan), target))  # ...match it many times
+        target = matcher.compute_features(target_xyz)  # describe a map once...
+        for scan in scans:  # ...and match it many times
+            print(matcher.register_features(matcher.compute_features(scan), target))
 
 Results are bitwise identical to the C library's (and the ``kissm`` CLI's) on the same input, whatever
 ``num_threads``. The library never prints; neither does this package.

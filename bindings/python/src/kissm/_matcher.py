@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import warnings
 from typing import Any, NoReturn
 
 from ._config import Config
@@ -15,7 +16,7 @@ from ._result import Result
 class Features:
     """A cloud described once (voxels, normals, FPFH descriptors), to be matched against many others.
 
-    Made by :meth:`Matcher.features`. Immutable: one Features object may be used by several threads and
+    Made by :meth:`Matcher.compute_features`. Immutable: one Features object may be used by several threads and
     matchers at once, and may outlive the matcher that made it. It can be matched by any matcher whose
     descriptor settings (voxel size, radii, ``min_normal_neighbors``, ``max_linearity``, viewpoint) are the
     same, else :class:`kissm.FeaturesMismatchError` is raised. Not picklable (the library has no
@@ -29,7 +30,7 @@ class Features:
     num_keypoints: int  #: voxels with a descriptor
 
     def __init__(self) -> None:
-        raise TypeError("kissm.Features objects are made by Matcher.features(cloud)")
+        raise TypeError("kissm.Features objects are made by Matcher.compute_features(cloud)")
 
     @classmethod
     def _adopt(cls, ptr: Any) -> Features:
@@ -46,7 +47,7 @@ class Features:
     def __reduce__(self) -> NoReturn:
         raise TypeError(
             "kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
-            "and call Matcher.features() again"
+            "and call Matcher.compute_features() again"
         )
 
 
@@ -115,8 +116,13 @@ class Matcher:
                 raise_status(status)  # reads the thread-local message before any other call
         return Result._from_c(result)
 
-    def features(self, cloud: PointsLike) -> Features:
-        """Describe ``cloud`` once, for :meth:`register_features` against any number of other clouds."""
+    def compute_features(self, cloud: PointsLike) -> Features:
+        """Describe ``cloud`` once (``kissm_features_compute``), for :meth:`register_features` against any
+        number of other clouds. ``cloud`` is read like :meth:`register`'s inputs.
+
+        Raises:
+            TypeError, ValueError: as :meth:`register` (e.g. :class:`kissm.TooFewPointsError`).
+        """
         view = points_view(cloud, "cloud")
         out = ffi.new("kissm_features **")
         with self._call_lock:
@@ -125,12 +131,21 @@ class Matcher:
                 raise_status(status)
         return Features._adopt(out[0])
 
+    def features(self, cloud: PointsLike) -> Features:
+        """Deprecated alias of :meth:`compute_features` (the name of the C ``kissm_features_compute``)."""
+        warnings.warn(
+            "kissm.Matcher.features() is deprecated; use Matcher.compute_features()", DeprecationWarning, stacklevel=2
+        )
+        return self.compute_features(cloud)
+
     def register_features(self, source: Features, target: Features) -> Result:
         """Register two described clouds: the same pose, counts and validity as :meth:`register` on the
         clouds they were computed from (voxelisation and feature times are reported as 0)."""
         for name, value in (("source", source), ("target", target)):
             if not isinstance(value, Features):
-                raise TypeError(f"{name} must be kissm.Features (from Matcher.features), not {type(value).__name__}")
+                raise TypeError(
+                    f"{name} must be kissm.Features (from Matcher.compute_features), not {type(value).__name__}"
+                )
         result = ffi.new("kissm_result *")
         result.struct_size = ffi.sizeof("kissm_result")
         with self._call_lock:
