@@ -73,10 +73,13 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
 }
 
 /* The counts, by the names golden.json uses (the kissm_result field names). */
+/* One X(...) per field, wrapped by hand. */
+/* clang-format off */
 #define COUNT_FIELDS(X)                                                                                \
     X(num_source_points) X(num_target_points) X(num_source_voxels) X(num_target_voxels)              \
     X(num_source_keypoints) X(num_target_keypoints) X(num_initial_correspondences)                   \
     X(num_pruned_correspondences) X(num_rotation_inliers) X(num_final_inliers) X(max_core_number)
+/* clang-format on */
 
 static void write_golden(void) {
     size_t c;
@@ -145,10 +148,12 @@ static void check_case(const char *text, const golden_case *gc) {
                       gc->name, (int)threads[t], i, expect, r.transform[i]);
             v = next + strspn(next, ", ");
         }
+/* clang-format off */
 #define CHECK_COUNT(f)                                                                                 \
     v = value_of(begin, end, #f);                                                                      \
     CHECK_MSG(v && strtoull(v, NULL, 10) == r.f, "%s threads %d: " #f " %llu", gc->name, (int)threads[t], \
               (unsigned long long)r.f);
+/* clang-format on */
         COUNT_FIELDS(CHECK_COUNT)
         v = value_of(begin, end, "residual_rms");
         {
