@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Running `kissm register --json` and comparing its output with a Python Result, bit for bit."""
 
 from __future__ import annotations

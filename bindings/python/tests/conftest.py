@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Shared fixtures: the repository, the real data, the kissm CLI, the committed test pair."""
 
 from __future__ import annotations

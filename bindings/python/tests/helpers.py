@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Comparisons used by several test modules."""
 
 from __future__ import annotations

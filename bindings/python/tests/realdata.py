@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The real-data pairs of $KISSM_DATA_DIR/index.tsv, with the voxel sizes and success thresholds of the C
 real-data test (SPEC section 7)."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The cffi declarations must be exactly what tools/gen_cdef.py makes of include/kissm.h."""
 
 from __future__ import annotations

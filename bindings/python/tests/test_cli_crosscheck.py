@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Bitwise equality with the C library as the kissm CLI runs it, on inputs that need no real data."""
 
 from __future__ import annotations

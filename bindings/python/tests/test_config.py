@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """kissm.Config: every C field as a keyword, library defaults, library validation, pickling, repr."""
 
 from __future__ import annotations

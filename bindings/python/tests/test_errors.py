@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """One exception class per status code, each raised with the library's message; all picklable."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Cross-language round trip, Python side: the clouds of tests/data registered as listed in
 tests/data/golden.json (written by the C library) give the same result bit for bit. The C suite
 (tests/roundtrip) and the Rust suite (kissm/tests/golden.rs) check the same file."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The import-time self-check: version, ABI version and struct sizes, with clear ImportErrors."""
 
 from __future__ import annotations

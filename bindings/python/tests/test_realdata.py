@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Real scans from ../shared/data (or $KISSM_DATA_DIR): every pair of index.tsv against its ground truth,
 and bitwise against the kissm CLI. Skipped when the data is absent."""
 

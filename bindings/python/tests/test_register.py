@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Registration through Matcher, kissm.register and features; Result; lifecycle; pickling."""
 
 from __future__ import annotations

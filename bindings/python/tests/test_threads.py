@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Threads: thread pools give the serial results; the GIL is released; one Matcher is safe to share."""
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Build step: write the out-of-line ABI-mode cffi module ``kissm/_kissm_cffi.py``.
 
 Run by ``bindings/python/CMakeLists.txt`` with the build environment's Python (which has cffi). It first

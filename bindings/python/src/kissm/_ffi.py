@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Loading libkissm: the cffi declarations, the library file, and the check that they agree.
 
 The declarations come from ``_kissm_cffi.py``, an out-of-line ABI-mode module that the package build

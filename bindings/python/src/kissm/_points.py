@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Turning array-likes into ``kissm_points`` views: checks first, copies only when unavoidable."""
 
 from __future__ import annotations
