@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``kissm.Matcher`` and ``kissm.Features``: the C handles, owned, locked and released."""
 
 from __future__ import annotations
@@ -25,9 +26,12 @@ class Features:
 
     __slots__ = ("_ptr", "num_points", "num_voxels", "num_keypoints", "__weakref__")
     _ptr: Any
-    num_points: int  #: points given
-    num_voxels: int  #: occupied voxels
-    num_keypoints: int  #: voxels with a descriptor
+    num_points: int
+    """Points given."""
+    num_voxels: int
+    """Occupied voxels."""
+    num_keypoints: int
+    """Voxels with a descriptor."""
 
     def __init__(self) -> None:
         raise TypeError("kissm.Features objects are made by Matcher.compute_features(cloud)")
@@ -84,6 +88,7 @@ class Matcher:
 
     @property
     def closed(self) -> bool:
+        """Whether :meth:`close` was called (then every other method raises ValueError)."""
         return self._ptr is None
 
     def _handle(self) -> Any:
