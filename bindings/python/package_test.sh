@@ -79,6 +79,13 @@ if ! grep -q 'platform tag: "manylinux_' <<<"$show"; then
   exit 1
 fi
 step "$(basename "$repaired"): $(grep -o 'platform tag: "[^"]*"' <<<"$show" | head -1)"
+wheel_files=$("$tools_venv/bin/python" -m zipfile -l "$repaired")
+for licence in LICENSE THIRD_PARTY.md third_party/nanoflann/LICENSE third_party/eigen/LICENSE.MPL2; do
+  grep -q "dist-info/licenses/_core/$licence " <<<"$wheel_files" || {
+    echo "package: the wheel lacks the licence file $licence" >&2
+    exit 1
+  }
+done
 
 # ---- the tests, copied away from the source tree -----------------------------------------------------
 tests=$stage/tests

@@ -1,6 +1,9 @@
+# SPDX-License-Identifier: MIT
 """Inputs: (N, 3) float32/float64 array-likes in any layout, read in place when possible, never written."""
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 import pytest
@@ -133,8 +136,14 @@ def test_objects_with_points_attribute(pair, reference) -> None:
     assert_same_result(register(pair, cloud, FakeOpen3DCloud(pair.target)), reference)
 
 
-def test_open3d_point_clouds_when_installed(pair, reference) -> None:
-    o3d = pytest.importorskip("open3d")
+def test_open3d_point_clouds(pair, reference) -> None:
+    """Open3D point clouds register in place. run_tests.sh installs open3d-cpu and sets
+    KISSM_REQUIRE_OPEN3D=1, so there a missing Open3D fails; elsewhere (the package tests' lighter venvs)
+    the test skips."""
+    if os.environ.get("KISSM_REQUIRE_OPEN3D") == "1":
+        import open3d as o3d
+    else:
+        o3d = pytest.importorskip("open3d", reason="open3d is not installed (run_tests.sh installs open3d-cpu)")
     source, target = o3d.geometry.PointCloud(), o3d.geometry.PointCloud()
     source.points = o3d.utility.Vector3dVector(pair.source)
     target.points = o3d.utility.Vector3dVector(pair.target)
