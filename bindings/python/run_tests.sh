@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The Python binding's suite: makes a venv, installs the package the way users do
-# (pip install ./bindings/python[test], which builds libkissm again), then runs pytest.
+# (pip install ./bindings/python[test], which copies the core into bindings/python/_core and builds
+# libkissm, incrementally in $KISSM_BUILD_DIR/python-build), adds open3d-cpu, then runs pytest.
+# bindings/python/package_test.sh tests the sdist and the manylinux wheel away from the repository.
 #
 # Run by tools/test.sh with KISSM_BUILD_DIR (the CMake build: its `kissm` CLI is the reference for the
 # bitwise cross-checks) and KISSM_DATA_DIR (the real scans; those tests skip when absent). Both default as
@@ -55,12 +58,30 @@ if ! install_package; then
 fi
 echo "python: pip install ./bindings/python[test] took $(($(date +%s) - start)) s"
 
+# Open3D for the interop test (tests/test_inputs.py, which fails here without it): large, so only in this
+# venv, not in package_test.sh's fresh ones. pip returns at once when the pinned version is there.
+# (open3d brings dash, whose pytest plugin is kept out with -p no:dash.)
+"$py" -m pip install --quiet --disable-pip-version-check open3d-cpu==0.20.0
+# Its wheel links libusb-1.0, which Debian does not install by default.
+if ! "$py" -c 'import open3d' >/dev/null 2>&1; then
+  if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
+    echo "python: installing libusb-1.0-0 (needed by open3d)"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get install -y -qq --no-install-recommends libusb-1.0-0 >/dev/null 2>&1 ||
+      { apt-get update -qq && apt-get install -y -qq --no-install-recommends libusb-1.0-0 >/dev/null; }
+  fi
+  if ! "$py" -c 'import open3d' >/dev/null; then
+    echo "python: open3d does not import (on Debian/Ubuntu: apt-get install libusb-1.0-0)" >&2
+    exit 1
+  fi
+fi
+
 # ---- the tests: against the installed package and its own library -----------------------------------
 unset KISSM_LIBRARY
 # (The package sits under src/, so running from bindings/python cannot import the source tree instead.)
 cd "$here/bindings/python"
 status=0
-KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir "$py" -m pytest -p no:cacheprovider tests "$@" || status=$?
+KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir KISSM_REQUIRE_OPEN3D=1 "$py" -m pytest -p no:cacheprovider -p no:dash tests "$@" || status=$?
 if ((status == 5)); then
   echo "python: pytest collected no tests" >&2
   exit 1

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Running `kissm register --json` and comparing its output with a Python Result, bit for bit."""
 
 from __future__ import annotations
@@ -16,13 +17,19 @@ from helpers import bits
 
 #: CLI JSON "counts" key -> Result field.
 COUNTS = {
-    "source_points": "num_source_points", "target_points": "num_target_points",
-    "source_nonfinite": "num_source_nonfinite", "target_nonfinite": "num_target_nonfinite",
-    "source_voxels": "num_source_voxels", "target_voxels": "num_target_voxels",
-    "source_keypoints": "num_source_keypoints", "target_keypoints": "num_target_keypoints",
+    "source_points": "num_source_points",
+    "target_points": "num_target_points",
+    "source_nonfinite": "num_source_nonfinite",
+    "target_nonfinite": "num_target_nonfinite",
+    "source_voxels": "num_source_voxels",
+    "target_voxels": "num_target_voxels",
+    "source_keypoints": "num_source_keypoints",
+    "target_keypoints": "num_target_keypoints",
     "initial_correspondences": "num_initial_correspondences",
-    "pruned_correspondences": "num_pruned_correspondences", "max_core_number": "max_core_number",
-    "rotation_inliers": "num_rotation_inliers", "final_inliers": "num_final_inliers",
+    "pruned_correspondences": "num_pruned_correspondences",
+    "max_core_number": "max_core_number",
+    "rotation_inliers": "num_rotation_inliers",
+    "final_inliers": "num_final_inliers",
 }
 
 
@@ -30,11 +37,22 @@ def _parse_int(text: str) -> Any:
     return -0.0 if text == "-0" else int(text)  # the CLI prints doubles -0.0 and 0.0 as "-0" and "0"
 
 
-def run_cli(cli: Path, source: Path, target: Path, voxel: float, extra: list[str] | None = None,
-            threads: int = 1) -> dict[str, Any]:
+def run_cli(
+    cli: Path, source: Path, target: Path, voxel: float, extra: list[str] | None = None, threads: int = 1
+) -> dict[str, Any]:
     """`kissm register SOURCE TARGET --voxel V --threads 1 --json` as a dict (exact doubles, null = NaN)."""
-    command = [str(cli), "register", str(source), str(target), "--voxel", repr(float(voxel)),
-               "--threads", str(threads), "--json", *(extra or [])]
+    command = [
+        str(cli),
+        "register",
+        str(source),
+        str(target),
+        "--voxel",
+        repr(float(voxel)),
+        "--threads",
+        str(threads),
+        "--json",
+        *(extra or []),
+    ]
     done = subprocess.run(command, capture_output=True, text=True, timeout=600)
     assert done.returncode in (0, 1), f"{command}: exit {done.returncode}: {done.stderr}"
     return json.loads(done.stdout, parse_int=_parse_int, parse_float=float)

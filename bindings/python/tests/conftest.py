@@ -1,4 +1,5 @@
-"""Shared fixtures: the repository, the real data, the kissm CLI, synthetic pairs."""
+# SPDX-License-Identifier: MIT
+"""Shared fixtures: the repository, the real data, the kissm CLI, the committed test pair."""
 
 from __future__ import annotations
 
@@ -10,11 +11,11 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/scenes.py, tests/helpers.py
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/testdata.py, tests/helpers.py
 
 import kissm  # noqa: E402
 
-import scenes  # noqa: E402
+import testdata  # noqa: E402
 
 TESTS_DIR = Path(__file__).resolve().parent
 PACKAGE_ROOT = TESTS_DIR.parent  # bindings/python
@@ -66,19 +67,22 @@ def cli() -> Path:
 def demo_clouds(cli: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     """source.ply and target.ply (binary float64 PLY) written by `kissm demo`: no real data needed."""
     out = tmp_path_factory.mktemp("demo")
-    subprocess.run([str(cli), "demo", "--out", str(out), "--threads", "2"], check=True, capture_output=True,
-                   timeout=300)
+    subprocess.run(
+        [str(cli), "demo", "--out", str(out), "--threads", "2"], check=True, capture_output=True, timeout=300
+    )
     return out / "source.ply", out / "target.ply"
 
 
 @pytest.fixture(scope="session")
-def pair() -> scenes.Pair:
-    return scenes.yard_pair(130.0)
+def pair() -> testdata.Pair:
+    """The committed pair of tests/data (shared with the C and Rust suites)."""
+    return testdata.committed_pair()
 
 
 @pytest.fixture(scope="session")
-def pairs() -> list[scenes.Pair]:
-    return [scenes.yard_pair(yaw, seed) for yaw, seed in ((130.0, 7), (25.0, 11), (-95.0, 13), (170.0, 17))]
+def pairs(pair: testdata.Pair) -> list[testdata.Pair]:
+    """The committed pair and three moved, shuffled or noisy variations of it."""
+    return testdata.variations(pair)
 
 
 @pytest.fixture()

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Comparisons used by several test modules."""
 
 from __future__ import annotations
@@ -8,8 +9,14 @@ import numpy as np
 
 import kissm
 
-TIME_FIELDS = {"time_voxelize_ms", "time_features_ms", "time_matching_ms", "time_pruning_ms", "time_solver_ms",
-               "time_total_ms"}
+TIME_FIELDS = {
+    "time_voxelize_ms",
+    "time_features_ms",
+    "time_matching_ms",
+    "time_pruning_ms",
+    "time_solver_ms",
+    "time_total_ms",
+}
 
 
 def bits(value: object) -> object:

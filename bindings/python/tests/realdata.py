@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The real-data pairs of $KISSM_DATA_DIR/index.tsv, with the voxel sizes and success thresholds of the C
 real-data test (SPEC section 7)."""
 
@@ -52,13 +53,17 @@ def load_pairs(root: Path) -> list[RealPair]:
             pair_dir = root / row["pair_dir"]
             info = _pair_txt(pair_dir / "pair.txt")
             dataset = root / row["dataset"]
-            pairs.append(RealPair(
-                name=row["pair_dir"],
-                source=dataset / info["source"], target=dataset / info["target"],
-                source_format=info["source_format"], target_format=info["target_format"],
-                gt=np.loadtxt(pair_dir / "gt_T_target_source.txt").reshape(4, 4),
-                kind=KINDS[row["kind"]],
-            ))
+            pairs.append(
+                RealPair(
+                    name=row["pair_dir"],
+                    source=dataset / info["source"],
+                    target=dataset / info["target"],
+                    source_format=info["source_format"],
+                    target_format=info["target_format"],
+                    gt=np.loadtxt(pair_dir / "gt_T_target_source.txt").reshape(4, 4),
+                    kind=KINDS[row["kind"]],
+                )
+            )
     return pairs
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The cffi declarations must be exactly what tools/gen_cdef.py makes of include/kissm.h."""
 
 from __future__ import annotations
@@ -42,7 +43,8 @@ def test_committed_cdef_matches_the_header(gen_cdef, fresh_cdef: str) -> None:
     assert committed == fresh_cdef, (
         "bindings/python/src/kissm/_cdef.h drifted from include/kissm.h; regenerate it with "
         "'python3 bindings/python/tools/gen_cdef.py --write':\n"
-        + gen_cdef.diff(fresh_cdef, committed, "fresh", "committed"))
+        + gen_cdef.diff(fresh_cdef, committed, "fresh", "committed")
+    )
 
 
 def test_installed_cdef_matches_the_header(fresh_cdef: str) -> None:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Bitwise equality with the C library as the kissm CLI runs it, on inputs that need no real data."""
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ def test_demo_clouds_bitwise_equal_cli(cli: Path, demo_clouds: tuple[Path, Path]
     for threads in (1, 2):
         with kissm.Matcher(voxel_size=0.3, num_threads=threads) as matcher:
             assert_matches_cli(matcher.register(source, target), expected)
-            assert_matches_cli(matcher.register_features(matcher.features(source), matcher.features(target)),
-                               expected)
+            assert_matches_cli(
+                matcher.register_features(matcher.compute_features(source), matcher.compute_features(target)), expected
+            )
 
 
 def test_python_arrays_bitwise_equal_cli_on_the_same_values(cli: Path, pair, tmp_path: Path) -> None:
@@ -34,8 +36,9 @@ def test_python_arrays_bitwise_equal_cli_on_the_same_values(cli: Path, pair, tmp
     assert_matches_cli(kissm.register(pair.source, pair.target, voxel_size=pair.voxel_size), expected)
     strided = np.zeros((len(pair.source), 4))
     strided[:, :3] = pair.source
-    assert_matches_cli(kissm.register(strided[:, :3], np.asfortranarray(pair.target),
-                                      voxel_size=pair.voxel_size), expected)
+    assert_matches_cli(
+        kissm.register(strided[:, :3], np.asfortranarray(pair.target), voxel_size=pair.voxel_size), expected
+    )
 
 
 def test_float32_arrays_bitwise_equal_cli(cli: Path, pair, tmp_path: Path) -> None:
@@ -43,8 +46,7 @@ def test_float32_arrays_bitwise_equal_cli(cli: Path, pair, tmp_path: Path) -> No
     source, target = pair.source.astype("<f4"), pair.target.astype("<f4")
     source.tofile(tmp_path / "source.bin")
     target.tofile(tmp_path / "target.bin")
-    expected = run_cli(cli, tmp_path / "source.bin", tmp_path / "target.bin", pair.voxel_size,
-                       ["--format", "bin_xyz"])
+    expected = run_cli(cli, tmp_path / "source.bin", tmp_path / "target.bin", pair.voxel_size, ["--format", "bin_xyz"])
     assert_matches_cli(kissm.register(source, target, voxel_size=pair.voxel_size), expected)
 
 
@@ -68,10 +70,21 @@ def test_invalid_result_matches_cli(cli: Path, tmp_path: Path) -> None:
 def test_cli_config_flags_match_config_fields(cli: Path, pair, tmp_path: Path) -> None:
     np.save(tmp_path / "s.npy", pair.source)
     np.save(tmp_path / "t.npy", pair.target)
-    expected = run_cli(cli, tmp_path / "s.npy", tmp_path / "t.npy", 0.35,
-                       ["--min-inliers", "12", "--max-correspondences", "800", "--viewpoint-center"])
-    result = kissm.register(pair.source, pair.target, voxel_size=0.35, min_inliers=12, max_correspondences=800,
-                            viewpoint_mode="cloud_center")
+    expected = run_cli(
+        cli,
+        tmp_path / "s.npy",
+        tmp_path / "t.npy",
+        0.35,
+        ["--min-inliers", "12", "--max-correspondences", "800", "--viewpoint-center"],
+    )
+    result = kissm.register(
+        pair.source,
+        pair.target,
+        voxel_size=0.35,
+        min_inliers=12,
+        max_correspondences=800,
+        viewpoint_mode="cloud_center",
+    )
     assert_matches_cli(result, expected)
 
 
@@ -79,5 +92,7 @@ def test_cli_config_flags_match_config_fields(cli: Path, pair, tmp_path: Path) -
 def test_cli_threads_do_not_matter(cli: Path, demo_clouds: tuple[Path, Path], threads: int) -> None:
     source_path, target_path = demo_clouds
     expected = run_cli(cli, source_path, target_path, 0.3, threads=threads)
-    assert_matches_cli(kissm.register(kissm.read_points(source_path), kissm.read_points(target_path),
-                                      voxel_size=0.3, num_threads=1), expected)
+    assert_matches_cli(
+        kissm.register(kissm.read_points(source_path), kissm.read_points(target_path), voxel_size=0.3, num_threads=1),
+        expected,
+    )

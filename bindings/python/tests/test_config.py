@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """kissm.Config: every C field as a keyword, library defaults, library validation, pickling, repr."""
 
 from __future__ import annotations
@@ -45,11 +46,24 @@ def test_defaults_come_from_kissm_config_init() -> None:
 
 
 def test_fields_round_trip_into_the_c_struct() -> None:
-    config = kissm.Config(voxel_size=0.25, num_threads=3, normal_radius_gain=2.5, fpfh_radius_gain=6.0,
-                          max_linearity=0.95, ratio_test=1.0, prune_noise_bound_gain=1.5,
-                          solver_noise_bound_gain=0.5, noise_bound_max=0.4, viewpoint=(1, 2.5, -3),
-                          min_normal_neighbors=5, max_correspondences=3000, min_inliers=20,
-                          nonfinite_policy="drop", viewpoint_mode="cloud_center", log_level=0)
+    config = kissm.Config(
+        voxel_size=0.25,
+        num_threads=3,
+        normal_radius_gain=2.5,
+        fpfh_radius_gain=6.0,
+        max_linearity=0.95,
+        ratio_test=1.0,
+        prune_noise_bound_gain=1.5,
+        solver_noise_bound_gain=0.5,
+        noise_bound_max=0.4,
+        viewpoint=(1, 2.5, -3),
+        min_normal_neighbors=5,
+        max_correspondences=3000,
+        min_inliers=20,
+        nonfinite_policy="drop",
+        viewpoint_mode="cloud_center",
+        log_level=0,
+    )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
     assert (c.max_linearity, c.ratio_test, c.prune_noise_bound_gain) == (0.95, 1.0, 1.5)
@@ -108,8 +122,16 @@ def test_out_of_int32_range_is_a_valueerror() -> None:
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("voxel_size", "0.3"), ("voxel_size", None), ("num_threads", 2.0), ("num_threads", True),
-     ("min_inliers", "15"), ("viewpoint", 3.0), ("viewpoint", ("a", 0, 0)), ("nonfinite_policy", 0.5)],
+    [
+        ("voxel_size", "0.3"),
+        ("voxel_size", None),
+        ("num_threads", 2.0),
+        ("num_threads", True),
+        ("min_inliers", "15"),
+        ("viewpoint", 3.0),
+        ("viewpoint", ("a", 0, 0)),
+        ("nonfinite_policy", 0.5),
+    ],
 )
 def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
     with pytest.raises(TypeError, match=field):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """One exception class per status code, each raised with the library's message; all picklable."""
 
 from __future__ import annotations
@@ -14,11 +15,20 @@ import kissm
 from kissm import _errors, _ffi
 
 DOCUMENTED_BASES = {
-    kissm.InvalidArgumentError: ValueError, kissm.NullArgumentError: ValueError, kissm.EmptyInputError: ValueError,
-    kissm.TooFewPointsError: ValueError, kissm.NonFiniteError: ValueError, kissm.VoxelRangeError: ValueError,
-    kissm.StructSizeError: None, kissm.OutOfMemoryError: MemoryError, kissm.CancelledError: None,
-    kissm.FeaturesMismatchError: ValueError, kissm.IoError: OSError, kissm.ParseError: ValueError,
-    kissm.UnsupportedFormatError: ValueError, kissm.InternalError: None,
+    kissm.InvalidArgumentError: ValueError,
+    kissm.NullArgumentError: ValueError,
+    kissm.EmptyInputError: ValueError,
+    kissm.TooFewPointsError: ValueError,
+    kissm.NonFiniteError: ValueError,
+    kissm.VoxelRangeError: ValueError,
+    kissm.StructSizeError: None,
+    kissm.OutOfMemoryError: MemoryError,
+    kissm.CancelledError: None,
+    kissm.FeaturesMismatchError: ValueError,
+    kissm.IoError: OSError,
+    kissm.ParseError: ValueError,
+    kissm.UnsupportedFormatError: ValueError,
+    kissm.InternalError: None,
 }
 
 
@@ -91,7 +101,7 @@ def test_too_few_points(pair) -> None:
     with pytest.raises(kissm.TooFewPointsError, match=f"target has 3 points; at least {kissm.MIN_POINTS}"):
         kissm.register(pair.source, pair.target[:3], voxel_size=0.3)
     with kissm.Matcher() as matcher, pytest.raises(kissm.TooFewPointsError, match="cloud has 1 points"):
-        matcher.features(pair.source[:1])
+        matcher.compute_features(pair.source[:1])
 
 
 def test_nonfinite(pair) -> None:
@@ -111,7 +121,7 @@ def test_voxel_range(pair) -> None:
 
 def test_features_mismatch(pair) -> None:
     with kissm.Matcher(voxel_size=0.3) as a, kissm.Matcher(voxel_size=0.5) as b:
-        source, target = a.features(pair.source), a.features(pair.target)
+        source, target = a.compute_features(pair.source), a.compute_features(pair.target)
         with pytest.raises(kissm.FeaturesMismatchError, match="^kissm_register_features: source features"):
             b.register_features(source, target)
         assert a.register_features(source, target).valid
@@ -127,8 +137,10 @@ def test_io_error(tmp_path) -> None:
 
 def test_parse_error(tmp_path) -> None:
     bad = tmp_path / "bad.ply"
-    bad.write_text("ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\nproperty float y\n"
-                   "property float z\nend_header\n1 2 3\n")
+    bad.write_text(
+        "ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n1 2 3\n"
+    )
     with pytest.raises(kissm.ParseError, match=re.escape(f"kissm_read_points: {bad}: ")):
         kissm.read_points(bad)
 
@@ -175,8 +187,10 @@ def test_errors_in_one_thread_do_not_leak_into_another(pair) -> None:
         except kissm.Error as e:
             messages[name] = str(e)
 
-    threads = [threading.Thread(target=fail, args=("few", pair.source[:2])),
-               threading.Thread(target=fail, args=("empty", np.empty((0, 3))))]
+    threads = [
+        threading.Thread(target=fail, args=("few", pair.source[:2])),
+        threading.Thread(target=fail, args=("empty", np.empty((0, 3)))),
+    ]
     for t in threads:
         t.start()
     for t in threads:

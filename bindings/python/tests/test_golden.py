@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Cross-language round trip, Python side: the clouds of tests/data registered as listed in
 tests/data/golden.json (written by the C library) give the same result bit for bit. The C suite
 (tests/roundtrip) and the Rust suite (kissm/tests/golden.rs) check the same file."""
@@ -6,20 +7,29 @@ from __future__ import annotations
 
 import json
 import struct
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import kissm
 
-DATA = Path(__file__).resolve().parents[3] / "tests" / "data"
-GOLDEN = json.loads((DATA / "golden.json").read_text()) if (DATA / "golden.json").exists() else None
+import testdata
+
+DATA = testdata.data_dir()  # the committed pair and golden.json, from tests/data
+GOLDEN = json.loads((DATA / "golden.json").read_text())
 
 COUNTS = [
-    "num_source_points", "num_target_points", "num_source_voxels", "num_target_voxels",
-    "num_source_keypoints", "num_target_keypoints", "num_initial_correspondences",
-    "num_pruned_correspondences", "num_rotation_inliers", "num_final_inliers", "max_core_number",
+    "num_source_points",
+    "num_target_points",
+    "num_source_voxels",
+    "num_target_voxels",
+    "num_source_keypoints",
+    "num_target_keypoints",
+    "num_initial_correspondences",
+    "num_pruned_correspondences",
+    "num_rotation_inliers",
+    "num_final_inliers",
+    "max_core_number",
 ]
 
 
@@ -27,8 +37,7 @@ def bits(x: float) -> bytes:
     return struct.pack("<d", x)
 
 
-@pytest.mark.skipif(GOLDEN is None, reason="tests/data/golden.json not found (not a source checkout)")
-@pytest.mark.parametrize("case", GOLDEN["cases"] if GOLDEN else [], ids=lambda c: c["name"])
+@pytest.mark.parametrize("case", GOLDEN["cases"], ids=lambda c: c["name"])
 @pytest.mark.parametrize("threads", [1, 2])
 def test_golden(case: dict, threads: int) -> None:
     source = kissm.read_points(DATA / GOLDEN["source"])

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The import-time self-check: version, ABI version and struct sizes, with clear ImportErrors."""
 
 from __future__ import annotations
@@ -83,8 +84,11 @@ def _fake(**values: int) -> types.SimpleNamespace:
         "kissm_abi_version": lambda: lib.KISSM_ABI_VERSION,
         "kissm_version_number": lambda: lib.KISSM_VERSION_NUMBER,
         "kissm_abi_sizeof": lambda which: lib.kissm_abi_sizeof(which),
-        "KISSM_VERSION_NUMBER": lib.KISSM_VERSION_NUMBER, "KISSM_ABI_VERSION": lib.KISSM_ABI_VERSION,
-        "KISSM_STRUCT_CONFIG": 1, "KISSM_STRUCT_POINTS": 2, "KISSM_STRUCT_RESULT": 3,
+        "KISSM_VERSION_NUMBER": lib.KISSM_VERSION_NUMBER,
+        "KISSM_ABI_VERSION": lib.KISSM_ABI_VERSION,
+        "KISSM_STRUCT_CONFIG": 1,
+        "KISSM_STRUCT_POINTS": 2,
+        "KISSM_STRUCT_RESULT": 3,
     }
     defaults.update(values)
     return types.SimpleNamespace(**defaults)
@@ -99,8 +103,10 @@ def test_check_library_accepts_the_real_library() -> None:
     [
         (_fake(kissm_version_number=lambda: 20301), "is kissm 2.3.1"),
         (_fake(kissm_abi_version=lambda: 7), "(ABI 7)"),
-        (_fake(kissm_abi_sizeof=lambda which: 8 if which == 3 else _ffi.lib.kissm_abi_sizeof(which)),
-         "sizeof(kissm_result) is 8"),
+        (
+            _fake(kissm_abi_sizeof=lambda which: 8 if which == 3 else _ffi.lib.kissm_abi_sizeof(which)),
+            "sizeof(kissm_result) is 8",
+        ),
     ],
     ids=["version", "abi", "struct-size"],
 )
@@ -148,11 +154,11 @@ def test_a_file_that_is_no_library_is_an_import_error(tmp_path: Path) -> None:
     ],
     ids=["version", "abi", "result-size", "config-size"],
 )
-def test_a_mismatched_library_fails_the_import(cc: str, tmp_path: Path, overrides: dict[str, int],
-                                               expected: str) -> None:
+def test_a_mismatched_library_fails_the_import(
+    cc: str, tmp_path: Path, overrides: dict[str, int], expected: str
+) -> None:
     library = fake_library(cc, tmp_path, **overrides)
     done = import_kissm(library)
     assert done.returncode != 0, done.stdout
     assert "ImportError: kissm:" in done.stderr
     assert expected in done.stderr, done.stderr
-

@@ -1,6 +1,9 @@
+# SPDX-License-Identifier: MIT
 """Inputs: (N, 3) float32/float64 array-likes in any layout, read in place when possible, never written."""
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 import pytest
@@ -111,8 +114,8 @@ def test_lists_integers_and_byte_order(pair) -> None:
     assert np.array_equal(as_point_array(big_endian), pair.source)
     small = pair.source[:2000]
     assert_same_result(
-        kissm.register(small.tolist(), small, voxel_size=0.3),
-        kissm.register(small, small, voxel_size=0.3))
+        kissm.register(small.tolist(), small, voxel_size=0.3), kissm.register(small, small, voxel_size=0.3)
+    )
 
 
 def test_float32_input_equals_the_same_values_in_float64(pair) -> None:
@@ -133,8 +136,14 @@ def test_objects_with_points_attribute(pair, reference) -> None:
     assert_same_result(register(pair, cloud, FakeOpen3DCloud(pair.target)), reference)
 
 
-def test_open3d_point_clouds_when_installed(pair, reference) -> None:
-    o3d = pytest.importorskip("open3d")
+def test_open3d_point_clouds(pair, reference) -> None:
+    """Open3D point clouds register in place. run_tests.sh installs open3d-cpu and sets
+    KISSM_REQUIRE_OPEN3D=1, so there a missing Open3D fails; elsewhere (the package tests' lighter venvs)
+    the test skips."""
+    if os.environ.get("KISSM_REQUIRE_OPEN3D") == "1":
+        import open3d as o3d
+    else:
+        o3d = pytest.importorskip("open3d", reason="open3d is not installed (run_tests.sh installs open3d-cpu)")
     source, target = o3d.geometry.PointCloud(), o3d.geometry.PointCloud()
     source.points = o3d.utility.Vector3dVector(pair.source)
     target.points = o3d.utility.Vector3dVector(pair.target)
@@ -146,8 +155,15 @@ def test_open3d_point_clouds_when_installed(pair, reference) -> None:
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros((10, 2)), np.zeros((10, 4)), np.zeros(30), np.zeros((2, 5, 3)), np.zeros(()), [[1, 2], [3, 4]],
-     [[1, 2, 3], [4, 5]]],
+    [
+        np.zeros((10, 2)),
+        np.zeros((10, 4)),
+        np.zeros(30),
+        np.zeros((2, 5, 3)),
+        np.zeros(()),
+        [[1, 2], [3, 4]],
+        [[1, 2, 3], [4, 5]],
+    ],
     ids=["n2", "n4", "flat", "3d", "scalar", "list-n2", "ragged"],
 )
 def test_wrong_shapes_are_valueerrors(bad) -> None:
@@ -164,8 +180,14 @@ def test_wide_rows_error_suggests_a_view() -> None:
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros((10, 3), dtype=bool), np.zeros((10, 3), dtype=complex), np.zeros((10, 3), dtype=object),
-     np.array([["a", "b", "c"]] * 5), [[None, None, None]] * 5, np.zeros((10, 3), dtype="datetime64[s]")],
+    [
+        np.zeros((10, 3), dtype=bool),
+        np.zeros((10, 3), dtype=complex),
+        np.zeros((10, 3), dtype=object),
+        np.array([["a", "b", "c"]] * 5),
+        [[None, None, None]] * 5,
+        np.zeros((10, 3), dtype="datetime64[s]"),
+    ],
     ids=["bool", "complex", "object", "str", "none", "datetime"],
 )
 def test_wrong_dtypes_are_typeerrors(bad) -> None:
@@ -176,6 +198,6 @@ def test_wrong_dtypes_are_typeerrors(bad) -> None:
 def test_features_argument_checks() -> None:
     with kissm.Matcher() as matcher:
         with pytest.raises(ValueError, match="cloud must have shape"):
-            matcher.features(np.zeros((5, 2)))
+            matcher.compute_features(np.zeros((5, 2)))
         with pytest.raises(TypeError, match="source must be kissm.Features"):
             matcher.register_features(np.zeros((5, 3)), np.zeros((5, 3)))  # type: ignore[arg-type]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The struct layout the Python declarations use equals the C ABI's committed layout
 (tests/abi/layout.json, checked against the compiled header by the C suite) and the loaded library's
 kissm_abi_sizeof: every struct's size and every field's offset and size."""

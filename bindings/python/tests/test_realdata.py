@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Real scans from ../shared/data (or $KISSM_DATA_DIR): every pair of index.tsv against its ground truth,
 and bitwise against the kissm CLI. Skipped when the data is absent."""
 
@@ -17,7 +18,7 @@ from cli_json import assert_matches_cli, run_cli
 from conftest import data_dir
 from helpers import assert_same_result
 from realdata import RealPair, load_pairs, pair_names
-from scenes import rotation_error_deg
+from testdata import rotation_error_deg
 
 NAMES = pair_names(data_dir()) or ["(no real data)"]
 
@@ -60,8 +61,13 @@ def test_real_pair_against_ground_truth(real_pairs: dict[str, RealPair], name: s
 @pytest.mark.parametrize("name", NAMES)
 def test_real_pair_bitwise_equals_cli(real_pairs: dict[str, RealPair], cli: Path, name: str) -> None:
     pair = real_pairs[name]
-    expected = run_cli(cli, pair.source, pair.target, pair.kind.voxel,
-                       ["--format-src", pair.source_format, "--format-tgt", pair.target_format])
+    expected = run_cli(
+        cli,
+        pair.source,
+        pair.target,
+        pair.kind.voxel,
+        ["--format-src", pair.source_format, "--format-tgt", pair.target_format],
+    )
     assert_matches_cli(_register(name, pair), expected)
 
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Registration through Matcher, kissm.register and features; Result; lifecycle; pickling."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import pytest
 import kissm
 
 from helpers import TIME_FIELDS, assert_same_result, bits
-from scenes import rotation_error_deg
+from testdata import rotation_error_deg
 
 
 @pytest.fixture(scope="module")
@@ -49,13 +50,19 @@ def test_result_fields(pair, result) -> None:
     assert 0 < result.residual_rms < result.noise_bound == pytest.approx(0.75 * pair.voxel_size)
     for name in TIME_FIELDS:
         assert getattr(result, name) >= 0
-    parts = (result.time_voxelize_ms + result.time_features_ms + result.time_matching_ms
-             + result.time_pruning_ms + result.time_solver_ms)
+    parts = (
+        result.time_voxelize_ms
+        + result.time_features_ms
+        + result.time_matching_ms
+        + result.time_pruning_ms
+        + result.time_solver_ms
+    )
     assert result.time_total_ms == pytest.approx(parts)
     for field in dataclasses.fields(kissm.Result):  # plain Python types, not cdata
         value = getattr(result, field.name)
         assert isinstance(value, (bool, int, float, str, np.ndarray)), field.name
-    assert result.has_pose and result.rotation_angle_deg == pytest.approx(130.0, abs=5.0)
+    true_angle = rotation_error_deg(np.eye(3), pair.rotation)
+    assert result.has_pose and result.rotation_angle_deg == pytest.approx(true_angle, abs=1.0)
 
 
 def test_result_is_immutable_and_picklable(result) -> None:
@@ -111,7 +118,7 @@ def test_results_do_not_depend_on_thread_count_or_reuse(pair, result) -> None:
 
 def test_features_path_equals_register(pair, result) -> None:
     with kissm.Matcher(voxel_size=pair.voxel_size, num_threads=2) as matcher:
-        source, target = matcher.features(pair.source), matcher.features(pair.target)
+        source, target = matcher.compute_features(pair.source), matcher.compute_features(pair.target)
         assert source.num_points == len(pair.source) and source.num_voxels == result.num_source_voxels
         assert source.num_keypoints == result.num_source_keypoints
         assert target.num_keypoints == result.num_target_keypoints
@@ -124,12 +131,27 @@ def test_features_path_equals_register(pair, result) -> None:
     assert "keypoints" in repr(source)
 
 
+def test_features_is_a_deprecated_alias_of_compute_features(pair) -> None:
+    with kissm.Matcher(voxel_size=pair.voxel_size, num_threads=2) as matcher:
+        expected = matcher.compute_features(pair.source)
+        with pytest.warns(DeprecationWarning, match=r"Matcher\.compute_features\(\)") as caught:
+            old = matcher.features(pair.source)
+        assert len(caught) == 1 and caught[0].filename == __file__  # reported at the caller's line
+        assert isinstance(old, kissm.Features)
+        assert (old.num_points, old.num_voxels, old.num_keypoints) == (
+            expected.num_points,
+            expected.num_voxels,
+            expected.num_keypoints,
+        )
+        assert_same_result(matcher.register_features(old, old), matcher.register_features(expected, expected))
+
+
 def test_features_are_not_picklable_nor_constructible(pair) -> None:
     with kissm.Matcher(voxel_size=pair.voxel_size) as matcher:
-        features = matcher.features(pair.source)
+        features = matcher.compute_features(pair.source)
     with pytest.raises(TypeError, match="cannot be pickled"):
         pickle.dumps(features)
-    with pytest.raises(TypeError, match="Matcher.features"):
+    with pytest.raises(TypeError, match=r"Matcher\.compute_features"):
         kissm.Features()
 
 
@@ -140,7 +162,7 @@ def test_matcher_lifecycle(pair) -> None:
     assert matcher.closed and "(closed)" in repr(matcher)
     matcher.close()  # idempotent
     matcher.cancel()  # harmless
-    for call in (lambda: matcher.register(pair.source, pair.target), lambda: matcher.features(pair.source)):
+    for call in (lambda: matcher.register(pair.source, pair.target), lambda: matcher.compute_features(pair.source)):
         with pytest.raises(ValueError, match="closed kissm.Matcher"):
             call()
     with pytest.raises(ValueError, match="closed"):

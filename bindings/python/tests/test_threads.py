@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Threads: thread pools give the serial results; the GIL is released; one Matcher is safe to share."""
 
 from __future__ import annotations
@@ -10,9 +11,10 @@ import pytest
 
 import kissm
 
+import testdata
 from helpers import assert_same_result
 
-VOXEL = 0.3
+VOXEL = testdata.VOXEL_SIZE
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +47,7 @@ def test_thread_pool_with_a_matcher_per_task_equals_serial(pairs, serial) -> Non
 
 def test_features_shared_between_threads_and_matchers(pairs, serial) -> None:
     with kissm.Matcher(voxel_size=VOXEL) as describer:
-        features = [(describer.features(p.source), describer.features(p.target)) for p in pairs]
+        features = [(describer.compute_features(p.source), describer.compute_features(p.target)) for p in pairs]
     local = threading.local()
 
     def run(i: int) -> kissm.Result:

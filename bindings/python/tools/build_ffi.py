@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Build step: write the out-of-line ABI-mode cffi module ``kissm/_kissm_cffi.py``.
 
 Run by ``bindings/python/CMakeLists.txt`` with the build environment's Python (which has cffi). It first
@@ -40,8 +41,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         import cffi
     except ImportError:
-        sys.stderr.write(f"error: {sys.executable} has no cffi; build the package with pip (pip install "
-                         f"./bindings/python), or install cffi for this interpreter\n")
+        sys.stderr.write(
+            f"error: {sys.executable} has no cffi; build the package with pip (pip install "
+            f"./bindings/python), or install cffi for this interpreter\n"
+        )
         return 1
 
     ffi = cffi.FFI()

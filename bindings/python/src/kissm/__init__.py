@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """kissm: fast, robust, deterministic global 3D point cloud registration.
 
 A thin Python layer over the kissm C library (loaded through cffi in ABI mode)::
@@ -9,9 +10,9 @@ A thin Python layer over the kissm C library (loaded through cffi in ABI mode)::
         aligned = source_xyz @ result.rotation.T + result.translation
 
     with kissm.Matcher(voxel_size=0.5, num_threads=2) as matcher:     # reuse settings and threads
-        target = matcher.features(target_xyz)                       # describe a map once...
-        for scan in scans:
-            print(matcher.register_features(matcher.features(scan), target))  # ...match it many times
+        target = matcher.compute_features(target_xyz)  # describe a map once...
+        for scan in scans:  # ...and match it many times
+            print(matcher.register_features(matcher.compute_features(scan), target))
 
 Results are bitwise identical to the C library's (and the ``kissm`` CLI's) on the same input, whatever
 ``num_threads``. The library never prints; neither does this package.
@@ -19,9 +20,10 @@ Results are bitwise identical to the C library's (and the ``kissm`` CLI's) on th
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, TypeAlias
 
-from ._config import Config, NonFinitePolicy, ViewpointMode
+from . import _config, _ffi, _points, _read
+from ._config import Config
 from ._errors import (
     CancelledError,
     EmptyInputError,
@@ -39,19 +41,35 @@ from ._errors import (
     UnsupportedFormatError,
     VoxelRangeError,
 )
-from ._ffi import lib as _lib
-from ._ffi import library_path
-from ._ffi import text as _text
 from ._matcher import Features, Matcher
-from ._points import PointsLike, as_point_array
-from ._read import FORMATS, read_points
+from ._points import as_point_array
+from ._read import read_points
 from ._result import Result
 
-#: The library's version (kissm_version_string()); equal to the package's.
-__version__: str = _text(_lib.kissm_version_string())
+# Re-exported data and type aliases are assigned here, so that each carries its docstring in the API reference.
 
-#: Fewest points a cloud may have (fewer raise TooFewPointsError).
-MIN_POINTS: int = int(_lib.KISSM_MIN_POINTS)
+__version__: str = _ffi.text(_ffi.lib.kissm_version_string())
+"""The library's version (``kissm_version_string()``); equal to the package's."""
+
+MIN_POINTS: int = int(_ffi.lib.KISSM_MIN_POINTS)
+"""Fewest points a cloud may have (fewer raise :class:`TooFewPointsError`)."""
+
+FORMATS: dict[str, int] = _read.FORMATS
+"""The ``format`` names :func:`read_points` accepts (those of the ``kissm`` CLI's ``--format``), with their C
+``KISSM_FORMAT_*`` values."""
+
+library_path: str = _ffi.library_path
+"""The path of the shared library this package loaded (its own, or ``$KISSM_LIBRARY``)."""
+
+PointsLike: TypeAlias = _points.PointsLike
+"""What the registration functions accept as a cloud: an (N, 3) array-like of real numbers, or an object with
+a ``.points`` attribute holding one (an Open3D ``PointCloud``). ``Any`` for type checkers."""
+
+NonFinitePolicy: TypeAlias = _config.NonFinitePolicy
+"""The names of :attr:`Config.nonfinite_policy`: ``"reject"`` or ``"drop"``."""
+
+ViewpointMode: TypeAlias = _config.ViewpointMode
+"""The names of :attr:`Config.viewpoint_mode`: ``"fixed"`` or ``"cloud_center"``."""
 
 
 def register(source: PointsLike, target: PointsLike, voxel_size: float, **config: Any) -> Result:

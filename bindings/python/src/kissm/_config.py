@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``kissm.Config``: every setting of ``kissm_config``, validated by the library at construction."""
 
 from __future__ import annotations
@@ -18,8 +19,16 @@ NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "dro
 VIEWPOINT_MODES: dict[str, int] = {"fixed": lib.KISSM_VIEWPOINT_FIXED, "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER}
 _ENUMS: dict[str, dict[str, int]] = {"nonfinite_policy": NONFINITE_POLICIES, "viewpoint_mode": VIEWPOINT_MODES}
 
-_FLOAT_FIELDS = ("voxel_size", "normal_radius_gain", "fpfh_radius_gain", "max_linearity", "ratio_test",
-                 "prune_noise_bound_gain", "solver_noise_bound_gain", "noise_bound_max")
+_FLOAT_FIELDS = (
+    "voxel_size",
+    "normal_radius_gain",
+    "fpfh_radius_gain",
+    "max_linearity",
+    "ratio_test",
+    "prune_noise_bound_gain",
+    "solver_noise_bound_gain",
+    "noise_bound_max",
+)
 _INT_FIELDS = ("num_threads", "min_normal_neighbors", "max_correspondences", "min_inliers", "log_level")
 
 
@@ -79,46 +88,43 @@ class Config:
     ``voxel_size``. Invalid values raise :class:`ValueError` (a :class:`kissm.InvalidArgumentError`) with
     the library's message when the Config is made. Configs are immutable, hashable and picklable; derive
     one from another with :meth:`replace`.
-
-    Attributes:
-        voxel_size: voxel edge length, > 0; the one setting to choose per data set (0.3-0.5 m for outdoor
-            LiDAR, about 0.05 m for indoor RGB-D fragments).
-        num_threads: worker threads per call, 0..1024; 0 = all hardware threads. Results never depend on it.
-        normal_radius_gain: normal-estimation radius = gain * voxel_size; in (0, fpfh_radius_gain].
-        fpfh_radius_gain: FPFH radius = gain * voxel_size; in [1.5, 50].
-        max_linearity: voxels with (l1 - l2) / l1 above this get no normal; in (0, 1].
-        ratio_test: Lowe ratio on squared descriptor distances; in (0, 1]; 1 = off.
-        prune_noise_bound_gain: graph-pruning bound = gain * voxel_size; in (0, 1e6].
-        solver_noise_bound_gain: solver inlier bound = gain * voxel_size; in (0, 1e6].
-        noise_bound_max: cap on both bounds, in the clouds' unit; 0 = no cap.
-        viewpoint: sensor position (x, y, z) toward which normals point, under viewpoint_mode='fixed'.
-        min_normal_neighbors: neighbours needed for a normal and a descriptor; 3..100000.
-        max_correspondences: cap on the mutual matches kept, best ratio first; 3..100000.
-        min_inliers: final inliers needed for ``Result.valid``; 3..100000.
-        nonfinite_policy: 'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are
-            skipped and counted).
-        viewpoint_mode: 'fixed' (toward ``viewpoint``, in each cloud's frame: single scans) or
-            'cloud_center' (toward each cloud's bounding-box centre: maps, merged clouds).
-        log_level: most verbose level passed to a log callback (0..4); kept for completeness: the Python
-            package installs no log callback, and the library itself never prints.
     """
 
     voxel_size: float = _DEFAULTS["voxel_size"]
+    """Voxel edge length, > 0; the one setting to choose per data set (0.3-0.5 m for outdoor LiDAR, about 0.05 m for
+    indoor RGB-D fragments)."""
     num_threads: int = _DEFAULTS["num_threads"]
+    """Worker threads per call, 0..1024; 0 = all hardware threads. Results never depend on it."""
     normal_radius_gain: float = _DEFAULTS["normal_radius_gain"]
+    """Normal-estimation radius = gain * voxel_size; in (0, fpfh_radius_gain]."""
     fpfh_radius_gain: float = _DEFAULTS["fpfh_radius_gain"]
+    """FPFH radius = gain * voxel_size; in [1.5, 50]."""
     max_linearity: float = _DEFAULTS["max_linearity"]
+    """Voxels with (l1 - l2) / l1 above this get no normal; in (0, 1]."""
     ratio_test: float = _DEFAULTS["ratio_test"]
+    """Lowe ratio on squared descriptor distances; in (0, 1]; 1 = off."""
     prune_noise_bound_gain: float = _DEFAULTS["prune_noise_bound_gain"]
+    """Graph-pruning bound = gain * voxel_size; in (0, 1e6]."""
     solver_noise_bound_gain: float = _DEFAULTS["solver_noise_bound_gain"]
+    """Solver inlier bound = gain * voxel_size; in (0, 1e6]."""
     noise_bound_max: float = _DEFAULTS["noise_bound_max"]
+    """Cap on both bounds, in the clouds' unit; 0 = no cap."""
     viewpoint: tuple[float, float, float] = _DEFAULTS["viewpoint"]
+    """Sensor position (x, y, z) toward which normals point, under viewpoint_mode='fixed'."""
     min_normal_neighbors: int = _DEFAULTS["min_normal_neighbors"]
+    """Neighbours needed for a normal and a descriptor; 3..100000."""
     max_correspondences: int = _DEFAULTS["max_correspondences"]
+    """Cap on the mutual matches kept, best ratio first; 3..100000."""
     min_inliers: int = _DEFAULTS["min_inliers"]
+    """Final inliers needed for ``Result.valid``; 3..100000."""
     nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]
+    """'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are skipped and counted)."""
     viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
+    """'fixed' (toward ``viewpoint``, in each cloud's frame: single scans) or 'cloud_center' (toward each cloud's
+    bounding-box centre: maps, merged clouds)."""
     log_level: int = _DEFAULTS["log_level"]
+    """Most verbose level passed to a log callback (0..4); kept for completeness: the Python package installs no log
+    callback, and the library itself never prints."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Exceptions: one class per kissm status code, each carrying the library's message."""
 
 from __future__ import annotations
@@ -15,7 +16,9 @@ class Error(Exception):
     """
 
     status: int = 0
+    """The C status code, a negative ``KISSM_ERR_*`` value (each subclass has its own)."""
     status_name: str = ""
+    """The name of ``status``, e.g. ``"KISSM_ERR_TOO_FEW_POINTS"``."""
 
     def __init__(self, message: str, status: int | None = None) -> None:
         super().__init__(message)

@@ -1,8 +1,10 @@
+# SPDX-License-Identifier: MIT
 """``kissm.Matcher`` and ``kissm.Features``: the C handles, owned, locked and released."""
 
 from __future__ import annotations
 
 import threading
+import warnings
 from typing import Any, NoReturn
 
 from ._config import Config
@@ -15,7 +17,7 @@ from ._result import Result
 class Features:
     """A cloud described once (voxels, normals, FPFH descriptors), to be matched against many others.
 
-    Made by :meth:`Matcher.features`. Immutable: one Features object may be used by several threads and
+    Made by :meth:`Matcher.compute_features`. Immutable: one Features object may be used by several threads and
     matchers at once, and may outlive the matcher that made it. It can be matched by any matcher whose
     descriptor settings (voxel size, radii, ``min_normal_neighbors``, ``max_linearity``, viewpoint) are the
     same, else :class:`kissm.FeaturesMismatchError` is raised. Not picklable (the library has no
@@ -24,12 +26,15 @@ class Features:
 
     __slots__ = ("_ptr", "num_points", "num_voxels", "num_keypoints", "__weakref__")
     _ptr: Any
-    num_points: int  #: points given
-    num_voxels: int  #: occupied voxels
-    num_keypoints: int  #: voxels with a descriptor
+    num_points: int
+    """Points given."""
+    num_voxels: int
+    """Occupied voxels."""
+    num_keypoints: int
+    """Voxels with a descriptor."""
 
     def __init__(self) -> None:
-        raise TypeError("kissm.Features objects are made by Matcher.features(cloud)")
+        raise TypeError("kissm.Features objects are made by Matcher.compute_features(cloud)")
 
     @classmethod
     def _adopt(cls, ptr: Any) -> Features:
@@ -41,12 +46,13 @@ class Features:
         return self
 
     def __repr__(self) -> str:
-        return (f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, "
-                f"{self.num_keypoints} keypoints>")
+        return f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, {self.num_keypoints} keypoints>"
 
     def __reduce__(self) -> NoReturn:
-        raise TypeError("kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
-                        "and call Matcher.features() again")
+        raise TypeError(
+            "kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
+            "and call Matcher.compute_features() again"
+        )
 
 
 class Matcher:
@@ -82,6 +88,7 @@ class Matcher:
 
     @property
     def closed(self) -> bool:
+        """Whether :meth:`close` was called (then every other method raises ValueError)."""
         return self._ptr is None
 
     def _handle(self) -> Any:
@@ -114,8 +121,13 @@ class Matcher:
                 raise_status(status)  # reads the thread-local message before any other call
         return Result._from_c(result)
 
-    def features(self, cloud: PointsLike) -> Features:
-        """Describe ``cloud`` once, for :meth:`register_features` against any number of other clouds."""
+    def compute_features(self, cloud: PointsLike) -> Features:
+        """Describe ``cloud`` once (``kissm_features_compute``), for :meth:`register_features` against any
+        number of other clouds. ``cloud`` is read like :meth:`register`'s inputs.
+
+        Raises:
+            TypeError, ValueError: as :meth:`register` (e.g. :class:`kissm.TooFewPointsError`).
+        """
         view = points_view(cloud, "cloud")
         out = ffi.new("kissm_features **")
         with self._call_lock:
@@ -124,12 +136,21 @@ class Matcher:
                 raise_status(status)
         return Features._adopt(out[0])
 
+    def features(self, cloud: PointsLike) -> Features:
+        """Deprecated alias of :meth:`compute_features` (the name of the C ``kissm_features_compute``)."""
+        warnings.warn(
+            "kissm.Matcher.features() is deprecated; use Matcher.compute_features()", DeprecationWarning, stacklevel=2
+        )
+        return self.compute_features(cloud)
+
     def register_features(self, source: Features, target: Features) -> Result:
         """Register two described clouds: the same pose, counts and validity as :meth:`register` on the
         clouds they were computed from (voxelisation and feature times are reported as 0)."""
         for name, value in (("source", source), ("target", target)):
             if not isinstance(value, Features):
-                raise TypeError(f"{name} must be kissm.Features (from Matcher.features), not {type(value).__name__}")
+                raise TypeError(
+                    f"{name} must be kissm.Features (from Matcher.compute_features), not {type(value).__name__}"
+                )
         result = ffi.new("kissm_result *")
         result.struct_size = ffi.sizeof("kissm_result")
         with self._call_lock:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Turning array-likes into ``kissm_points`` views: checks first, copies only when unavoidable."""
 
 from __future__ import annotations
@@ -46,8 +47,9 @@ def as_point_array(cloud: PointsLike, name: str = "cloud") -> np.ndarray:
             raise ValueError(f"{name} cannot be read as an (N, 3) array: {e}") from None
     array: np.ndarray = cloud
     if array.dtype.kind not in "fiu":
-        raise TypeError(f"{name} has dtype {array.dtype}; kissm needs real coordinates (float32 or float64; "
-                        f"integers are converted)")
+        raise TypeError(
+            f"{name} has dtype {array.dtype}; kissm needs real coordinates (float32 or float64; integers are converted)"
+        )
     if array.ndim != 2 or array.shape[1] != 3:
         hint = f" (pass {name}[:, :3] for x, y, z of wider rows: no copy)" if array.ndim == 2 else ""
         raise ValueError(f"{name} must have shape (N, 3), not {array.shape}{hint}")

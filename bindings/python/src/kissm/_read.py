@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``kissm.read_points``: the library's point-file readers, returning numpy arrays."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """``kissm.Result``: a plain, picklable copy of ``kissm_result``."""
 
 from __future__ import annotations
@@ -11,14 +12,29 @@ import numpy as np
 from ._ffi import ffi, lib, text
 
 _COUNT_FIELDS = (
-    "num_source_points", "num_target_points", "num_source_nonfinite", "num_target_nonfinite",
-    "num_source_voxels", "num_target_voxels", "num_source_keypoints", "num_target_keypoints",
-    "num_initial_correspondences", "num_pruned_correspondences", "num_rotation_inliers", "num_final_inliers",
+    "num_source_points",
+    "num_target_points",
+    "num_source_nonfinite",
+    "num_target_nonfinite",
+    "num_source_voxels",
+    "num_target_voxels",
+    "num_source_keypoints",
+    "num_target_keypoints",
+    "num_initial_correspondences",
+    "num_pruned_correspondences",
+    "num_rotation_inliers",
+    "num_final_inliers",
     "max_core_number",
 )
 _FLOAT_FIELDS = ("inlier_ratio", "residual_rms", "noise_bound")
-_TIME_FIELDS = ("time_voxelize_ms", "time_features_ms", "time_matching_ms", "time_pruning_ms", "time_solver_ms",
-                "time_total_ms")
+_TIME_FIELDS = (
+    "time_voxelize_ms",
+    "time_features_ms",
+    "time_matching_ms",
+    "time_pruning_ms",
+    "time_solver_ms",
+    "time_total_ms",
+)
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -33,34 +49,63 @@ class Result:
     """
 
     valid: bool
-    reason: str  #: the library's text for reason_code ("none" when valid)
-    reason_code: int  #: a KISSM_REASON_* value; 0 when valid
-    transform: np.ndarray  #: (4, 4) float64
-    rotation: np.ndarray  #: (3, 3) float64
-    translation: np.ndarray  #: (3,) float64
+    """Whether the pose can be trusted (C ``valid``); see ``reason`` and the counts."""
+    reason: str
+    """The library's text for ``reason_code`` (``"none"`` when valid)."""
+    reason_code: int
+    """Why the pose is not trusted: a ``KISSM_REASON_*`` value (C ``reason``); 0 when valid."""
+    transform: np.ndarray
+    """(4, 4) float64: maps source points into the target frame; all NaN when no pose was estimated."""
+    rotation: np.ndarray
+    """(3, 3) float64: the rotation part of ``transform``."""
+    translation: np.ndarray
+    """(3,) float64: the translation part of ``transform``."""
     num_source_points: int
+    """Source points given."""
     num_target_points: int
+    """Target points given."""
     num_source_nonfinite: int
+    """Source points dropped as non-finite (``nonfinite_policy='drop'``)."""
     num_target_nonfinite: int
+    """Target points dropped as non-finite (``nonfinite_policy='drop'``)."""
     num_source_voxels: int
+    """Occupied source voxels."""
     num_target_voxels: int
+    """Occupied target voxels."""
     num_source_keypoints: int
+    """Source voxels with a descriptor."""
     num_target_keypoints: int
+    """Target voxels with a descriptor."""
     num_initial_correspondences: int
+    """Mutual, ratio-tested, capped descriptor matches."""
     num_pruned_correspondences: int
+    """Matches in the maximum k-core of the compatibility graph."""
     num_rotation_inliers: int
+    """Pruned matches the rotation solver kept."""
     num_final_inliers: int
+    """Pruned matches within the solver bound after rotation and translation."""
     max_core_number: int
+    """k of the maximum k-core."""
     inlier_ratio: float
+    """``num_final_inliers / num_initial_correspondences`` (0 when there are no matches)."""
     residual_rms: float
+    """RMS distance over the final inliers, in the clouds' unit (NaN when there are none)."""
     noise_bound: float
-    inlier_extent: np.ndarray  #: (3,) float64
+    """The solver's inlier bound, in the clouds' unit."""
+    inlier_extent: np.ndarray
+    """(3,) float64: square roots of the eigenvalues (descending) of the inliers' source covariance."""
     time_voxelize_ms: float
+    """Milliseconds spent on input checks, recentring and voxelisation."""
     time_features_ms: float
+    """Milliseconds spent on neighbour search, normals and FPFH descriptors."""
     time_matching_ms: float
+    """Milliseconds spent on descriptor matching."""
     time_pruning_ms: float
+    """Milliseconds spent on the compatibility graph and its maximum k-core."""
     time_solver_ms: float
+    """Milliseconds spent on rotation, translation, inliers and validity."""
     time_total_ms: float
+    """The sum of the stage times, in milliseconds."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
@@ -93,8 +138,10 @@ class Result:
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as plain Python values (nested lists for the arrays), e.g. for JSON."""
-        return {f.name: (v.tolist() if isinstance(v := getattr(self, f.name), np.ndarray) else v)
-                for f in dataclasses.fields(self)}
+        return {
+            f.name: (v.tolist() if isinstance(v := getattr(self, f.name), np.ndarray) else v)
+            for f in dataclasses.fields(self)
+        }
 
     def __repr__(self) -> str:
         head = "kissm.Result("
@@ -107,11 +154,12 @@ class Result:
             f"{self.time_total_ms:.1f} ms,",
         ]
         if self.has_pose:
-            lines.append(f"{pad}rotation {self.rotation_angle_deg:.2f} deg, "
-                         f"translation {float(np.linalg.norm(self.translation)):.4g},")
+            lines.append(
+                f"{pad}rotation {self.rotation_angle_deg:.2f} deg, "
+                f"translation {float(np.linalg.norm(self.translation)):.4g},"
+            )
             prefix = f"{pad}transform="
-            matrix = np.array2string(self.transform, precision=6, suppress_small=True, separator=", ",
-                                     prefix=prefix)
+            matrix = np.array2string(self.transform, precision=6, suppress_small=True, separator=", ", prefix=prefix)
             lines.append(f"{prefix}{matrix})")
         else:
             lines.append(f"{pad}no pose)")
