@@ -1,12 +1,13 @@
 /* SPDX-License-Identifier: MIT */
-/*
- * kissm: fast, robust, deterministic global 3D point cloud registration.
+/**
+ * @file kissm.h
+ * @brief kissm: fast, robust, deterministic global 3D point cloud registration.
  *
  * The only public header of the library. C99 and C++ compatible; fixed-width types only; no enum types,
- * no bool and no compiler-specific types cross this boundary (constants are #defines on int32_t values).
+ * no bool and no compiler-specific types cross this boundary (constants are \#defines on int32_t values).
  *
  * Conventions
- *  - Every fallible function returns an int32_t status: KISSM_OK (0) or a negative KISSM_ERR_* code.
+ *  - Every fallible function returns an int32_t status: #KISSM_OK (0) or a negative KISSM_ERR_* code.
  *    Codes are never renumbered. kissm_status_string() gives a static description of a code and
  *    kissm_last_error_message() the detailed message of the last failure on the calling thread.
  *  - Output parameters come last. On failure nothing is written to them, except that a kissm_result
@@ -15,6 +16,9 @@
  *  - The library never prints, never aborts, never keeps a caller's pointer after a call returns, and
  *    creates no thread outside a call.
  *  - Structs that may grow (kissm_config, kissm_result) start with struct_size; fields are only appended.
+ *
+ * Every fallible function can also fail with #KISSM_ERR_OUT_OF_MEMORY (an allocation failed; nothing was
+ * changed) and #KISSM_ERR_INTERNAL (a bug in kissm); the lists of return values below name them too.
  */
 #ifndef KISSM_H
 #define KISSM_H
@@ -22,6 +26,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/** @cond KISSM_INTERNAL */
 #if defined(_WIN32)
 #  if defined(KISSM_BUILDING_DLL)
 #    define KISSM_API __declspec(dllexport)
@@ -35,6 +40,7 @@
 #else
 #  define KISSM_API
 #endif
+/** @endcond */
 
 #ifdef __cplusplus
 extern "C" {
@@ -44,273 +50,629 @@ extern "C" {
 /* Version                                                                                          */
 /* ------------------------------------------------------------------------------------------------ */
 
+/**
+ * @defgroup version Version
+ * @brief The header's version macros and their runtime twins, which bindings compare with the header they
+ *        were built from.
+ * @{
+ */
+
+/** Major version of this header. */
 #define KISSM_VERSION_MAJOR 0
+/** Minor version of this header. */
 #define KISSM_VERSION_MINOR 1
+/** Patch version of this header. */
 #define KISSM_VERSION_PATCH 0
+/** The header's version as one number: major * 10000 + minor * 100 + patch. */
 #define KISSM_VERSION_NUMBER (KISSM_VERSION_MAJOR * 10000 + KISSM_VERSION_MINOR * 100 + KISSM_VERSION_PATCH)
+/** The header's version as "major.minor.patch". */
 #define KISSM_VERSION_STRING "0.1.0"
-/* Bumped only when the ABI breaks; equals the shared library's SOVERSION. */
+/** Bumped only when the ABI breaks; equals the shared library's SOVERSION. */
 #define KISSM_ABI_VERSION 0
 
-/* Runtime twins of the macros above; bindings compare them with the header they were built from. */
+/**
+ * @brief Runtime twin of #KISSM_VERSION_NUMBER: the version of the library actually loaded.
+ * @return major * 10000 + minor * 100 + patch of the library.
+ */
 KISSM_API uint32_t kissm_version_number(void);
+/**
+ * @brief Runtime twin of #KISSM_VERSION_STRING.
+ * @return The library's version, "major.minor.patch": a static string, never NULL.
+ */
 KISSM_API const char *kissm_version_string(void);
+/**
+ * @brief Runtime twin of #KISSM_ABI_VERSION: a program compiled against this header may use the library
+ *        only when the two are equal.
+ * @return The library's ABI version (its SOVERSION).
+ */
 KISSM_API uint32_t kissm_abi_version(void);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Status codes (values are pinned forever)                                                        */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_OK 0
-#define KISSM_ERR_INVALID_ARGUMENT -1    /* a config value or argument is out of its documented range */
-#define KISSM_ERR_NULL_ARGUMENT -2       /* a required pointer is NULL */
-#define KISSM_ERR_EMPTY_INPUT -3         /* a cloud has no points (or none left after dropping non-finite ones) */
-#define KISSM_ERR_TOO_FEW_POINTS -4      /* a cloud has fewer than KISSM_MIN_POINTS points */
-#define KISSM_ERR_NONFINITE -5           /* a NaN or infinite coordinate under KISSM_NONFINITE_REJECT */
-#define KISSM_ERR_VOXEL_RANGE -6         /* the voxel size is too small for the cloud's extent */
-#define KISSM_ERR_STRUCT_SIZE -7         /* struct_size too small, above 65536, or with a non-zero unknown tail */
-#define KISSM_ERR_OUT_OF_MEMORY -8       /* an allocation failed; nothing was changed */
-#define KISSM_ERR_CANCELLED -9           /* kissm_cancel() or the progress callback stopped the call */
-#define KISSM_ERR_FEATURES_MISMATCH -10  /* features computed under a different configuration */
-#define KISSM_ERR_IO -11                 /* a file could not be opened or read */
-#define KISSM_ERR_PARSE -12              /* a file is malformed, truncated or of an unsupported layout */
-#define KISSM_ERR_UNSUPPORTED_FORMAT -13 /* a file's format is not recognised */
-#define KISSM_ERR_INTERNAL -14           /* a bug in kissm: please report it with the message */
+/**
+ * @defgroup status Status codes and error messages
+ * @brief What every fallible function returns: #KISSM_OK or a negative code. The values are pinned
+ *        forever.
+ * @{
+ */
 
-/* Static, never-NULL description of a status code ("unknown status" for unknown values). */
+#define KISSM_OK 0                       /**< Success. */
+#define KISSM_ERR_INVALID_ARGUMENT -1    /**< A config value or argument is out of its documented range. */
+#define KISSM_ERR_NULL_ARGUMENT -2       /**< A required pointer is NULL. */
+#define KISSM_ERR_EMPTY_INPUT -3         /**< A cloud has no points (or none left after dropping non-finite ones). */
+#define KISSM_ERR_TOO_FEW_POINTS -4      /**< A cloud has fewer than #KISSM_MIN_POINTS points. */
+#define KISSM_ERR_NONFINITE -5           /**< A NaN or infinite coordinate under #KISSM_NONFINITE_REJECT. */
+#define KISSM_ERR_VOXEL_RANGE -6         /**< The voxel size is too small for the cloud's extent. */
+#define KISSM_ERR_STRUCT_SIZE -7         /**< struct_size too small, above 65536, or with a non-zero unknown tail. */
+#define KISSM_ERR_OUT_OF_MEMORY -8       /**< An allocation failed; nothing was changed. */
+#define KISSM_ERR_CANCELLED -9           /**< kissm_cancel() or the progress callback stopped the call. */
+#define KISSM_ERR_FEATURES_MISMATCH -10  /**< Features computed under a different configuration. */
+#define KISSM_ERR_IO -11                 /**< A file could not be opened or read. */
+#define KISSM_ERR_PARSE -12              /**< A file is malformed, truncated or of an unsupported layout. */
+#define KISSM_ERR_UNSUPPORTED_FORMAT -13 /**< A file's format is not recognised. */
+#define KISSM_ERR_INTERNAL -14           /**< A bug in kissm: please report it with the message. */
+
+/**
+ * @brief Describes a status code.
+ * @param[in] status A status returned by a kissm_* function (any value is accepted).
+ * @return A static, never-NULL description of @p status; "unknown status" for unknown values.
+ */
 KISSM_API const char *kissm_status_string(int32_t status);
-/* Detailed message of the last failing kissm_* call on this thread, naming the offending argument.
- * Library-owned; valid until the next kissm_* call on this thread; "" when the last call succeeded. */
+/**
+ * @brief Detailed message of the last failing kissm_* call on this thread, naming the offending argument.
+ * @return A library-owned string, valid until the next kissm_* call on this thread; "" when the last call
+ *         succeeded. Never NULL.
+ */
 KISSM_API const char *kissm_last_error_message(void);
 
-/* Fewest points a cloud may have before kissm_register() refuses it with KISSM_ERR_TOO_FEW_POINTS. */
+/** Fewest points a cloud may have before kissm_register() refuses it with #KISSM_ERR_TOO_FEW_POINTS. */
 #define KISSM_MIN_POINTS 4
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Reasons for valid = 0 (a well-formed input that gives no trustworthy pose is not an error)       */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_REASON_NONE 0                    /* valid = 1, or the call failed (see its status) */
-#define KISSM_REASON_TOO_FEW_VOXELS 1          /* a cloud has too few occupied voxels to describe */
-#define KISSM_REASON_TOO_FEW_FEATURES 2        /* a cloud has too few points with a reliable descriptor */
-#define KISSM_REASON_TOO_FEW_CORRESPONDENCES 3 /* matching or pruning left too few correspondences */
-#define KISSM_REASON_SOLVER_FAILED 4           /* the robust solver found no consistent rotation */
-#define KISSM_REASON_TOO_FEW_INLIERS 5         /* final inliers below config.min_inliers */
-#define KISSM_REASON_DEGENERATE 6              /* the inliers are collinear or planar: the pose is ambiguous */
+/**
+ * @defgroup reasons Reasons for valid = 0
+ * @brief Why kissm_result.valid is 0 after a call that returned #KISSM_OK: a well-formed input that gives
+ *        no trustworthy pose is not an error.
+ * @{
+ */
 
+#define KISSM_REASON_NONE 0                    /**< valid = 1, or the call failed (see its status). */
+#define KISSM_REASON_TOO_FEW_VOXELS 1          /**< A cloud has too few occupied voxels to describe. */
+#define KISSM_REASON_TOO_FEW_FEATURES 2        /**< A cloud has too few points with a reliable descriptor. */
+#define KISSM_REASON_TOO_FEW_CORRESPONDENCES 3 /**< Matching or pruning left too few correspondences. */
+#define KISSM_REASON_SOLVER_FAILED 4           /**< The robust solver found no consistent rotation. */
+#define KISSM_REASON_TOO_FEW_INLIERS 5         /**< Final inliers below kissm_config.min_inliers. */
+#define KISSM_REASON_DEGENERATE 6              /**< The inliers are collinear or planar: the pose is ambiguous. */
+
+/**
+ * @brief Describes a reason code.
+ * @param[in] reason A KISSM_REASON_* value, as in kissm_result.reason (any value is accepted).
+ * @return A static, never-NULL description of @p reason; "unknown reason" for unknown values.
+ */
 KISSM_API const char *kissm_reason_string(int32_t reason);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Configuration                                                                                    */
 /* ------------------------------------------------------------------------------------------------ */
 
-/* Non-finite policy. */
-#define KISSM_NONFINITE_REJECT 0 /* a NaN/Inf coordinate fails the call with KISSM_ERR_NONFINITE */
-#define KISSM_NONFINITE_DROP 1   /* such points are skipped and counted in the result */
+/**
+ * @defgroup config Configuration
+ * @brief kissm_config, its defaults (kissm_config_init()) and checks (kissm_config_validate()), and the
+ *        constants and callbacks its fields use.
+ * @{
+ */
 
-/* Where normals are oriented toward. */
-#define KISSM_VIEWPOINT_FIXED 0        /* config.viewpoint, in each cloud's own input frame (the sensor) */
-#define KISSM_VIEWPOINT_CLOUD_CENTER 1 /* each cloud's bounding-box centre (maps, no sensor) */
+/** @name Non-finite policy (kissm_config.nonfinite_policy) */
+/** @{ */
+#define KISSM_NONFINITE_REJECT 0 /**< A NaN/Inf coordinate fails the call with #KISSM_ERR_NONFINITE. */
+#define KISSM_NONFINITE_DROP 1   /**< Such points are skipped and counted in the result. */
+/** @} */
 
-/* Log levels for kissm_log_fn. */
-#define KISSM_LOG_ERROR 1
-#define KISSM_LOG_WARN 2
-#define KISSM_LOG_INFO 3
-#define KISSM_LOG_DEBUG 4
+/** @name Where normals are oriented toward (kissm_config.viewpoint_mode) */
+/** @{ */
+#define KISSM_VIEWPOINT_FIXED 0        /**< kissm_config.viewpoint, in each cloud's own input frame (the sensor). */
+#define KISSM_VIEWPOINT_CLOUD_CENTER 1 /**< Each cloud's bounding-box centre (maps, no sensor). */
+/** @} */
 
-/* Pipeline stages, as reported to kissm_progress_fn. */
-#define KISSM_STAGE_VOXELIZE 1
-#define KISSM_STAGE_FEATURES 2
-#define KISSM_STAGE_MATCHING 3
-#define KISSM_STAGE_PRUNING 4
-#define KISSM_STAGE_SOLVER 5
+/** @name Log levels for kissm_log_fn (kissm_config.log_level) */
+/** @{ */
+#define KISSM_LOG_ERROR 1 /**< Errors. */
+#define KISSM_LOG_WARN 2  /**< Warnings (the default level). */
+#define KISSM_LOG_INFO 3  /**< Progress information. */
+#define KISSM_LOG_DEBUG 4 /**< Details for debugging. */
+/** @} */
 
-/* Called on the calling thread only, never concurrently; must not call back into the same matcher. */
+/** @name Pipeline stages, as reported to kissm_progress_fn */
+/** @{ */
+#define KISSM_STAGE_VOXELIZE 1 /**< Input checks, recentring and voxelisation. */
+#define KISSM_STAGE_FEATURES 2 /**< Neighbour search, normals, FPFH. */
+#define KISSM_STAGE_MATCHING 3 /**< Descriptor matching. */
+#define KISSM_STAGE_PRUNING 4  /**< Compatibility graph and max k-core. */
+#define KISSM_STAGE_SOLVER 5   /**< GNC-TLS rotation, translation, inliers, validity. */
+/** @} */
+
+/**
+ * @brief Log callback (kissm_config.log_fn). Called on the calling thread only, never concurrently; must not
+ *        call back into the same matcher.
+ * @param[in] user_data kissm_config.log_user_data, as given.
+ * @param[in] level A KISSM_LOG_* level, at most kissm_config.log_level.
+ * @param[in] message The message; valid during the call only.
+ */
 typedef void (*kissm_log_fn)(void *user_data, int32_t level, const char *message);
-/* Called on the calling thread at stage boundaries and within long stages; return non-zero to cancel.
+/**
+ * @brief Progress callback (kissm_config.progress_fn). Called on the calling thread at stage boundaries and
+ *        within long stages.
+ *
  * Stages never go back within a call and fractions never decrease within a stage; the last call of a
- * registration that ran to the end is (KISSM_STAGE_SOLVER, 1.0). */
+ * registration that ran to the end is (#KISSM_STAGE_SOLVER, 1.0).
+ * @param[in] user_data kissm_config.progress_user_data, as given.
+ * @param[in] stage The KISSM_STAGE_* stage running.
+ * @param[in] fraction How much of that stage is done, in [0, 1].
+ * @return 0 to go on; non-zero to cancel (the call then fails with #KISSM_ERR_CANCELLED).
+ */
 typedef int32_t (*kissm_progress_fn)(void *user_data, int32_t stage, double fraction);
 
+/**
+ * @brief Settings of a matcher. Fill it with kissm_config_init(), then change what you need.
+ *
+ * Each field's comment gives its unit, its valid range and its default (the value kissm_config_init()
+ * writes).
+ */
 typedef struct kissm_config {
-    uint32_t struct_size; /* sizeof(kissm_config) as the caller knows it; set by kissm_config_init */
-    int32_t num_threads;  /* worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. */
+    /** sizeof(kissm_config) as the caller knows it; set by kissm_config_init(). */
+    uint32_t struct_size;
+    /** Worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. Default 0. */
+    int32_t num_threads;
 
-    double voxel_size;              /* metres (or the cloud's unit); > 0. Every length below scales with it. 0.3 */
-    double normal_radius_gain;      /* normal radius = gain * voxel_size; in (0, fpfh_radius_gain]; 3.5 (paper) */
-    double fpfh_radius_gain;        /* FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain; 5.0 */
-    double max_linearity;           /* tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]; 0.99 */
-    double ratio_test;              /* Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off; 0.9 */
-    double prune_noise_bound_gain;  /* graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]; 1.0 */
-    double solver_noise_bound_gain; /* solver inlier bound = gain * voxel_size; in (0, 1e6]; 0.75 */
-    double noise_bound_max;         /* cap on both noise bounds in metres, finite; 0 = no cap; 0 */
-    double viewpoint[3];            /* for KISSM_VIEWPOINT_FIXED: the sensor position, finite; (0, 0, 0) */
+    /** Metres (or the cloud's unit); > 0. Every length below scales with it. Default 0.3. */
+    double voxel_size;
+    /** Normal radius = gain * voxel_size; in (0, fpfh_radius_gain]. Default 3.5 (paper). */
+    double normal_radius_gain;
+    /** FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain. Default 5.0. */
+    double fpfh_radius_gain;
+    /** tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]. Default 0.99. */
+    double max_linearity;
+    /** Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off. Default 0.9. */
+    double ratio_test;
+    /** Graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]. Default 1.0. */
+    double prune_noise_bound_gain;
+    /** Solver inlier bound = gain * voxel_size; in (0, 1e6]. Default 0.75. */
+    double solver_noise_bound_gain;
+    /** Cap on both noise bounds in metres, finite; 0 = no cap. Default 0. */
+    double noise_bound_max;
+    /** For #KISSM_VIEWPOINT_FIXED: the sensor position, finite. Default (0, 0, 0). */
+    double viewpoint[3];
 
-    int32_t min_normal_neighbors; /* tau_num: neighbours needed for a normal and a descriptor; 3..100000; 3 */
-    int32_t max_correspondences;  /* cap on mutual matches kept (best ratio first); 3..100000; 5000 */
-    int32_t min_inliers;          /* valid needs at least this many final inliers; 3..100000; 15 */
-    int32_t nonfinite_policy;     /* KISSM_NONFINITE_*; KISSM_NONFINITE_REJECT */
-    int32_t viewpoint_mode;       /* KISSM_VIEWPOINT_*; KISSM_VIEWPOINT_FIXED */
-    int32_t log_level;            /* most verbose level passed to log_fn, 0 (none)..4; KISSM_LOG_WARN */
+    /** tau_num: neighbours needed for a normal and a descriptor; 3..100000. Default 3. */
+    int32_t min_normal_neighbors;
+    /** Cap on mutual matches kept (best ratio first); 3..100000. Default 5000. */
+    int32_t max_correspondences;
+    /** valid needs at least this many final inliers; 3..100000. Default 15. */
+    int32_t min_inliers;
+    /** KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT. */
+    int32_t nonfinite_policy;
+    /** KISSM_VIEWPOINT_*. Default #KISSM_VIEWPOINT_FIXED. */
+    int32_t viewpoint_mode;
+    /** Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN. */
+    int32_t log_level;
 
-    kissm_log_fn log_fn; /* NULL = silent */
+    /** Log callback; NULL = silent. */
+    kissm_log_fn log_fn;
+    /** Passed to log_fn as it is. */
     void *log_user_data;
-    kissm_progress_fn progress_fn; /* NULL = none */
+    /** Progress and cancellation callback; NULL = none. */
+    kissm_progress_fn progress_fn;
+    /** Passed to progress_fn as it is. */
     void *progress_user_data;
     /* New fields are only ever appended here. */
 } kissm_config;
 
-/* Writes the documented defaults into the first struct_size bytes of *config and sets
- * config->struct_size = struct_size. Pass sizeof(kissm_config). Fails with KISSM_ERR_STRUCT_SIZE when
- * struct_size is smaller than the first published layout. */
+/**
+ * @brief Writes the documented defaults into the first struct_size bytes of *config and sets
+ *        config->struct_size = struct_size.
+ * @param[out] config The struct to fill.
+ * @param[in] struct_size Pass sizeof(kissm_config).
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p config is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE @p struct_size is smaller than the first published layout, or above 65536.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
-/* Checks every field; KISSM_OK or KISSM_ERR_INVALID_ARGUMENT / KISSM_ERR_STRUCT_SIZE with a message
- * naming the field. kissm_create() performs the same checks. */
+/**
+ * @brief Checks every field, with a message (kissm_last_error_message()) naming the field.
+ *
+ * kissm_create() performs the same checks.
+ * @param[in] config The configuration to check.
+ * @retval KISSM_OK Every field is in its range.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p config is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT A field is out of its documented range.
+ * @retval KISSM_ERR_STRUCT_SIZE config->struct_size is too small, above 65536, or the bytes this library
+ *         does not know are not all zero.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_config_validate(const kissm_config *config);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Points: a borrowed, zero-copy view of the caller's xyz coordinates                               */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_SCALAR_FLOAT32 1
-#define KISSM_SCALAR_FLOAT64 2
+/**
+ * @defgroup points Points
+ * @brief kissm_points: a borrowed, zero-copy view of the caller's xyz coordinates.
+ * @{
+ */
 
+#define KISSM_SCALAR_FLOAT32 1 /**< Coordinates are float. */
+#define KISSM_SCALAR_FLOAT64 2 /**< Coordinates are double. */
+
+/** @brief A borrowed, zero-copy view of the caller's xyz coordinates. */
 typedef struct kissm_points {
-    const void *data;      /* first point's x; y and z follow contiguously. Read during the call only. */
-    uint64_t count;        /* number of points, at most 4294967295 */
-    uint64_t stride_bytes; /* bytes from one point to the next; 0 = packed (3 scalars) */
-    int32_t scalar_type;   /* KISSM_SCALAR_FLOAT32 or KISSM_SCALAR_FLOAT64 */
-    int32_t reserved;      /* must be 0 */
+    /** First point's x; y and z follow contiguously. Read during the call only. */
+    const void *data;
+    /** Number of points, at most 4294967295. */
+    uint64_t count;
+    /** Bytes from one point to the next; 0 = packed (3 scalars). */
+    uint64_t stride_bytes;
+    /** #KISSM_SCALAR_FLOAT32 or #KISSM_SCALAR_FLOAT64. */
+    int32_t scalar_type;
+    /** Must be 0. */
+    int32_t reserved;
 } kissm_points;
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Result                                                                                           */
 /* ------------------------------------------------------------------------------------------------ */
 
+/**
+ * @defgroup result Result
+ * @brief kissm_result: the pose, its validity and what each stage found.
+ * @{
+ */
+
+/**
+ * @brief What a registration call found: the pose, whether it can be trusted, and the counts and timings
+ *        of every stage. Always fully overwritten by kissm_register() and kissm_register_features().
+ *
+ * The time_*_ms fields are wall-clock milliseconds per stage; time_total_ms is their sum. Stages not run
+ * are 0. Timings are the only fields that differ between identical calls.
+ */
 typedef struct kissm_result {
-    uint32_t struct_size; /* set by the caller to sizeof(kissm_result) */
-    int32_t valid;        /* 1 when the pose can be trusted (see reason and the counts) */
-    int32_t reason;       /* KISSM_REASON_* when valid = 0 */
+    /** Set by the caller to sizeof(kissm_result). */
+    uint32_t struct_size;
+    /** 1 when the pose can be trusted (see reason and the counts). */
+    int32_t valid;
+    /** KISSM_REASON_* when valid = 0. */
+    int32_t reason;
+    /** Reserved; written as 0. */
     int32_t reserved0;
 
-    /* Maps source points into the target frame: p_t = R p_s + t. Row-major. NaN when no pose was
+    /** Maps source points into the target frame: p_t = R p_s + t. Row-major. NaN when no pose was
      * estimated; when valid = 0 but a pose was estimated it is kept here for inspection. */
     double transform[16];
+    /** R of transform, row-major (NaN when no pose was estimated). */
     double rotation[9];
+    /** t of transform (NaN when no pose was estimated). */
     double translation[3];
 
-    uint64_t num_source_points; /* points given */
+    /** Points given. */
+    uint64_t num_source_points;
+    /** Points given. */
     uint64_t num_target_points;
-    uint64_t num_source_nonfinite; /* points dropped under KISSM_NONFINITE_DROP */
+    /** Points dropped under #KISSM_NONFINITE_DROP. */
+    uint64_t num_source_nonfinite;
+    /** Points dropped under #KISSM_NONFINITE_DROP. */
     uint64_t num_target_nonfinite;
-    uint64_t num_source_voxels; /* occupied voxels */
+    /** Occupied voxels. */
+    uint64_t num_source_voxels;
+    /** Occupied voxels. */
     uint64_t num_target_voxels;
-    uint64_t num_source_keypoints; /* voxels with a descriptor */
+    /** Voxels with a descriptor. */
+    uint64_t num_source_keypoints;
+    /** Voxels with a descriptor. */
     uint64_t num_target_keypoints;
-    uint64_t num_initial_correspondences; /* mutual, ratio-tested, capped matches */
-    uint64_t num_pruned_correspondences;  /* the maximum k-core */
-    uint64_t num_rotation_inliers;        /* pruned correspondences the rotation solver kept */
-    uint64_t num_final_inliers;           /* pruned correspondences within the solver bound after R, t */
-    uint64_t max_core_number;             /* k of the maximum k-core */
+    /** Mutual, ratio-tested, capped matches. */
+    uint64_t num_initial_correspondences;
+    /** The maximum k-core. */
+    uint64_t num_pruned_correspondences;
+    /** Pruned correspondences the rotation solver kept. */
+    uint64_t num_rotation_inliers;
+    /** Pruned correspondences within the solver bound after R, t. */
+    uint64_t num_final_inliers;
+    /** k of the maximum k-core. */
+    uint64_t max_core_number;
 
-    double inlier_ratio;     /* num_final_inliers / num_initial_correspondences (0 when none) */
-    double residual_rms;     /* RMS of |R a + t - b| over final inliers, metres (NaN when none) */
-    double noise_bound;      /* solver inlier bound used, metres */
-    double inlier_extent[3]; /* sqrt of the eigenvalues (descending) of the inliers' source covariance */
+    /** num_final_inliers / num_initial_correspondences (0 when none). */
+    double inlier_ratio;
+    /** RMS of |R a + t - b| over final inliers, metres (NaN when none). */
+    double residual_rms;
+    /** Solver inlier bound used, metres. */
+    double noise_bound;
+    /** sqrt of the eigenvalues (descending) of the inliers' source covariance. */
+    double inlier_extent[3];
 
-    /* Wall-clock milliseconds per stage; time_total_ms is their sum. Stages not run are 0. Timings are
-     * the only fields that differ between identical calls. */
-    double time_voxelize_ms; /* input checks, recentring and voxelisation */
-    double time_features_ms; /* neighbour search, normals, FPFH */
-    double time_matching_ms; /* descriptor matching */
-    double time_pruning_ms;  /* compatibility graph and max k-core */
-    double time_solver_ms;   /* GNC-TLS rotation, translation, inliers, validity */
+    /** Wall-clock ms: input checks, recentring and voxelisation (0 if not run). */
+    double time_voxelize_ms;
+    /** Wall-clock ms: neighbour search, normals, FPFH (0 if not run). */
+    double time_features_ms;
+    /** Wall-clock ms: descriptor matching (0 if not run). */
+    double time_matching_ms;
+    /** Wall-clock ms: compatibility graph and max k-core (0 if not run). */
+    double time_pruning_ms;
+    /** Wall-clock ms: GNC-TLS rotation, translation, inliers, validity (0 if not run). */
+    double time_solver_ms;
+    /** Sum of the stage times. Timings are the only fields that differ between identical calls. */
     double time_total_ms;
     /* New fields are only ever appended here. */
 } kissm_result;
 
-/* Prepares a result for a registration call: writes struct_size and leaves the rest as a failed call
- * does (valid = 0, counts 0, NaN pose). Pass sizeof(kissm_result). Optional (setting struct_size by hand
- * is enough); fails with KISSM_ERR_NULL_ARGUMENT or KISSM_ERR_STRUCT_SIZE (below the first published
- * layout, or above 65536) and then writes nothing. */
+/**
+ * @brief Prepares a result for a registration call: sets result->struct_size = struct_size and leaves the
+ *        rest as a failed call does (valid = 0, reason #KISSM_REASON_NONE, counts 0, NaN pose).
+ *
+ * Optional: setting struct_size by hand is enough, since every registration call overwrites the whole
+ * result. A newer caller's larger struct gets its unknown tail zeroed.
+ * @param[out] result The struct to prepare.
+ * @param[in] struct_size Pass sizeof(kissm_result).
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p result is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE @p struct_size is smaller than the first published layout, or above 65536;
+ *         nothing is written.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Matcher                                                                                          */
 /* ------------------------------------------------------------------------------------------------ */
 
-/* Mutable; used by one thread at a time (kissm_cancel excepted). Distinct matchers run concurrently. */
+/**
+ * @defgroup matcher Matcher
+ * @brief Create a matcher from a configuration, register pairs of clouds, cancel a running call.
+ * @{
+ */
+
+/** @brief Mutable; used by one thread at a time (kissm_cancel() excepted). Distinct matchers run
+ *         concurrently. */
 typedef struct kissm_matcher kissm_matcher;
 
-/* config NULL = defaults. The config is validated and copied. */
+/**
+ * @brief Creates a matcher. The config is validated (as by kissm_config_validate()) and copied.
+ * @param[in] config The settings; NULL = defaults.
+ * @param[out] out_matcher The new matcher, for kissm_destroy().
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p out_matcher is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT, KISSM_ERR_STRUCT_SIZE @p config fails kissm_config_validate().
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_create(const kissm_config *config, kissm_matcher **out_matcher);
-KISSM_API void kissm_destroy(kissm_matcher *matcher); /* NULL is fine */
-/* Copies the matcher's config into *out (whose struct_size the caller sets). */
+/**
+ * @brief Destroys a matcher.
+ * @param[in] matcher A matcher from kissm_create(); NULL is fine.
+ */
+KISSM_API void kissm_destroy(kissm_matcher *matcher);
+/**
+ * @brief Copies the matcher's config into *out_config (whose struct_size the caller sets).
+ * @param[in] matcher The matcher.
+ * @param[in,out] out_config Its struct_size is read (sizeof(kissm_config)); then it is overwritten.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p matcher or @p out_config is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE out_config->struct_size is too small or above 65536.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *out_config);
 
-/* Global registration of source against target. The result is always fully overwritten. Returns KISSM_OK
- * whenever the inputs were acceptable, including when result->valid is 0. */
+/**
+ * @brief Global registration of source against target. The result is always fully overwritten.
+ *
+ * Returns #KISSM_OK whenever the inputs were acceptable, including when result->valid is 0.
+ * @param[in,out] matcher The matcher (its settings; one call at a time).
+ * @param[in] source The cloud to move; read during the call only.
+ * @param[in] target The cloud it is registered against; read during the call only.
+ * @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ * @retval KISSM_OK The inputs were acceptable; result->valid says whether the pose can be trusted.
+ * @retval KISSM_ERR_NULL_ARGUMENT A pointer argument, or source->data or target->data, is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ * @retval KISSM_ERR_INVALID_ARGUMENT A kissm_points field is out of range (scalar_type, reserved, count,
+ *         stride_bytes).
+ * @retval KISSM_ERR_EMPTY_INPUT A cloud has no points (or none left after dropping non-finite ones).
+ * @retval KISSM_ERR_TOO_FEW_POINTS A cloud has fewer than #KISSM_MIN_POINTS points.
+ * @retval KISSM_ERR_NONFINITE A NaN or infinite coordinate under #KISSM_NONFINITE_REJECT.
+ * @retval KISSM_ERR_VOXEL_RANGE The voxel size is too small for a cloud's extent.
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
                                  kissm_result *result);
 
-/* Requests that the call running on matcher stop with KISSM_ERR_CANCELLED. Safe from any thread. A
- * request made while no call is running is cleared when the next call starts. */
+/**
+ * @brief Requests that the call running on matcher stop with #KISSM_ERR_CANCELLED. Safe from any thread.
+ *
+ * A request made while no call is running is cleared when the next call starts.
+ * @param[in] matcher The matcher; NULL is ignored.
+ */
 KISSM_API void kissm_cancel(kissm_matcher *matcher);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Features: a cloud described once, matched against many                                           */
 /* ------------------------------------------------------------------------------------------------ */
 
-/* Immutable once created; may be used from several threads at once and outlive the matcher. */
+/**
+ * @defgroup features Features
+ * @brief A cloud described once, matched against many.
+ * @{
+ */
+
+/** @brief Immutable once created; may be used from several threads at once and outlive the matcher. */
 typedef struct kissm_features kissm_features;
 
+/**
+ * @brief Voxelises and describes one cloud under the matcher's configuration.
+ * @param[in,out] matcher The matcher (its settings; one call at a time).
+ * @param[in] cloud The cloud; read during the call only.
+ * @param[out] out_features The features, for kissm_features_destroy().
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p matcher, @p cloud, cloud->data or @p out_features is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT A kissm_points field is out of range.
+ * @retval KISSM_ERR_EMPTY_INPUT, KISSM_ERR_TOO_FEW_POINTS, KISSM_ERR_NONFINITE, KISSM_ERR_VOXEL_RANGE As
+ *         for kissm_register().
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_features_compute(kissm_matcher *matcher, const kissm_points *cloud,
                                          kissm_features **out_features);
-KISSM_API void kissm_features_destroy(kissm_features *features);                 /* NULL is fine */
-KISSM_API uint64_t kissm_features_num_points(const kissm_features *features);    /* 0 for NULL */
-KISSM_API uint64_t kissm_features_num_voxels(const kissm_features *features);    /* 0 for NULL */
-KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features); /* 0 for NULL */
-/* Same pose, counts and validity as kissm_register() on the clouds the features were computed from.
- * Fails with KISSM_ERR_FEATURES_MISMATCH when either was computed under a config whose descriptor
- * parameters differ from matcher's. Voxelisation and feature times are reported as 0. */
+/**
+ * @brief Destroys features.
+ * @param[in] features Features from kissm_features_compute(); NULL is fine.
+ */
+KISSM_API void kissm_features_destroy(kissm_features *features);
+/**
+ * @brief Points of the cloud the features were computed from.
+ * @param[in] features The features.
+ * @return The number of points; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_features_num_points(const kissm_features *features);
+/**
+ * @brief Occupied voxels of the described cloud.
+ * @param[in] features The features.
+ * @return The number of voxels; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_features_num_voxels(const kissm_features *features);
+/**
+ * @brief Voxels with a descriptor.
+ * @param[in] features The features.
+ * @return The number of keypoints; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features);
+/**
+ * @brief Registration of two described clouds: same pose, counts and validity as kissm_register() on the
+ *        clouds the features were computed from.
+ *
+ * Voxelisation and feature times are reported as 0. The result is always fully overwritten.
+ * @param[in,out] matcher The matcher (its settings; one call at a time).
+ * @param[in] source Features of the cloud to move.
+ * @param[in] target Features of the cloud it is registered against.
+ * @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ * @retval KISSM_OK The inputs were acceptable; result->valid says whether the pose can be trusted.
+ * @retval KISSM_ERR_NULL_ARGUMENT A pointer argument is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ * @retval KISSM_ERR_FEATURES_MISMATCH Either was computed under a config whose descriptor parameters differ
+ *         from matcher's.
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source,
                                           const kissm_features *target, kissm_result *result);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Point files: PLY (ascii, binary), PCD (ascii, binary), KITTI .bin (float32 xyzi), .npy (float32 /  */
 /* float64, shape (N, 3) or (N, >=3)), whitespace xyz text (.xyz, .txt, .pts, .asc)                   */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_FORMAT_AUTO 0 /* by extension, then by content */
-#define KISSM_FORMAT_PLY 1
-#define KISSM_FORMAT_PCD 2
-#define KISSM_FORMAT_KITTI_BIN 3 /* float32 x y z intensity */
-#define KISSM_FORMAT_NPY 4
-#define KISSM_FORMAT_XYZ 5
-#define KISSM_FORMAT_BIN_XYZ 6 /* float32 x y z, no intensity */
+/**
+ * @defgroup files Point files
+ * @brief Reading clouds: PLY (ascii, binary), PCD (ascii, binary), KITTI .bin (float32 xyzi), .npy
+ *        (float32 / float64, shape (N, 3) or (N, >=3)), whitespace xyz text (.xyz, .txt, .pts, .asc).
+ * @{
+ */
 
-/* A cloud owned by the library, as read from a file: float64 xyz, packed. */
+#define KISSM_FORMAT_AUTO 0      /**< By extension, then by content. */
+#define KISSM_FORMAT_PLY 1       /**< PLY, ascii or binary. */
+#define KISSM_FORMAT_PCD 2       /**< PCD, ascii or binary. */
+#define KISSM_FORMAT_KITTI_BIN 3 /**< float32 x y z intensity. */
+#define KISSM_FORMAT_NPY 4       /**< .npy, float32 or float64, shape (N, 3) or (N, >=3). */
+#define KISSM_FORMAT_XYZ 5       /**< Whitespace-separated xyz text. */
+#define KISSM_FORMAT_BIN_XYZ 6   /**< float32 x y z, no intensity. */
+
+/** @brief A cloud owned by the library, as read from a file: float64 xyz, packed. */
 typedef struct kissm_cloud kissm_cloud;
 
-/* path is UTF-8. Non-finite points are kept as they are (the registration policy decides). */
+/**
+ * @brief Reads a point file. Non-finite points are kept as they are (the registration policy decides).
+ * @param[in] path The file, UTF-8.
+ * @param[in] format A KISSM_FORMAT_* value; #KISSM_FORMAT_AUTO detects it.
+ * @param[out] out_cloud The cloud, for kissm_cloud_destroy().
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p path or @p out_cloud is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p format is not a KISSM_FORMAT_* value.
+ * @retval KISSM_ERR_IO The file could not be opened or read.
+ * @retval KISSM_ERR_PARSE The file is malformed, truncated or of an unsupported layout.
+ * @retval KISSM_ERR_UNSUPPORTED_FORMAT The file's format is not recognised.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);
-KISSM_API void kissm_cloud_destroy(kissm_cloud *cloud);         /* NULL is fine */
-KISSM_API uint64_t kissm_cloud_count(const kissm_cloud *cloud); /* 0 for NULL */
-/* Pointer to count * 3 doubles, valid until kissm_cloud_destroy(); NULL for NULL or an empty cloud. */
+/**
+ * @brief Destroys a cloud.
+ * @param[in] cloud A cloud from kissm_read_points(); NULL is fine.
+ */
+KISSM_API void kissm_cloud_destroy(kissm_cloud *cloud);
+/**
+ * @brief Number of points of a cloud.
+ * @param[in] cloud The cloud.
+ * @return The number of points; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_cloud_count(const kissm_cloud *cloud);
+/**
+ * @brief The cloud's coordinates.
+ * @param[in] cloud The cloud.
+ * @return Pointer to count * 3 doubles (x, y, z per point), valid until kissm_cloud_destroy(); NULL for
+ *         NULL or an empty cloud.
+ */
 KISSM_API const double *kissm_cloud_data(const kissm_cloud *cloud);
-/* Fills a kissm_points view of the cloud (float64, packed). */
+/**
+ * @brief Fills a kissm_points view of the cloud (float64, packed), valid until kissm_cloud_destroy().
+ * @param[in] cloud The cloud.
+ * @param[out] out_points The view.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p cloud or @p out_points is NULL.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
 KISSM_API int32_t kissm_cloud_points(const kissm_cloud *cloud, kissm_points *out_points);
+
+/** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
 /* ABI self-check for bindings                                                                      */
 /* ------------------------------------------------------------------------------------------------ */
 
-#define KISSM_STRUCT_CONFIG 1
-#define KISSM_STRUCT_POINTS 2
-#define KISSM_STRUCT_RESULT 3
+/**
+ * @defgroup abi ABI self-check for bindings
+ * @brief The sizes of the public structs as compiled into the library.
+ * @{
+ */
 
-/* sizeof() of the public struct as compiled into the library; 0 for an unknown id. */
+#define KISSM_STRUCT_CONFIG 1 /**< kissm_config */
+#define KISSM_STRUCT_POINTS 2 /**< kissm_points */
+#define KISSM_STRUCT_RESULT 3 /**< kissm_result */
+
+/**
+ * @brief sizeof() of a public struct as compiled into the library.
+ * @param[in] which A KISSM_STRUCT_* id.
+ * @return The size in bytes; 0 for an unknown id.
+ */
 KISSM_API uint32_t kissm_abi_sizeof(int32_t which);
+
+/** @} */
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -6,14 +6,19 @@
  */
 
 #define KISSM_VERSION_MAJOR 0
+
 #define KISSM_VERSION_MINOR 1
+
 #define KISSM_VERSION_PATCH 0
+
 #define KISSM_VERSION_NUMBER 100
 
 #define KISSM_ABI_VERSION 0
 
 uint32_t kissm_version_number(void);
+
 const char *kissm_version_string(void);
+
 uint32_t kissm_abi_version(void);
 
 #define KISSM_OK 0
@@ -70,29 +75,47 @@ typedef void (*kissm_log_fn)(void *user_data, int32_t level, const char *message
 typedef int32_t (*kissm_progress_fn)(void *user_data, int32_t stage, double fraction);
 
 typedef struct kissm_config {
+
     uint32_t struct_size;
+
     int32_t num_threads;
 
     double voxel_size;
+
     double normal_radius_gain;
+
     double fpfh_radius_gain;
+
     double max_linearity;
+
     double ratio_test;
+
     double prune_noise_bound_gain;
+
     double solver_noise_bound_gain;
+
     double noise_bound_max;
+
     double viewpoint[3];
 
     int32_t min_normal_neighbors;
+
     int32_t max_correspondences;
+
     int32_t min_inliers;
+
     int32_t nonfinite_policy;
+
     int32_t viewpoint_mode;
+
     int32_t log_level;
 
     kissm_log_fn log_fn;
+
     void *log_user_data;
+
     kissm_progress_fn progress_fn;
+
     void *progress_user_data;
 } kissm_config;
 
@@ -104,47 +127,78 @@ int32_t kissm_config_validate(const kissm_config *config);
 #define KISSM_SCALAR_FLOAT64 2
 
 typedef struct kissm_points {
+
     const void *data;
+
     uint64_t count;
+
     uint64_t stride_bytes;
+
     int32_t scalar_type;
+
     int32_t reserved;
 } kissm_points;
 
 typedef struct kissm_result {
+
     uint32_t struct_size;
+
     int32_t valid;
+
     int32_t reason;
+
     int32_t reserved0;
 
     double transform[16];
+
     double rotation[9];
+
     double translation[3];
 
     uint64_t num_source_points;
+
     uint64_t num_target_points;
+
     uint64_t num_source_nonfinite;
+
     uint64_t num_target_nonfinite;
+
     uint64_t num_source_voxels;
+
     uint64_t num_target_voxels;
+
     uint64_t num_source_keypoints;
+
     uint64_t num_target_keypoints;
+
     uint64_t num_initial_correspondences;
+
     uint64_t num_pruned_correspondences;
+
     uint64_t num_rotation_inliers;
+
     uint64_t num_final_inliers;
+
     uint64_t max_core_number;
 
     double inlier_ratio;
+
     double residual_rms;
+
     double noise_bound;
+
     double inlier_extent[3];
 
     double time_voxelize_ms;
+
     double time_features_ms;
+
     double time_matching_ms;
+
     double time_pruning_ms;
+
     double time_solver_ms;
+
     double time_total_ms;
 } kissm_result;
 
@@ -153,6 +207,7 @@ int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
 typedef struct kissm_matcher kissm_matcher;
 
 int32_t kissm_create(const kissm_config *config, kissm_matcher **out_matcher);
+
 void kissm_destroy(kissm_matcher *matcher);
 
 int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *out_config);
@@ -166,9 +221,13 @@ typedef struct kissm_features kissm_features;
 
 int32_t kissm_features_compute(kissm_matcher *matcher, const kissm_points *cloud,
     kissm_features **out_features);
+
 void kissm_features_destroy(kissm_features *features);
+
 uint64_t kissm_features_num_points(const kissm_features *features);
+
 uint64_t kissm_features_num_voxels(const kissm_features *features);
+
 uint64_t kissm_features_num_keypoints(const kissm_features *features);
 
 int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source,
@@ -185,7 +244,9 @@ int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *so
 typedef struct kissm_cloud kissm_cloud;
 
 int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);
+
 void kissm_cloud_destroy(kissm_cloud *cloud);
+
 uint64_t kissm_cloud_count(const kissm_cloud *cloud);
 
 const double *kissm_cloud_data(const kissm_cloud *cloud);

@@ -56,28 +56,44 @@ pub const KISSM_STRUCT_CONFIG: i32 = 1;
 pub const KISSM_STRUCT_POINTS: i32 = 2;
 pub const KISSM_STRUCT_RESULT: i32 = 3;
 extern "C" {
-    /// Runtime twins of the macros above; bindings compare them with the header they were built from.
+    /** @brief Runtime twin of #KISSM_VERSION_NUMBER: the version of the library actually loaded.
+ @return major * 10000 + minor * 100 + patch of the library.*/
     pub fn kissm_version_number() -> u32;
 }
 extern "C" {
+    /** @brief Runtime twin of #KISSM_VERSION_STRING.
+ @return The library's version, "major.minor.patch": a static string, never NULL.*/
     pub fn kissm_version_string() -> *const ::core::ffi::c_char;
 }
 extern "C" {
+    /** @brief Runtime twin of #KISSM_ABI_VERSION: a program compiled against this header may use the library
+        only when the two are equal.
+ @return The library's ABI version (its SOVERSION).*/
     pub fn kissm_abi_version() -> u32;
 }
 extern "C" {
-    /// Static, never-NULL description of a status code ("unknown status" for unknown values).
+    /** @brief Describes a status code.
+ @param[in] status A status returned by a kissm_* function (any value is accepted).
+ @return A static, never-NULL description of @p status; "unknown status" for unknown values.*/
     pub fn kissm_status_string(status: i32) -> *const ::core::ffi::c_char;
 }
 extern "C" {
-    /** Detailed message of the last failing kissm_* call on this thread, naming the offending argument.
- Library-owned; valid until the next kissm_* call on this thread; "" when the last call succeeded.*/
+    /** @brief Detailed message of the last failing kissm_* call on this thread, naming the offending argument.
+ @return A library-owned string, valid until the next kissm_* call on this thread; "" when the last call
+         succeeded. Never NULL.*/
     pub fn kissm_last_error_message() -> *const ::core::ffi::c_char;
 }
 extern "C" {
+    /** @brief Describes a reason code.
+ @param[in] reason A KISSM_REASON_* value, as in kissm_result.reason (any value is accepted).
+ @return A static, never-NULL description of @p reason; "unknown reason" for unknown values.*/
     pub fn kissm_reason_string(reason: i32) -> *const ::core::ffi::c_char;
 }
-/// Called on the calling thread only, never concurrently; must not call back into the same matcher.
+/** @brief Log callback (kissm_config.log_fn). Called on the calling thread only, never concurrently; must not
+        call back into the same matcher.
+ @param[in] user_data kissm_config.log_user_data, as given.
+ @param[in] level A KISSM_LOG_* level, at most kissm_config.log_level.
+ @param[in] message The message; valid during the call only.*/
 pub type kissm_log_fn = ::core::option::Option<
     unsafe extern "C" fn(
         user_data: *mut ::core::ffi::c_void,
@@ -85,9 +101,15 @@ pub type kissm_log_fn = ::core::option::Option<
         message: *const ::core::ffi::c_char,
     ),
 >;
-/** Called on the calling thread at stage boundaries and within long stages; return non-zero to cancel.
+/** @brief Progress callback (kissm_config.progress_fn). Called on the calling thread at stage boundaries and
+        within long stages.
+
  Stages never go back within a call and fractions never decrease within a stage; the last call of a
- registration that ran to the end is (KISSM_STAGE_SOLVER, 1.0).*/
+ registration that ran to the end is (#KISSM_STAGE_SOLVER, 1.0).
+ @param[in] user_data kissm_config.progress_user_data, as given.
+ @param[in] stage The KISSM_STAGE_* stage running.
+ @param[in] fraction How much of that stage is done, in [0, 1].
+ @return 0 to go on; non-zero to cancel (the call then fails with #KISSM_ERR_CANCELLED).*/
 pub type kissm_progress_fn = ::core::option::Option<
     unsafe extern "C" fn(
         user_data: *mut ::core::ffi::c_void,
@@ -95,48 +117,54 @@ pub type kissm_progress_fn = ::core::option::Option<
         fraction: f64,
     ) -> i32,
 >;
+/** @brief Settings of a matcher. Fill it with kissm_config_init(), then change what you need.
+
+ Each field's comment gives its unit, its valid range and its default (the value kissm_config_init()
+ writes).*/
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
 pub struct kissm_config {
-    /// sizeof(kissm_config) as the caller knows it; set by kissm_config_init
+    /// sizeof(kissm_config) as the caller knows it; set by kissm_config_init().
     pub struct_size: u32,
-    /// worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it.
+    /// Worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. Default 0.
     pub num_threads: i32,
-    /// metres (or the cloud's unit); > 0. Every length below scales with it. 0.3
+    /// Metres (or the cloud's unit); > 0. Every length below scales with it. Default 0.3.
     pub voxel_size: f64,
-    /// normal radius = gain * voxel_size; in (0, fpfh_radius_gain]; 3.5 (paper)
+    /// Normal radius = gain * voxel_size; in (0, fpfh_radius_gain]. Default 3.5 (paper).
     pub normal_radius_gain: f64,
-    /// FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain; 5.0
+    /// FPFH radius = gain * voxel_size; in [1.5, 50] and >= normal gain. Default 5.0.
     pub fpfh_radius_gain: f64,
-    /// tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]; 0.99
+    /// tau_lin: (l1 - l2) / l1 above this gets no normal; in (0, 1]. Default 0.99.
     pub max_linearity: f64,
-    /// Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off; 0.9
+    /// Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off. Default 0.9.
     pub ratio_test: f64,
-    /// graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]; 1.0
+    /// Graph edge when length mismatch <= gain * voxel_size; in (0, 1e6]. Default 1.0.
     pub prune_noise_bound_gain: f64,
-    /// solver inlier bound = gain * voxel_size; in (0, 1e6]; 0.75
+    /// Solver inlier bound = gain * voxel_size; in (0, 1e6]. Default 0.75.
     pub solver_noise_bound_gain: f64,
-    /// cap on both noise bounds in metres, finite; 0 = no cap; 0
+    /// Cap on both noise bounds in metres, finite; 0 = no cap. Default 0.
     pub noise_bound_max: f64,
-    /// for KISSM_VIEWPOINT_FIXED: the sensor position, finite; (0, 0, 0)
+    /// For #KISSM_VIEWPOINT_FIXED: the sensor position, finite. Default (0, 0, 0).
     pub viewpoint: [f64; 3usize],
-    /// tau_num: neighbours needed for a normal and a descriptor; 3..100000; 3
+    /// tau_num: neighbours needed for a normal and a descriptor; 3..100000. Default 3.
     pub min_normal_neighbors: i32,
-    /// cap on mutual matches kept (best ratio first); 3..100000; 5000
+    /// Cap on mutual matches kept (best ratio first); 3..100000. Default 5000.
     pub max_correspondences: i32,
-    /// valid needs at least this many final inliers; 3..100000; 15
+    /// valid needs at least this many final inliers; 3..100000. Default 15.
     pub min_inliers: i32,
-    /// KISSM_NONFINITE_*; KISSM_NONFINITE_REJECT
+    /// KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT.
     pub nonfinite_policy: i32,
-    /// KISSM_VIEWPOINT_*; KISSM_VIEWPOINT_FIXED
+    /// KISSM_VIEWPOINT_*. Default #KISSM_VIEWPOINT_FIXED.
     pub viewpoint_mode: i32,
-    /// most verbose level passed to log_fn, 0 (none)..4; KISSM_LOG_WARN
+    /// Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN.
     pub log_level: i32,
-    /// NULL = silent
+    /// Log callback; NULL = silent.
     pub log_fn: kissm_log_fn,
+    /// Passed to log_fn as it is.
     pub log_user_data: *mut ::core::ffi::c_void,
-    /// NULL = none
+    /// Progress and cancellation callback; NULL = none.
     pub progress_fn: kissm_progress_fn,
+    /// Passed to progress_fn as it is.
     pub progress_user_data: *mut ::core::ffi::c_void,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
@@ -217,28 +245,42 @@ impl Default for kissm_config {
     }
 }
 extern "C" {
-    /** Writes the documented defaults into the first struct_size bytes of *config and sets
- config->struct_size = struct_size. Pass sizeof(kissm_config). Fails with KISSM_ERR_STRUCT_SIZE when
- struct_size is smaller than the first published layout.*/
+    /** @brief Writes the documented defaults into the first struct_size bytes of *config and sets
+        config->struct_size = struct_size.
+ @param[out] config The struct to fill.
+ @param[in] struct_size Pass sizeof(kissm_config).
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p config is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE @p struct_size is smaller than the first published layout, or above 65536.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_config_init(config: *mut kissm_config, struct_size: u32) -> i32;
 }
 extern "C" {
-    /** Checks every field; KISSM_OK or KISSM_ERR_INVALID_ARGUMENT / KISSM_ERR_STRUCT_SIZE with a message
- naming the field. kissm_create() performs the same checks.*/
+    /** @brief Checks every field, with a message (kissm_last_error_message()) naming the field.
+
+ kissm_create() performs the same checks.
+ @param[in] config The configuration to check.
+ @retval KISSM_OK Every field is in its range.
+ @retval KISSM_ERR_NULL_ARGUMENT @p config is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT A field is out of its documented range.
+ @retval KISSM_ERR_STRUCT_SIZE config->struct_size is too small, above 65536, or the bytes this library
+         does not know are not all zero.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_config_validate(config: *const kissm_config) -> i32;
 }
+/// @brief A borrowed, zero-copy view of the caller's xyz coordinates.
 #[repr(C)]
 #[derive(Debug, Copy, Clone)]
 pub struct kissm_points {
-    /// first point's x; y and z follow contiguously. Read during the call only.
+    /// First point's x; y and z follow contiguously. Read during the call only.
     pub data: *const ::core::ffi::c_void,
-    /// number of points, at most 4294967295
+    /// Number of points, at most 4294967295.
     pub count: u64,
-    /// bytes from one point to the next; 0 = packed (3 scalars)
+    /// Bytes from one point to the next; 0 = packed (3 scalars).
     pub stride_bytes: u64,
-    /// KISSM_SCALAR_FLOAT32 or KISSM_SCALAR_FLOAT64
+    /// #KISSM_SCALAR_FLOAT32 or #KISSM_SCALAR_FLOAT64.
     pub scalar_type: i32,
-    /// must be 0
+    /// Must be 0.
     pub reserved: i32,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
@@ -270,62 +312,74 @@ impl Default for kissm_points {
         }
     }
 }
-#[doc = " ------------------------------------------------------------------------------------------------ */\n/* Result                                                                                           */\n/* ------------------------------------------------------------------------------------------------"]
+/** @brief What a registration call found: the pose, whether it can be trusted, and the counts and timings
+        of every stage. Always fully overwritten by kissm_register() and kissm_register_features().
+
+ The time_*_ms fields are wall-clock milliseconds per stage; time_total_ms is their sum. Stages not run
+ are 0. Timings are the only fields that differ between identical calls.*/
 #[repr(C)]
 #[derive(Debug, Default, Copy, Clone)]
 pub struct kissm_result {
-    /// set by the caller to sizeof(kissm_result)
+    /// Set by the caller to sizeof(kissm_result).
     pub struct_size: u32,
-    /// 1 when the pose can be trusted (see reason and the counts)
+    /// 1 when the pose can be trusted (see reason and the counts).
     pub valid: i32,
-    /// KISSM_REASON_* when valid = 0
+    /// KISSM_REASON_* when valid = 0.
     pub reason: i32,
+    /// Reserved; written as 0.
     pub reserved0: i32,
     /** Maps source points into the target frame: p_t = R p_s + t. Row-major. NaN when no pose was
  estimated; when valid = 0 but a pose was estimated it is kept here for inspection.*/
     pub transform: [f64; 16usize],
+    /// R of transform, row-major (NaN when no pose was estimated).
     pub rotation: [f64; 9usize],
+    /// t of transform (NaN when no pose was estimated).
     pub translation: [f64; 3usize],
-    /// points given
+    /// Points given.
     pub num_source_points: u64,
+    /// Points given.
     pub num_target_points: u64,
-    /// points dropped under KISSM_NONFINITE_DROP
+    /// Points dropped under #KISSM_NONFINITE_DROP.
     pub num_source_nonfinite: u64,
+    /// Points dropped under #KISSM_NONFINITE_DROP.
     pub num_target_nonfinite: u64,
-    /// occupied voxels
+    /// Occupied voxels.
     pub num_source_voxels: u64,
+    /// Occupied voxels.
     pub num_target_voxels: u64,
-    /// voxels with a descriptor
+    /// Voxels with a descriptor.
     pub num_source_keypoints: u64,
+    /// Voxels with a descriptor.
     pub num_target_keypoints: u64,
-    /// mutual, ratio-tested, capped matches
+    /// Mutual, ratio-tested, capped matches.
     pub num_initial_correspondences: u64,
-    /// the maximum k-core
+    /// The maximum k-core.
     pub num_pruned_correspondences: u64,
-    /// pruned correspondences the rotation solver kept
+    /// Pruned correspondences the rotation solver kept.
     pub num_rotation_inliers: u64,
-    /// pruned correspondences within the solver bound after R, t
+    /// Pruned correspondences within the solver bound after R, t.
     pub num_final_inliers: u64,
-    /// k of the maximum k-core
+    /// k of the maximum k-core.
     pub max_core_number: u64,
-    /// num_final_inliers / num_initial_correspondences (0 when none)
+    /// num_final_inliers / num_initial_correspondences (0 when none).
     pub inlier_ratio: f64,
-    /// RMS of |R a + t - b| over final inliers, metres (NaN when none)
+    /// RMS of |R a + t - b| over final inliers, metres (NaN when none).
     pub residual_rms: f64,
-    /// solver inlier bound used, metres
+    /// Solver inlier bound used, metres.
     pub noise_bound: f64,
-    /// sqrt of the eigenvalues (descending) of the inliers' source covariance
+    /// sqrt of the eigenvalues (descending) of the inliers' source covariance.
     pub inlier_extent: [f64; 3usize],
-    /// input checks, recentring and voxelisation
+    /// Wall-clock ms: input checks, recentring and voxelisation (0 if not run).
     pub time_voxelize_ms: f64,
-    /// neighbour search, normals, FPFH
+    /// Wall-clock ms: neighbour search, normals, FPFH (0 if not run).
     pub time_features_ms: f64,
-    /// descriptor matching
+    /// Wall-clock ms: descriptor matching (0 if not run).
     pub time_matching_ms: f64,
-    /// compatibility graph and max k-core
+    /// Wall-clock ms: compatibility graph and max k-core (0 if not run).
     pub time_pruning_ms: f64,
-    /// GNC-TLS rotation, translation, inliers, validity
+    /// Wall-clock ms: GNC-TLS rotation, translation, inliers, validity (0 if not run).
     pub time_solver_ms: f64,
+    /// Sum of the stage times. Timings are the only fields that differ between identical calls.
     pub time_total_ms: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
@@ -424,38 +478,77 @@ const _: () = {
     ][::core::mem::offset_of!(kissm_result, time_total_ms) - 432usize];
 };
 extern "C" {
-    /** Prepares a result for a registration call: writes struct_size and leaves the rest as a failed call
- does (valid = 0, counts 0, NaN pose). Pass sizeof(kissm_result). Optional (setting struct_size by hand
- is enough); fails with KISSM_ERR_NULL_ARGUMENT or KISSM_ERR_STRUCT_SIZE (below the first published
- layout, or above 65536) and then writes nothing.*/
+    /** @brief Prepares a result for a registration call: sets result->struct_size = struct_size and leaves the
+        rest as a failed call does (valid = 0, reason #KISSM_REASON_NONE, counts 0, NaN pose).
+
+ Optional: setting struct_size by hand is enough, since every registration call overwrites the whole
+ result. A newer caller's larger struct gets its unknown tail zeroed.
+ @param[out] result The struct to prepare.
+ @param[in] struct_size Pass sizeof(kissm_result).
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p result is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE @p struct_size is smaller than the first published layout, or above 65536;
+         nothing is written.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_result_init(result: *mut kissm_result, struct_size: u32) -> i32;
 }
-/// Mutable; used by one thread at a time (kissm_cancel excepted). Distinct matchers run concurrently.
+/** @brief Mutable; used by one thread at a time (kissm_cancel() excepted). Distinct matchers run
+         concurrently.*/
 #[repr(C)]
 #[derive(Debug)]
 pub struct kissm_matcher {
     _unused: [u8; 0],
 }
 extern "C" {
-    /// config NULL = defaults. The config is validated and copied.
+    /** @brief Creates a matcher. The config is validated (as by kissm_config_validate()) and copied.
+ @param[in] config The settings; NULL = defaults.
+ @param[out] out_matcher The new matcher, for kissm_destroy().
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p out_matcher is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT, KISSM_ERR_STRUCT_SIZE @p config fails kissm_config_validate().
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_create(
         config: *const kissm_config,
         out_matcher: *mut *mut kissm_matcher,
     ) -> i32;
 }
 extern "C" {
+    /** @brief Destroys a matcher.
+ @param[in] matcher A matcher from kissm_create(); NULL is fine.*/
     pub fn kissm_destroy(matcher: *mut kissm_matcher);
 }
 extern "C" {
-    /// Copies the matcher's config into *out (whose struct_size the caller sets).
+    /** @brief Copies the matcher's config into *out_config (whose struct_size the caller sets).
+ @param[in] matcher The matcher.
+ @param[in,out] out_config Its struct_size is read (sizeof(kissm_config)); then it is overwritten.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p matcher or @p out_config is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE out_config->struct_size is too small or above 65536.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_get_config(
         matcher: *const kissm_matcher,
         out_config: *mut kissm_config,
     ) -> i32;
 }
 extern "C" {
-    /** Global registration of source against target. The result is always fully overwritten. Returns KISSM_OK
- whenever the inputs were acceptable, including when result->valid is 0.*/
+    /** @brief Global registration of source against target. The result is always fully overwritten.
+
+ Returns #KISSM_OK whenever the inputs were acceptable, including when result->valid is 0.
+ @param[in,out] matcher The matcher (its settings; one call at a time).
+ @param[in] source The cloud to move; read during the call only.
+ @param[in] target The cloud it is registered against; read during the call only.
+ @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ @retval KISSM_OK The inputs were acceptable; result->valid says whether the pose can be trusted.
+ @retval KISSM_ERR_NULL_ARGUMENT A pointer argument, or source->data or target->data, is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ @retval KISSM_ERR_INVALID_ARGUMENT A kissm_points field is out of range (scalar_type, reserved, count,
+         stride_bytes).
+ @retval KISSM_ERR_EMPTY_INPUT A cloud has no points (or none left after dropping non-finite ones).
+ @retval KISSM_ERR_TOO_FEW_POINTS A cloud has fewer than #KISSM_MIN_POINTS points.
+ @retval KISSM_ERR_NONFINITE A NaN or infinite coordinate under #KISSM_NONFINITE_REJECT.
+ @retval KISSM_ERR_VOXEL_RANGE The voxel size is too small for a cloud's extent.
+ @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_register(
         matcher: *mut kissm_matcher,
         source: *const kissm_points,
@@ -464,17 +557,30 @@ extern "C" {
     ) -> i32;
 }
 extern "C" {
-    /** Requests that the call running on matcher stop with KISSM_ERR_CANCELLED. Safe from any thread. A
- request made while no call is running is cleared when the next call starts.*/
+    /** @brief Requests that the call running on matcher stop with #KISSM_ERR_CANCELLED. Safe from any thread.
+
+ A request made while no call is running is cleared when the next call starts.
+ @param[in] matcher The matcher; NULL is ignored.*/
     pub fn kissm_cancel(matcher: *mut kissm_matcher);
 }
-/// Immutable once created; may be used from several threads at once and outlive the matcher.
+/// @brief Immutable once created; may be used from several threads at once and outlive the matcher.
 #[repr(C)]
 #[derive(Debug)]
 pub struct kissm_features {
     _unused: [u8; 0],
 }
 extern "C" {
+    /** @brief Voxelises and describes one cloud under the matcher's configuration.
+ @param[in,out] matcher The matcher (its settings; one call at a time).
+ @param[in] cloud The cloud; read during the call only.
+ @param[out] out_features The features, for kissm_features_destroy().
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p matcher, @p cloud, cloud->data or @p out_features is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT A kissm_points field is out of range.
+ @retval KISSM_ERR_EMPTY_INPUT, KISSM_ERR_TOO_FEW_POINTS, KISSM_ERR_NONFINITE, KISSM_ERR_VOXEL_RANGE As
+         for kissm_register().
+ @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_features_compute(
         matcher: *mut kissm_matcher,
         cloud: *const kissm_points,
@@ -482,21 +588,44 @@ extern "C" {
     ) -> i32;
 }
 extern "C" {
+    /** @brief Destroys features.
+ @param[in] features Features from kissm_features_compute(); NULL is fine.*/
     pub fn kissm_features_destroy(features: *mut kissm_features);
 }
 extern "C" {
+    /** @brief Points of the cloud the features were computed from.
+ @param[in] features The features.
+ @return The number of points; 0 for NULL.*/
     pub fn kissm_features_num_points(features: *const kissm_features) -> u64;
 }
 extern "C" {
+    /** @brief Occupied voxels of the described cloud.
+ @param[in] features The features.
+ @return The number of voxels; 0 for NULL.*/
     pub fn kissm_features_num_voxels(features: *const kissm_features) -> u64;
 }
 extern "C" {
+    /** @brief Voxels with a descriptor.
+ @param[in] features The features.
+ @return The number of keypoints; 0 for NULL.*/
     pub fn kissm_features_num_keypoints(features: *const kissm_features) -> u64;
 }
 extern "C" {
-    /** Same pose, counts and validity as kissm_register() on the clouds the features were computed from.
- Fails with KISSM_ERR_FEATURES_MISMATCH when either was computed under a config whose descriptor
- parameters differ from matcher's. Voxelisation and feature times are reported as 0.*/
+    /** @brief Registration of two described clouds: same pose, counts and validity as kissm_register() on the
+        clouds the features were computed from.
+
+ Voxelisation and feature times are reported as 0. The result is always fully overwritten.
+ @param[in,out] matcher The matcher (its settings; one call at a time).
+ @param[in] source Features of the cloud to move.
+ @param[in] target Features of the cloud it is registered against.
+ @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ @retval KISSM_OK The inputs were acceptable; result->valid says whether the pose can be trusted.
+ @retval KISSM_ERR_NULL_ARGUMENT A pointer argument is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ @retval KISSM_ERR_FEATURES_MISMATCH Either was computed under a config whose descriptor parameters differ
+         from matcher's.
+ @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_register_features(
         matcher: *mut kissm_matcher,
         source: *const kissm_features,
@@ -504,14 +633,24 @@ extern "C" {
         result: *mut kissm_result,
     ) -> i32;
 }
-/// A cloud owned by the library, as read from a file: float64 xyz, packed.
+/// @brief A cloud owned by the library, as read from a file: float64 xyz, packed.
 #[repr(C)]
 #[derive(Debug)]
 pub struct kissm_cloud {
     _unused: [u8; 0],
 }
 extern "C" {
-    /// path is UTF-8. Non-finite points are kept as they are (the registration policy decides).
+    /** @brief Reads a point file. Non-finite points are kept as they are (the registration policy decides).
+ @param[in] path The file, UTF-8.
+ @param[in] format A KISSM_FORMAT_* value; #KISSM_FORMAT_AUTO detects it.
+ @param[out] out_cloud The cloud, for kissm_cloud_destroy().
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p path or @p out_cloud is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p format is not a KISSM_FORMAT_* value.
+ @retval KISSM_ERR_IO The file could not be opened or read.
+ @retval KISSM_ERR_PARSE The file is malformed, truncated or of an unsupported layout.
+ @retval KISSM_ERR_UNSUPPORTED_FORMAT The file's format is not recognised.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_read_points(
         path: *const ::core::ffi::c_char,
         format: i32,
@@ -519,23 +658,38 @@ extern "C" {
     ) -> i32;
 }
 extern "C" {
+    /** @brief Destroys a cloud.
+ @param[in] cloud A cloud from kissm_read_points(); NULL is fine.*/
     pub fn kissm_cloud_destroy(cloud: *mut kissm_cloud);
 }
 extern "C" {
+    /** @brief Number of points of a cloud.
+ @param[in] cloud The cloud.
+ @return The number of points; 0 for NULL.*/
     pub fn kissm_cloud_count(cloud: *const kissm_cloud) -> u64;
 }
 extern "C" {
-    /// Pointer to count * 3 doubles, valid until kissm_cloud_destroy(); NULL for NULL or an empty cloud.
+    /** @brief The cloud's coordinates.
+ @param[in] cloud The cloud.
+ @return Pointer to count * 3 doubles (x, y, z per point), valid until kissm_cloud_destroy(); NULL for
+         NULL or an empty cloud.*/
     pub fn kissm_cloud_data(cloud: *const kissm_cloud) -> *const f64;
 }
 extern "C" {
-    /// Fills a kissm_points view of the cloud (float64, packed).
+    /** @brief Fills a kissm_points view of the cloud (float64, packed), valid until kissm_cloud_destroy().
+ @param[in] cloud The cloud.
+ @param[out] out_points The view.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p cloud or @p out_points is NULL.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_cloud_points(
         cloud: *const kissm_cloud,
         out_points: *mut kissm_points,
     ) -> i32;
 }
 extern "C" {
-    /// sizeof() of the public struct as compiled into the library; 0 for an unknown id.
+    /** @brief sizeof() of a public struct as compiled into the library.
+ @param[in] which A KISSM_STRUCT_* id.
+ @return The size in bytes; 0 for an unknown id.*/
     pub fn kissm_abi_sizeof(which: i32) -> u32;
 }

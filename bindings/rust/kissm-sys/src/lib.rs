@@ -19,8 +19,9 @@
 
 /// The generated declarations, re-exported at the crate root. bindgen keeps the C names (kissm_config,
 /// KISSM_OK, ...) and the header's comments, which do not document every item: the generated code is
-/// exempt from `missing_docs` (this crate's own items are not). Clippy finds nothing in it.
-#[allow(non_camel_case_types, non_snake_case, non_upper_case_globals, missing_docs)]
+/// exempt from `missing_docs` (this crate's own items are not). Clippy finds nothing in it. The header's
+/// Doxygen markup (`@param[in]`, `[out]`) reads as broken intra-doc links to rustdoc: allowed here only.
+#[allow(non_camel_case_types, non_snake_case, non_upper_case_globals, missing_docs, rustdoc::broken_intra_doc_links)]
 mod generated {
     #[cfg(not(feature = "bindgen"))]
     include!("bindings.rs");
