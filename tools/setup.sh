@@ -2,11 +2,13 @@
 # SPDX-License-Identifier: MIT
 # Installs what building and testing kissm needs on Debian/Ubuntu. As root it uses apt-get; otherwise it
 # checks and says what is missing. Safe to run repeatedly: it installs only what is absent.
-#   required: the build (cmake, a C++17 compiler, Eigen) and pkg-config for the install test;
+#   required: the build (cmake, a C++17 compiler, Eigen), pkg-config for the install tests, dpkg-dev for the
+#             .deb's computed dependencies, clang-format and shellcheck for tools/lint.sh, doxygen for the C
+#             API reference (tools/docs.sh), libusb-1.0-0 for the Open3D interop test (open3d-cpu needs it);
 #   optional: abigail-tools for the ABI baseline test, which skips (exit 77) without it.
 set -euo pipefail
 
-required=(cmake g++ ninja-build libeigen3-dev pkg-config)
+required=(cmake g++ ninja-build libeigen3-dev pkg-config dpkg-dev clang-format shellcheck doxygen libusb-1.0-0)
 optional=(abigail-tools)
 
 absent() {

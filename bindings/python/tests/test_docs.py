@@ -35,12 +35,9 @@ def test_python_blocks_are_found() -> None:
     assert python_blocks(text) == ["a = 1\n", "b = 2\n"]
 
 
-# A deprecated name in the package's own README is an error. The repository's README.md still calls the
-# deprecated Matcher.features (the lead updates it): there the warning is reported, not raised.
-STRICT = pytest.mark.filterwarnings("error::DeprecationWarning")
-
-
-@pytest.mark.parametrize("name", ["README.md", pytest.param("bindings/python/README.md", marks=STRICT)])
+# A deprecated name in a README example is an error.
+@pytest.mark.filterwarnings("error::DeprecationWarning")
+@pytest.mark.parametrize("name", ["README.md", "bindings/python/README.md"])
 def test_examples_run(name: str, pair: testdata.Pair, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     doc = DOCS[name]
     if not doc.is_file():
