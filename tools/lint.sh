@@ -56,7 +56,7 @@ fi
 # ---- shell scripts -----------------------------------------------------------------------------------
 step "shellcheck ($(shellcheck --version | sed -n 's/^version: //p'))"
 mapfile -t scripts < <(files '*.sh' '.ci/run')
-if ! shellcheck -x "${scripts[@]}"; then fail "shellcheck"; fi
+if ! shellcheck -x --source-path=SCRIPTDIR "${scripts[@]}"; then fail "shellcheck"; fi
 
 # ---- licence lines -----------------------------------------------------------------------------------
 # Every file we wrote that can hold a comment; generated and third-party files are named here.
