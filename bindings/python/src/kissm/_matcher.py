@@ -14,6 +14,13 @@ from ._points import PointsLike, points_view
 from ._result import Result
 
 
+def _new_result() -> Any:
+    """A kissm_result prepared by ``kissm_result_init`` (struct_size set, no pose)."""
+    result = ffi.new("kissm_result *")
+    check(lib.kissm_result_init(result, ffi.sizeof("kissm_result")))
+    return result
+
+
 class Features:
     """A cloud described once (voxels, normals, FPFH descriptors), to be matched against many others.
 
@@ -113,8 +120,7 @@ class Matcher:
         """
         src = points_view(source, "source")
         tgt = points_view(target, "target")
-        result = ffi.new("kissm_result *")
-        result.struct_size = ffi.sizeof("kissm_result")
+        result = _new_result()
         with self._call_lock:
             status = lib.kissm_register(self._handle(), src.c, tgt.c, result)
             if status != 0:
@@ -151,8 +157,7 @@ class Matcher:
                 raise TypeError(
                     f"{name} must be kissm.Features (from Matcher.compute_features), not {type(value).__name__}"
                 )
-        result = ffi.new("kissm_result *")
-        result.struct_size = ffi.sizeof("kissm_result")
+        result = _new_result()
         with self._call_lock:
             status = lib.kissm_register_features(self._handle(), source._ptr, target._ptr, result)
             if status != 0:

@@ -88,8 +88,12 @@ impl Matcher {
         self.raw.0.as_ptr()
     }
 
-    fn new_result() -> sys::kissm_result {
-        sys::kissm_result { struct_size: mem::size_of::<sys::kissm_result>() as u32, ..Default::default() }
+    /// A result prepared by `kissm_result_init`: struct_size set, no pose.
+    fn new_result() -> Result<sys::kissm_result, Error> {
+        let mut result = sys::kissm_result::default();
+        // SAFETY: result is a writable kissm_result of exactly the size passed.
+        Error::check(unsafe { sys::kissm_result_init(&mut result, mem::size_of::<sys::kissm_result>() as u32) })?;
+        Ok(result)
     }
 
     /// Globally registers `source` against `target` (no initial guess needed): the returned transform
@@ -107,7 +111,7 @@ impl Matcher {
     {
         let source = source.as_points();
         let target = target.as_points();
-        let mut result = Self::new_result();
+        let mut result = Self::new_result()?;
         // SAFETY: the matcher is live and used by this thread only (&mut self); both views borrow data
         // that outlives the call; result is a writable kissm_result with struct_size set.
         let status = unsafe { sys::kissm_register(self.ptr(), source.as_raw(), target.as_raw(), &mut result) };
@@ -133,7 +137,7 @@ impl Matcher {
     /// [`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch) when either was computed under
     /// descriptor settings different from this matcher's.
     pub fn register_features(&mut self, source: &Features, target: &Features) -> Result<Registration, Error> {
-        let mut result = Self::new_result();
+        let mut result = Self::new_result()?;
         // SAFETY: the matcher is live and exclusively borrowed; features are immutable and live.
         let status =
             unsafe { sys::kissm_register_features(self.ptr(), source.raw.as_ptr(), target.raw.as_ptr(), &mut result) };
