@@ -73,7 +73,7 @@ have_abidw=0
 if command -v abidw >/dev/null && [[ -e $build/tests/abi/probe/libkissm.so ]]; then
   have_abidw=1
   abidw --headers-dir "$here/include" --drop-private-types --exported-interfaces-only --no-corpus-path \
-    --no-comp-dir-path --no-elf-needed --no-show-locs --type-id-style hash \
+    --no-comp-dir-path --no-elf-needed --no-show-locs --short-locs --type-id-style hash \
     --out-file "$work/kissm.abi" "$build/tests/abi/probe/libkissm.so"
 else
   echo "regen: SKIP tests/abi/kissm.abi: abidw (abigail-tools) or the probe library is missing"

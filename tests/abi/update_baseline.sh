@@ -15,7 +15,7 @@
 #
 # kissm.abi is written from the debug-info copy of libkissm.so the tests build (kissm_abi_probe), with:
 #   abidw --headers-dir include --drop-private-types --exported-interfaces-only --no-corpus-path
-#         --no-comp-dir-path --no-elf-needed --no-show-locs --type-id-style hash
+#         --no-comp-dir-path --no-elf-needed --no-show-locs --short-locs --type-id-style hash
 #         --out-file tests/abi/kissm.abi BUILD_DIR/tests/abi/probe/libkissm.so
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -42,7 +42,7 @@ cmake -DNM="$(command -v nm)" -DLIBRARY="$shared" -DSYMBOLS="$here/kissm.symbols
   -DHEADER="$root/include/kissm.h" -DUPDATE=1 -P "$here/check_exports.cmake"
 
 abidw --headers-dir "$root/include" --drop-private-types --exported-interfaces-only --no-corpus-path \
-  --no-comp-dir-path --no-elf-needed --no-show-locs --type-id-style hash \
+  --no-comp-dir-path --no-elf-needed --no-show-locs --short-locs --type-id-style hash \
   --out-file "$here/kissm.abi" "$probe"
 echo "-- wrote $here/kissm.abi ($(grep -c "<function-decl name='kissm_" "$here/kissm.abi") functions)"
 
