@@ -8,10 +8,15 @@ tests/data/update_golden.sh).
 Scene: a walled yard with boxes, poles and a sphere on rough ground, sampled twice with independent noise
 and partial crops; the source is expressed in a frame turned by 140 degrees about a tilted axis and moved
 by 4 m. Files: binary little-endian PLY with float64 x y z (exact values, no text rounding).
+
+SplitMix64 is a copy of src/common/splitmix64.h, the reference (next, uniform, range, gauss); the
+test splitmix64_python runs `make_roundtrip_data.py --selftest PROGRAM`, which compares this class with
+the numbers that header gives (PROGRAM: the C test capi_splitmix64).
 """
 import math
 import os
 import struct
+import subprocess
 import sys
 
 MASK = (1 << 64) - 1
@@ -98,7 +103,29 @@ def write_ply(path, pts):
             f.write(struct.pack("<3d", *p))
 
 
+def selftest(program):
+    """0 when SplitMix64 draws the same numbers as src/common/splitmix64.h (printed by program)."""
+    checked = 0
+    for seed in (0, 20261122, MASK):
+        printed = subprocess.run([program, "--print", str(seed), "100"], check=True, capture_output=True, text=True)
+        rng = SplitMix64(seed)
+        for line in printed.stdout.splitlines():
+            bits, u, r, g = line.split()
+            ours = (rng.next(), rng.uniform(), rng.uniform(-2.0, 3.0), rng.normal())
+            if ours != (int(bits), float(u), float(r), float(g)):
+                print("selftest: seed %d, draw %d: C header %s, Python %r" % (seed, checked, line, ours))
+                return 1
+            checked += 1
+    if checked != 300:
+        print("selftest: %s printed %d lines, not 300" % (program, checked))
+        return 1
+    print("selftest: %d draws of next, uniform, range and gauss match the C header" % checked)
+    return 0
+
+
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--selftest":
+        sys.exit(selftest(sys.argv[2]))
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "tests", "data")
     rng = SplitMix64(20261122)
     noise = 0.01

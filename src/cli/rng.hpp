@@ -1,27 +1,23 @@
 // SPDX-License-Identifier: MIT
-// Deterministic pseudo-random numbers for the demo scene: xoshiro256** seeded through splitmix64, with our
-// own uniform and normal transforms. std::random_device is never used, and std:: distributions are avoided
-// because their output is implementation-defined: the same seed must give the same scene everywhere.
+// Deterministic pseudo-random numbers for the demo scene: xoshiro256** seeded through splitmix64
+// (src/common/splitmix64.h), with our own uniform and normal transforms. std::random_device is never used,
+// and std:: distributions are avoided because their output is implementation-defined: the same seed must
+// give the same scene everywhere.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 
-namespace kissm_cli {
+#include "splitmix64.h"
 
-inline uint64_t splitmix64_next(uint64_t &state) {
-    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
+namespace kissm_cli {
 
 class Rng {
 public:
     // `stream` selects an independent sequence for the same seed (scene layout, each scan, ...).
     explicit Rng(uint64_t seed, uint64_t stream = 0) {
         uint64_t sm = seed ^ (stream * 0xD1B54A32D192ED03ull);
-        for (uint64_t &word : s_) word = splitmix64_next(sm);
+        for (uint64_t &word : s_) word = splitmix64_next(&sm);
     }
 
     uint64_t next() {
@@ -37,7 +33,7 @@ public:
     }
 
     // Uniform in [0, 1) with 53 random bits.
-    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+    double uniform() { return splitmix64_unit(next()); }
     double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
     // Uniform integer in [lo, hi] (the modulo bias is negligible for the small spans used here).
     int uniform_int(int lo, int hi) {

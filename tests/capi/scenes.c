@@ -10,40 +10,25 @@
 #include <string.h>
 #include <time.h>
 
+#include "splitmix64.h"
+
 #define SCN_PI 3.14159265358979323846
 
 /* ---------------------------------------------------------------------------------------------- */
 /* Random numbers                                                                                   */
 /* ---------------------------------------------------------------------------------------------- */
 
-void scn_rng_seed(scn_rng *rng, uint64_t seed) { rng->state = seed ^ UINT64_C(0x6a09e667f3bcc909); }
+/* The scenes draw from splitmix64 (src/common/splitmix64.h) started at seed ^ this constant. */
+static uint64_t scn_rng_state(uint64_t seed) { return seed ^ UINT64_C(0x6a09e667f3bcc909); }
 
-uint64_t scn_rng_next(scn_rng *rng) {
-    uint64_t z = (rng->state += UINT64_C(0x9e3779b97f4a7c15));
-    z = (z ^ (z >> 30)) * UINT64_C(0xbf58476d1ce4e5b9);
-    z = (z ^ (z >> 27)) * UINT64_C(0x94d049bb133111eb);
-    return z ^ (z >> 31);
-}
-
-double scn_rng_uniform(scn_rng *rng) { return (double)(scn_rng_next(rng) >> 11) * (1.0 / 9007199254740992.0); }
-
-double scn_rng_range(scn_rng *rng, double lo, double hi) { return lo + (hi - lo) * scn_rng_uniform(rng); }
-
-uint64_t scn_rng_below(scn_rng *rng, uint64_t n) {
-    /* Rejection sampling: draws above the largest multiple of n are redrawn. */
+/* [0, n), n > 0, unbiased: draws above the largest multiple of n are redrawn. */
+static uint64_t scn_rng_below(uint64_t *rng, uint64_t n) {
     const uint64_t limit = UINT64_MAX - UINT64_MAX % n;
     uint64_t x;
     do {
-        x = scn_rng_next(rng);
+        x = splitmix64_next(rng);
     } while (x >= limit);
     return x % n;
-}
-
-double scn_rng_gauss(scn_rng *rng) {
-    double u1 = scn_rng_uniform(rng);
-    const double u2 = scn_rng_uniform(rng);
-    if (u1 < 1e-300) u1 = 1e-300;
-    return sqrt(-2.0 * log(u1)) * cos(2.0 * SCN_PI * u2);
 }
 
 /* ---------------------------------------------------------------------------------------------- */
@@ -124,9 +109,9 @@ void scn_cloud_translate(scn_cloud *c, double dx, double dy, double dz) {
 }
 
 void scn_cloud_shuffle(scn_cloud *c, uint64_t seed) {
-    scn_rng rng;
+    uint64_t rng;
     size_t i;
-    scn_rng_seed(&rng, seed);
+    rng = scn_rng_state(seed);
     for (i = c->count; i > 1; --i) {
         const size_t j = (size_t)scn_rng_below(&rng, (uint64_t)i);
         double tmp[3];
@@ -261,29 +246,29 @@ double scn_translation_error(const double ta[3], const double tb[3]) {
 
 static size_t scn_count_for(double area, double density) { return (size_t)(area * density + 0.5); }
 
-static void scn_push_noisy(scn_cloud *c, scn_rng *rng, double x, double y, double z, double sigma) {
-    const double nx = sigma * scn_rng_gauss(rng);
-    const double ny = sigma * scn_rng_gauss(rng);
-    const double nz = sigma * scn_rng_gauss(rng);
+static void scn_push_noisy(scn_cloud *c, uint64_t *rng, double x, double y, double z, double sigma) {
+    const double nx = sigma * splitmix64_gauss(rng);
+    const double ny = sigma * splitmix64_gauss(rng);
+    const double nz = sigma * splitmix64_gauss(rng);
     scn_cloud_push(c, x + nx, y + ny, z + nz);
 }
 
 /* The parallelogram o + a u + b v, (a, b) in [0, 1]^2. */
-static void scn_sample_rect(scn_cloud *c, scn_rng *rng, const double o[3], const double u[3], const double v[3],
+static void scn_sample_rect(scn_cloud *c, uint64_t *rng, const double o[3], const double u[3], const double v[3],
                             double density, double sigma) {
     const double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2], cz = u[0] * v[1] - u[1] * v[0];
     const size_t n = scn_count_for(sqrt(cx * cx + cy * cy + cz * cz), density);
     size_t i;
     for (i = 0; i < n; ++i) {
-        const double a = scn_rng_uniform(rng), b = scn_rng_uniform(rng);
+        const double a = splitmix64_uniform(rng), b = splitmix64_uniform(rng);
         scn_push_noisy(c, rng, o[0] + a * u[0] + b * v[0], o[1] + a * u[1] + b * v[1], o[2] + a * u[2] + b * v[2],
                        sigma);
     }
 }
 
 /* A box standing on z = z0: four sides and the top (no bottom), rotated by yaw about its vertical axis. */
-static void scn_sample_box(scn_cloud *c, scn_rng *rng, double cx, double cy, double z0, double sx, double sy, double sz,
-                           double yaw, double density, double sigma) {
+static void scn_sample_box(scn_cloud *c, uint64_t *rng, double cx, double cy, double z0, double sx, double sy,
+                           double sz, double yaw, double density, double sigma) {
     const double ex[3] = {cos(yaw) * sx, sin(yaw) * sx, 0.0};
     const double ey[3] = {-sin(yaw) * sy, cos(yaw) * sy, 0.0};
     const double ez[3] = {0.0, 0.0, sz};
@@ -301,31 +286,31 @@ static void scn_sample_box(scn_cloud *c, scn_rng *rng, double cx, double cy, dou
 }
 
 /* A vertical cylinder standing on z = z0: mantle and top disc. */
-static void scn_sample_cylinder(scn_cloud *c, scn_rng *rng, double cx, double cy, double z0, double r, double h,
+static void scn_sample_cylinder(scn_cloud *c, uint64_t *rng, double cx, double cy, double z0, double r, double h,
                                 double density, double sigma) {
     const size_t n_side = scn_count_for(2.0 * SCN_PI * r * h, density);
     const size_t n_top = scn_count_for(SCN_PI * r * r, density);
     size_t i;
     for (i = 0; i < n_side; ++i) {
-        const double a = 2.0 * SCN_PI * scn_rng_uniform(rng), z = z0 + h * scn_rng_uniform(rng);
+        const double a = 2.0 * SCN_PI * splitmix64_uniform(rng), z = z0 + h * splitmix64_uniform(rng);
         scn_push_noisy(c, rng, cx + r * cos(a), cy + r * sin(a), z, sigma);
     }
     for (i = 0; i < n_top; ++i) {
-        const double a = 2.0 * SCN_PI * scn_rng_uniform(rng), rr = r * sqrt(scn_rng_uniform(rng));
+        const double a = 2.0 * SCN_PI * splitmix64_uniform(rng), rr = r * sqrt(splitmix64_uniform(rng));
         scn_push_noisy(c, rng, cx + rr * cos(a), cy + rr * sin(a), z0 + h, sigma);
     }
 }
 
 /* The part of a sphere above z = ground. */
-static void scn_sample_sphere(scn_cloud *c, scn_rng *rng, double cx, double cy, double cz, double r, double ground,
+static void scn_sample_sphere(scn_cloud *c, uint64_t *rng, double cx, double cy, double cz, double r, double ground,
                               double density, double sigma) {
     const size_t n = scn_count_for(4.0 * SCN_PI * r * r, density);
     size_t i;
     for (i = 0; i < n; ++i) {
         double d[3], len;
-        d[0] = scn_rng_gauss(rng);
-        d[1] = scn_rng_gauss(rng);
-        d[2] = scn_rng_gauss(rng);
+        d[0] = splitmix64_gauss(rng);
+        d[1] = splitmix64_gauss(rng);
+        d[2] = splitmix64_gauss(rng);
         len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         if (len < 1e-12) continue;
         if (cz + r * d[2] / len < ground) continue;
@@ -349,38 +334,38 @@ typedef struct scn_layout {
 } scn_layout;
 
 static void scn_make_layout(scn_layout *l, uint64_t layout_seed) {
-    scn_rng rng;
+    uint64_t rng;
     int i;
-    scn_rng_seed(&rng, layout_seed * UINT64_C(0x100000001b3) + 17);
+    rng = scn_rng_state(layout_seed * UINT64_C(0x100000001b3) + 17);
     for (i = 0; i < SCN_NUM_BOXES; ++i) {
-        l->box[i][0] = scn_rng_range(&rng, -10.0, 10.0);
-        l->box[i][1] = scn_rng_range(&rng, -6.5, 6.5);
-        l->box[i][2] = scn_rng_range(&rng, 0.6, 2.8);
-        l->box[i][3] = scn_rng_range(&rng, 0.6, 2.2);
-        l->box[i][4] = scn_rng_range(&rng, 0.5, 2.5);
-        l->box[i][5] = scn_rng_range(&rng, 0.0, SCN_PI);
+        l->box[i][0] = splitmix64_range(&rng, -10.0, 10.0);
+        l->box[i][1] = splitmix64_range(&rng, -6.5, 6.5);
+        l->box[i][2] = splitmix64_range(&rng, 0.6, 2.8);
+        l->box[i][3] = splitmix64_range(&rng, 0.6, 2.2);
+        l->box[i][4] = splitmix64_range(&rng, 0.5, 2.5);
+        l->box[i][5] = splitmix64_range(&rng, 0.0, SCN_PI);
     }
     for (i = 0; i < SCN_NUM_POLES; ++i) {
-        l->pole[i][0] = scn_rng_range(&rng, -10.5, 10.5);
-        l->pole[i][1] = scn_rng_range(&rng, -7.0, 7.0);
-        l->pole[i][2] = scn_rng_range(&rng, 0.12, 0.5);
-        l->pole[i][3] = scn_rng_range(&rng, 1.5, 4.5);
+        l->pole[i][0] = splitmix64_range(&rng, -10.5, 10.5);
+        l->pole[i][1] = splitmix64_range(&rng, -7.0, 7.0);
+        l->pole[i][2] = splitmix64_range(&rng, 0.12, 0.5);
+        l->pole[i][3] = splitmix64_range(&rng, 1.5, 4.5);
     }
     for (i = 0; i < SCN_NUM_SPHERES; ++i) {
-        l->sphere[i][0] = scn_rng_range(&rng, -9.0, 9.0);
-        l->sphere[i][1] = scn_rng_range(&rng, -6.0, 6.0);
-        l->sphere[i][2] = scn_rng_range(&rng, 0.5, 1.3);
+        l->sphere[i][0] = splitmix64_range(&rng, -9.0, 9.0);
+        l->sphere[i][1] = splitmix64_range(&rng, -6.0, 6.0);
+        l->sphere[i][2] = splitmix64_range(&rng, 0.5, 1.3);
     }
 }
 
 void scn_make_scene(scn_cloud *out, uint64_t layout_seed, uint64_t sample_seed, double points_per_m2,
                     double noise_sigma) {
     scn_layout l;
-    scn_rng rng;
+    uint64_t rng;
     const double g = SCN_GROUND;
     int i;
     scn_make_layout(&l, layout_seed);
-    scn_rng_seed(&rng, sample_seed);
+    rng = scn_rng_state(sample_seed);
     scn_cloud_free(out);
     {
         /* ground: 24 m x 16 m */
@@ -444,12 +429,12 @@ void scn_pair_free(scn_pair *pair) {
 
 void scn_make_line(scn_cloud *out, uint64_t seed, size_t n, double noise_sigma) {
     const double o[3] = {1.0, -2.0, 0.5}, d[3] = {0.6, 0.64, 0.48}; /* |d| = 1 */
-    scn_rng rng;
+    uint64_t rng;
     size_t i;
-    scn_rng_seed(&rng, seed);
+    rng = scn_rng_state(seed);
     scn_cloud_free(out);
     for (i = 0; i < n; ++i) {
-        const double s = scn_rng_range(&rng, 0.0, 20.0);
+        const double s = splitmix64_range(&rng, 0.0, 20.0);
         scn_push_noisy(out, &rng, o[0] + s * d[0], o[1] + s * d[1], o[2] + s * d[2], noise_sigma);
     }
 }
@@ -457,12 +442,12 @@ void scn_make_line(scn_cloud *out, uint64_t seed, size_t n, double noise_sigma) 
 void scn_make_plane(scn_cloud *out, uint64_t seed, size_t n, double noise_sigma) {
     const double o[3] = {-8.0, -8.0, -1.5};
     const double u[3] = {16.0, 0.0, 2.0}, v[3] = {0.0, 16.0, -1.0};
-    scn_rng rng;
+    uint64_t rng;
     size_t i;
-    scn_rng_seed(&rng, seed);
+    rng = scn_rng_state(seed);
     scn_cloud_free(out);
     for (i = 0; i < n; ++i) {
-        const double a = scn_rng_uniform(&rng), b = scn_rng_uniform(&rng);
+        const double a = splitmix64_uniform(&rng), b = splitmix64_uniform(&rng);
         scn_push_noisy(out, &rng, o[0] + a * u[0] + b * v[0], o[1] + a * u[1] + b * v[1], o[2] + a * u[2] + b * v[2],
                        noise_sigma);
     }
@@ -475,14 +460,14 @@ void scn_make_duplicates(scn_cloud *out, size_t n, double x, double y, double z)
 }
 
 void scn_make_blob(scn_cloud *out, uint64_t seed, size_t n, const double c[3], double h) {
-    scn_rng rng;
+    uint64_t rng;
     size_t i;
-    scn_rng_seed(&rng, seed);
+    rng = scn_rng_state(seed);
     scn_cloud_free(out);
     for (i = 0; i < n; ++i) {
-        const double x = scn_rng_range(&rng, c[0] - h, c[0] + h);
-        const double y = scn_rng_range(&rng, c[1] - h, c[1] + h);
-        const double z = scn_rng_range(&rng, c[2] - h, c[2] + h);
+        const double x = splitmix64_range(&rng, c[0] - h, c[0] + h);
+        const double y = splitmix64_range(&rng, c[1] - h, c[1] + h);
+        const double z = splitmix64_range(&rng, c[2] - h, c[2] + h);
         scn_cloud_push(out, x, y, z);
     }
 }

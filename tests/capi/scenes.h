@@ -1,9 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /* Deterministic synthetic scenes and small helpers shared by the C API tests (C99).
  *
- * Everything here is a pure function of its seeds: a splitmix64 generator (never rand()), fixed sampling
- * orders and no global state, so every test sees the same clouds on every run and every machine of the
- * same build.
+ * Everything here is a pure function of its seeds: splitmix64 (src/common/splitmix64.h, never rand()),
+ * fixed sampling orders and no global state, so every test sees the same clouds on every run and every
+ * machine of the same build.
  *
  * Coordinates are metres. The standard scene is a walled yard about 24 m x 16 m whose ground lies 1.7 m
  * below the source sensor (at the origin, like a car-mounted LiDAR): ground, three walls, a ramp, boxes,
@@ -19,21 +19,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* ---------------------------------------------------------------------------------------------- */
-/* Random numbers: splitmix64                                                                       */
-/* ---------------------------------------------------------------------------------------------- */
-
-typedef struct scn_rng {
-    uint64_t state;
-} scn_rng;
-
-void scn_rng_seed(scn_rng *rng, uint64_t seed);
-uint64_t scn_rng_next(scn_rng *rng);
-double scn_rng_uniform(scn_rng *rng);                     /* [0, 1) with 53 random bits */
-double scn_rng_range(scn_rng *rng, double lo, double hi); /* [lo, hi) */
-uint64_t scn_rng_below(scn_rng *rng, uint64_t n);         /* [0, n), n > 0, unbiased */
-double scn_rng_gauss(scn_rng *rng);                       /* standard normal (Box-Muller) */
 
 /* ---------------------------------------------------------------------------------------------- */
 /* Clouds: growable packed float64 xyz                                                              */

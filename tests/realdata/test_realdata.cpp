@@ -4,6 +4,7 @@
 // thresholds of SPEC section 7. LiDAR and indoor pairs must all succeed; object scans (the bunny) must never
 // be reported valid with a wrong pose and must succeed in most runs.
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../../src/common/splitmix64.h" // the shared generator (not on this test's include path)
 #include "harness.h"
 #include "kissm.h"
 
@@ -65,15 +67,9 @@ double rotation_error_deg(const Mat3 &a, const Mat3 &b) {
     return std::acos(std::max(-1.0, std::min(1.0, c))) * 180.0 / 3.14159265358979323846;
 }
 
-struct Rng { // splitmix64: the same numbers on every platform
-    unsigned long long s;
-    double uniform() {
-        unsigned long long z = (s += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        z ^= z >> 31;
-        return static_cast<double>(z >> 11) / 9007199254740992.0;
-    }
+struct Rng { // splitmix64 seeded with the seed itself: the same numbers on every platform
+    std::uint64_t s;
+    double uniform() { return splitmix64_uniform(&s); }
 };
 
 std::map<std::string, std::string> read_pair_txt(const std::string &path) {

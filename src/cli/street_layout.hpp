@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// The street of `kissm demo`, a deterministic function of one random stream.
+//
+// The main street runs along x between two kerbs (an asymmetric cross-section), is closed at one end by a
+// row of buildings and crossed by a street along y. Along them: buildings with columns, balconies and
+// entrances, walls, hedges, street lights, trees, parked cars and clutter, all as primitives of a Scene
+// (ray_geometry.hpp). The ground undulates gently, is rough at small scale and is raised behind the kerbs
+// (sidewalks, yards).
+//
+// The details are there for realism, and they matter: a perfectly smooth, symmetric street scanned by an
+// ideal sensor is ambiguous (its ring patterns and mirror symmetry fit several poses), real streets are not.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "demo_scene.hpp"
+#include "pose_math.hpp"
+#include "ray_geometry.hpp"
+#include "rng.hpp"
+
+namespace kissm_cli {
+
+// One side of the main street. Real streets are not symmetric, and neither is this one: each side has its
+// own sidewalk width, kerb position and furniture, so that a scan turned by 180 degrees does not fit itself.
+struct StreetSide {
+    double sign = 1.0;     // -1: y < 0, +1: y > 0
+    double kerb = 7.0;     // |y| of the kerb
+    double sidewalk = 3.5; // width of the sidewalk behind the kerb
+    bool poles = true;     // street lights
+    bool trees = true;
+    double parking = 0.7; // share of the kerb with parked cars
+    std::vector<double> pole_x;
+};
+
+struct Layout {
+    StreetSide sides[2];   // [0]: y < 0, [1]: y > 0
+    double cross_x = 30.0; // centre line of the cross street, along y
+    double cross_half_width = 6.0;
+    double end_x = -45.0; // the main street ends here (T-junction): a row of buildings closes it
+
+    double road_lo() const { return -sides[0].kerb; }
+    double road_hi() const { return sides[1].kerb; }
+    // The lanes: clear of the cars parked along the kerbs (sensor poses, stopped vehicles).
+    double lane_lo() const { return road_lo() + 2.8; }
+    double lane_hi() const { return road_hi() - 2.8; }
+    bool in_cross_street(double x, double margin) const { return std::fabs(x - cross_x) < cross_half_width + margin; }
+    bool beyond_end(double x) const { return end_x < 0.0 ? x < end_x : x > end_x; }
+};
+
+// The ground, the street's cross-section and everything that stands still: buildings, walls, street
+// furniture, parked cars. Fills lay and counts into stats.
+void build_street(Rng &rng, Scene &s, Layout &lay, DemoSceneStats &stats);
+// Lorries and vans stopped in the street (in both scans), clear of the sensor poses a and b.
+void add_stopped_vehicles(Scene &s, Rng &rng, const Layout &lay, const Pose &a, const Pose &b, DemoSceneStats &stats);
+// Vehicles and pedestrians seen in one scan only (they moved between the two scans).
+void add_movers(Scene &s, Rng &rng, const Layout &lay, const Pose &a, const Pose &b, DemoSceneStats &stats);
+
+} // namespace kissm_cli
