@@ -241,12 +241,11 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
     // the per-direction loop, for any thread count. A chunk owns the histograms of its rows; a pair whose
     // second point lies in a later chunk leaves its code in the edge slot, and a second pass collects it.
     constexpr std::size_t kChunk = 1024;
-    const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
     UninitVector<std::uint16_t> code;
     code.resize(nb.num_entries()); // likewise
-    std::vector<std::uint32_t> first_source(num_chunks);
 
-    ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
+    // Besides its rows' histograms and codes, each chunk returns its rows' lowest neighbour.
+    const std::vector<std::uint32_t> first_source = ctx.map_chunks(n, kChunk, [&](std::size_t b, std::size_t e) {
         std::fill(&spfh[b * D], &spfh[0] + e * D, 0.0f);
         std::fill(&code[0] + nb.offsets[b], &code[0] + nb.offsets[e], std::uint16_t(0));
         std::uint32_t lowest = static_cast<std::uint32_t>(b);
@@ -293,8 +292,9 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
                     code[batch.slot[m]] = back;
             }
         }
-        first_source[b / kChunk] = lowest;
+        return lowest;
     });
+    const std::size_t num_chunks = first_source.size();
 
     // The second pass works in spans of whole chunks, each at least as long as the reach: how far before a
     // chunk its rows' lowest neighbour lies. A span collects the codes of the rows from its lowest neighbour
