@@ -1,20 +1,14 @@
 // SPDX-License-Identifier: MIT
-// Stage 2c: FPFH descriptors (33 bins) of the keypoints.
+// Stage 2c: FPFH descriptors (33 bins) of the keypoints: the SPFH sums over each point's neighbours and the
+// FPFH weighted sums. The features of one pair (kBinsPerFeature, pair_feature_bins) are in pair_features.hpp.
 #pragma once
 
 #include "cloud.hpp"
 #include "detail_namespace.hpp"
+#include "pair_features.hpp"
 #include "run_context.hpp"
 
 KISSM_DETAIL_BEGIN
-
-constexpr int kBinsPerFeature = 11;
-
-// Bins (0..10) of the three Darboux-frame angle features of a pair of oriented points; false when the pair
-// has no defined frame (coincident points, or a normal parallel to the connecting line). The source point
-// of the frame is the one whose normal makes the smaller angle with the connecting line, so the result
-// does not depend on the order of the two points.
-bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]);
 
 // SPFH (n x 33, row-major) of every point with a normal: the bins of its pairs with each neighbour that has a
 // normal, each block scaled by 100 / (number of pairs with a frame); zero rows for points without a normal.

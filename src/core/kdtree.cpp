@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstring>
 
-// SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
+// SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_KDTREE_SSE2 1
 #  include <emmintrin.h>

@@ -6,7 +6,7 @@
 
 #include "radix_sort.hpp"
 
-// SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
+// SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_NEIGHBORS_SSE2 1
 #  include <emmintrin.h>
