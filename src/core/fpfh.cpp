@@ -88,9 +88,9 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
     // The second pass works in spans of whole chunks, each at least as long as the reach: how far before a
     // chunk its rows' lowest neighbour lies. A span collects the codes of the rows from its lowest neighbour
     // up to its end (rows inside it too: their codes for later chunks of the same span), so it rescans at
-    // most about its own length. With one chunk per span a large scene rescanned far more: points are in
-    // voxel (x-major) order, so a neighbour can lie a few x-slices of the whole scene back (12K rows per
-    // 1K-row chunk at 3M voxels, a second pass 13x the first and growing with the scene's width).
+    // most about its own length. With one chunk per span a large scene rescanned far more, and more the
+    // wider the scene: points are in voxel (x-major) order, so a neighbour can lie a few x-slices of the
+    // whole scene back (docs/performance.md, "SPFH second pass").
     std::size_t reach = kChunk;
     for (std::size_t c = 0; c < num_chunks; ++c) reach = std::max<std::size_t>(reach, c * kChunk - first_source[c]);
     const std::size_t span = (reach + kChunk - 1) / kChunk * kChunk;

@@ -25,10 +25,10 @@ int bin_of(float value, float lo, float hi) {
     return b < kBinsPerFeature ? b : kBinsPerFeature - 1;
 }
 
-// Bin of the angle atan2(y, x) in [-pi, pi] split into 11 equal sectors, without calling atan2 (which was
-// 40% of the pair-feature cost): the sector boundaries -pi + 2 pi k / 11 for k = 1..5 lie in the lower half
-// plane and k = 6..10 in the upper, and within a half plane "angle >= boundary" is the sign of a cross
-// product with the boundary direction.
+// Bin of the angle atan2(y, x) in [-pi, pi] split into 11 equal sectors, without calling atan2 (a large
+// part of the pair feature's cost; docs/performance.md, "Pair features"): the sector boundaries -pi + 2 pi k / 11
+// for k = 1..5 lie in the lower half plane and k = 6..10 in the upper, and within a half plane "angle >= boundary" is
+// the sign of a cross product with the boundary direction.
 struct AngleBins {
     float c[kBinsPerFeature], s[kBinsPerFeature];
     AngleBins() {

@@ -171,7 +171,8 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
     // key order, so the output is in key order (the table's slot order depends on its growth history, the
     // key order does not). One table for the whole cloud was merged serially, by random probes far out of
-    // cache (1.0 s of 1.9 s at 3M voxels). About 8K entries per range (a function of the data alone), at
+    // cache, and that merge grew faster than the point count (docs/performance.md, "What the profiles
+    // showed"). About 8K entries per range (a function of the data alone), at
     // most 256 ranges; a small cloud is one range, merged straight from the chunks' tables.
     std::size_t all_entries = 0;
     for (const VoxelTable &t : partial) all_entries += t.size();
