@@ -3,6 +3,14 @@
 // (paper Eq. (A2), \label{eqn:angular_features}) and their histogram bins (Eq. (A3), \label{eqn:histogram}),
 // one pair at a time or a row of neighbours four at a time (SSE2), bitwise alike. What fpfh.cpp shares with
 // it: the bins' packed code and the batch of a row's pairs. fpfh.cpp sums the bins into SPFH and FPFH.
+//
+// Eq. (A2) as the paper has it: p_a is the point whose normal makes the smaller angle with the line, d the
+// unit vector from p_a to p_b, u = n_a, v = d x u, w = u x v; f1 = atan2(w . n_b, u . n_b), f2 = v . n_b,
+// f3 = u . d. Eq. (A3) bins f in [f_min, f_max] into H = 11 bins as floor(H (f - f_min) / (f_max + eps -
+// f_min)) + 1; here bins are 0-based and the top value is clamped into the last bin instead of the eps, and
+// f1 is binned by its sector in [-pi, pi] without computing atan2 (the sector tests are float cross products,
+// so a value within rounding of a sector boundary may fall on the other side of it). A pair without a frame
+// (coincident points, or u parallel to d) gives no bins; the paper does not discuss that case.
 #pragma once
 
 #include <cstddef>

@@ -19,8 +19,8 @@ KISSM_DETAIL_BEGIN
 
 namespace {
 
-// FPFH neighbours are weighted by (v / d)^2, not by the paper's 1/d: it registered more pairs and reported
-// no wrong pose as valid (docs/parameters.md, "FPFH weighting").
+// FPFH neighbours are weighted by (v / d)^2, not by 1/d as in the paper's Eq. (A5): it registered more pairs and
+// reported no wrong pose as valid (docs/parameters.md, "FPFH weighting").
 constexpr int kFpfhWeightPower = 2;
 
 class Stopwatch {
