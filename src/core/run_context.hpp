@@ -59,7 +59,8 @@ public:
     // element c is what chunk c returned, whichever thread ran it and whenever. The chunks are those of
     // parallel_for, so they depend on n and chunk alone, never on the thread count; the result is therefore
     // the same for any num_threads as long as map(begin, end) depends only on its range (it may also write
-    // outputs that only its range owns). Partial must be default-constructible and not bool (a
+    // outputs that only its range owns); map runs on several threads at once, so it must not touch what
+    // another chunk reads or writes. Partial must be default-constructible and not bool (a
     // std::vector<bool> cannot be written from two threads). Cancellation and exceptions as parallel_for:
     // nothing is returned then.
     template <class Map>
