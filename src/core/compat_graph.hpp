@@ -1,5 +1,9 @@
 // SPDX-License-Identifier: MIT
 // Stage 4a: the pairwise-consistency graph over correspondences, in CSR form.
+// Paper: Sec. III-D (\label{subsec:robin}), Eq. (3) (\label{eq:test-p-ref3}), the pairwise invariant
+// -2 beta <= |b_j - b_j'| - |a_i - a_i'| <= 2 beta; the CSR form is the paper's too. noise_bound below is
+// the paper's 2 beta (the pipeline's prune bound, 1.0 v by default, i.e. beta = 0.5 v against the paper's
+// 1.5 v of Sec. IV-B; docs/parameters.md, prune_noise_bound_gain).
 #pragma once
 
 #include <utility>

@@ -1,23 +1,21 @@
 // SPDX-License-Identifier: MIT
-// Stage 2c: FPFH descriptors (33 bins) of the keypoints.
+// Stage 2c: FPFH descriptors (33 bins) of the keypoints: the SPFH sums over each point's neighbours and the
+// FPFH weighted sums. The features of one pair (kBinsPerFeature, pair_feature_bins) are in pair_features.hpp.
+// Paper: Sec. III-C (\label{subsec:fpfh}); SPFH is its Eq. (A4) (\label{eqn:each_of_spfh}), FPFH its
+// Eq. (A5) (\label{eqn:fpfh}). Deviations are noted at compute_spfh and compute_fpfh.
 #pragma once
 
 #include "cloud.hpp"
 #include "detail_namespace.hpp"
+#include "pair_features.hpp"
 #include "run_context.hpp"
 
 KISSM_DETAIL_BEGIN
 
-constexpr int kBinsPerFeature = 11;
-
-// Bins (0..10) of the three Darboux-frame angle features of a pair of oriented points; false when the pair
-// has no defined frame (coincident points, or a normal parallel to the connecting line). The source point
-// of the frame is the one whose normal makes the smaller angle with the connecting line, so the result
-// does not depend on the order of the two points.
-bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]);
-
 // SPFH (n x 33, row-major) of every point with a normal: the bins of its pairs with each neighbour that has a
 // normal, each block scaled by 100 / (number of pairs with a frame); zero rows for points without a normal.
+// Paper Eq. (A4) divides by |I_valid| instead, which counts the point itself and pairs without a frame that
+// add no bin; dividing by the pairs counted makes every block sum to exactly 100.
 // Bitwise identical to evaluating every ordered pair with pair_feature_bins, for any thread count.
 UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
                                  RunContext &ctx);
@@ -25,7 +23,9 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
 // SPFH of every point with a normal (neighbours without a normal are skipped), then FPFH of each keypoint:
 // its SPFH plus the mean of its neighbours' SPFH weighted by (voxel_size / distance)^weight_power, each 11-bin block
 // rescaled to sum to 100. Distances are normalised by the voxel size so that descriptors do not depend on
-// the unit of the coordinates.
+// the unit of the coordinates. Paper Eq. (A5) with deviations: the weight 1/omega_k there is 1/distance
+// (weight_power 1 up to the factor v; the pipeline uses 2, see pipeline.cpp), the mean runs over the
+// neighbours other than the point itself, and the paper does not rescale the blocks afterwards.
 Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
                          std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power, RunContext &ctx);
 

@@ -21,9 +21,9 @@ Eigen::Matrix3d rotation_from_correlation(const Eigen::Matrix3d &H) {
 }
 
 // One GNC pass: residuals under R, weights under the current mu, the weighted correlation sum and cost.
-// Fixed chunks with partial sums added in chunk order: the same numbers for any thread count. The
-// measurements are kept as structure of arrays and each chunk runs three plain loops (residuals, which
-// the compiler vectorises; weights; sums), which is faster than one loop doing everything.
+// Fixed chunks with partial sums added in chunk order (RunContext::map_fold): the same numbers for any
+// thread count. The measurements are kept as structure of arrays and each chunk runs three plain loops
+// (residuals, which the compiler vectorises; weights; sums), which is faster than one loop doing everything.
 class GncPass {
 public:
     static constexpr std::size_t kChunk = 2048;
@@ -35,8 +35,7 @@ public:
     };
 
     GncPass(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b)
-        : n_(a.size()), ax_(n_), ay_(n_), az_(n_), bx_(n_), by_(n_), bz_(n_), r2_(n_), w_(n_, 1.0),
-          partial_((n_ + kChunk - 1) / kChunk) {
+        : n_(a.size()), ax_(n_), ay_(n_), az_(n_), bx_(n_), by_(n_), bz_(n_), r2_(n_), w_(n_, 1.0) {
         for (std::size_t k = 0; k < n_; ++k) {
             ax_[k] = a[k].x(), ay_[k] = a[k].y(), az_[k] = a[k].z();
             bx_[k] = b[k].x(), by_[k] = b[k].y(), bz_[k] = b[k].z();
@@ -50,7 +49,7 @@ public:
         const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2, scale = c2 * mu * (mu + 1.0);
         const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2),
                      r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
-        ctx.parallel_for(n_, kChunk, [&](std::size_t begin, std::size_t end) {
+        const auto chunk = [&](std::size_t begin, std::size_t end) {
             Partial p;
             const double *ax = ax_.data(), *ay = ay_.data(), *az = az_.data();
             const double *bx = bx_.data(), *by = by_.data(), *bz = bz_.data();
@@ -63,8 +62,7 @@ public:
             }
             if (mu <= 0.0) {
                 for (std::size_t k = begin; k < end; ++k) p.max_r2 = std::max(p.max_r2, r2[k]);
-                partial_[begin / kChunk] = p;
-                return;
+                return p;
             }
             bool binary = true;
             for (std::size_t k = begin; k < end; ++k) {
@@ -90,22 +88,20 @@ public:
             std::copy(H, H + 9, p.H);
             p.cost = cost;
             p.binary = binary;
-            partial_[begin / kChunk] = p;
-        });
-        Partial total;
-        for (const Partial &p : partial_) {
+            return p;
+        };
+        // Partial sums added in chunk order, starting from zero.
+        return ctx.map_fold(n_, kChunk, Partial{}, chunk, [](Partial &total, Partial &&p) {
             for (int i = 0; i < 9; ++i) total.H[i] += p.H[i];
             total.cost += p.cost;
             total.max_r2 = std::max(total.max_r2, p.max_r2);
             total.binary = total.binary && p.binary;
-        }
-        return total;
+        });
     }
 
 private:
     std::size_t n_;
     std::vector<double> ax_, ay_, az_, bx_, by_, bz_, r2_, w_;
-    std::vector<Partial> partial_;
 };
 
 } // namespace

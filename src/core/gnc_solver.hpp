@@ -1,6 +1,12 @@
 // SPDX-License-Identifier: MIT
 // Stage 5: robust pose from the pruned correspondences: rotation by GNC-TLS on translation-invariant
 // measurements, translation by truncated least squares, then final inliers.
+// Paper: Sec. III-E (\label{subsec:nonminimal_solver}): Eq. (2) (\label{eqn:final_goal}) with the
+// truncated least squares loss as rho, solved by graduated non-convexity (its reference Yang et al., RA-L
+// 2020). Deviation in the split, not in the loss: Eq. (2) is solved in two steps as in TEASER++, which the
+// paper builds on but does not spell out: the rotation from differences of correspondences, in which t of
+// Eq. (1) (\label{eq:p-reg-gen-model}) cancels and the noise bound doubles, then the translation by a
+// per-axis scalar TLS, then a least-squares polish over the final inliers.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Stage 4b: maximum k-core of the compatibility graph (Batagelj-Zaversnik peeling, O(V + E)).
+// Paper: Sec. III-D (\label{subsec:robin}): the correspondences outside the maximum k-core are the gross
+// outliers O of Eq. (2); it numbers no equation for the k-core itself.
 #pragma once
 
 #include "compat_graph.hpp"

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstring>
 
-// SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
+// SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_KDTREE_SSE2 1
 #  include <emmintrin.h>
@@ -34,8 +34,8 @@ inline std::size_t lowest_bit(std::uint64_t m) {
 // Squared distances from q to a leaf's points, block by block, and a bit mask of the slots whose distance
 // is <= limit (bit i for slot i of the leaf), so that the caller visits only those: a whole leaf is usually
 // dismissed with one test, and the few candidates of the others are found without a pass over every slot
-// (that pass was an eighth of the search's time). Lane by lane the vector code performs the same operations
-// in the same order as the scalar loop over the dimensions. x - q rather than q - x: the same square
+// (docs/performance.md, second pass, "What changed"). Lane by lane the vector code performs the same
+// operations in the same order as the scalar loop over the dimensions. x - q rather than q - x: the same square
 // (rounding is symmetric in sign). Starting from the first square equals starting from 0 + it: a square is
 // never -0.
 template <int Dim, int Lane>
@@ -176,7 +176,7 @@ std::uint32_t ProjectedKdTree::build(std::uint32_t *begin, std::uint32_t *end, c
     // Split the widest dimension so that the low side holds whole leaves, half of them (rounded up): every
     // leaf is full but the last. With median splits leaves held between half and all of kLeafPoints
     // depending on where the point count fell between powers of two, and the search cost per query swung
-    // with it (by up to 40% between clouds of 1M and 3M descriptors, more leaves per search when smaller).
+    // with it (more leaves per search when they are emptier; docs/performance.md, "kd-tree leaves").
     float lo[kDim], hi[kDim];
     for (int d = 0; d < kDim; ++d) lo[d] = hi[d] = coord(*begin, d);
     for (const std::uint32_t *p = begin + 1; p != end; ++p)

@@ -48,9 +48,9 @@ public:
 
 private:
     static constexpr int kLane = 4; // points per block: one SSE2 register per dimension
-    // Points per leaf (a multiple of kLane); every leaf is full but the last. Matching time at one thread,
-    // full leaves of 24 / 32 / 48 points: small_gicp 15.1 / 15.3 / 15.0 ms, KITTI keyframes 53.5 / 52.2 /
-    // 52.3 ms, full KITTI scans 69.6 / 68.1 / 66.7 ms, 3M synthetic descriptors per cloud - / 23.3 / 21.9 s.
+    // Points per leaf (a multiple of kLane); every leaf is full but the last. 48 was as fast as 24 or 32 on
+    // small clouds and the fastest on large ones (docs/parameters.md, "Candidate search", the timings per
+    // leaf size).
     static constexpr int kLeafPoints = 48;
     static_assert(kLeafPoints % kLane == 0 && kLeafPoints <= 64, "a leaf's hits fit one 64-bit mask");
 

@@ -15,9 +15,9 @@ KISSM_DETAIL_BEGIN
 namespace {
 
 // Search space: descriptors projected on their kProjDim leading principal components. A kd-tree in 33-D
-// backtracks into near brute force (full KITTI scan pair: 13.3 G instructions of matching); in 8-D it
-// takes 1.5 G and in 6-D 0.8 G (callgrind). The kCandidates nearest found there are re-ranked by exact
-// 33-D distances; success on ../shared/data is the same as the exact search's (docs/parameters.md).
+// backtracks into near brute force; in a few dimensions it does not. The kCandidates nearest found there are
+// re-ranked by exact 33-D distances, which keeps the exact search's success rate (docs/parameters.md,
+// "Descriptor matching": instructions and successes per projection size).
 constexpr int kProjDim = ProjectedKdTree::kDim;
 constexpr int kCandidates = 16;
 static_assert(kCandidates <= ProjectedKdTree::kMaxK, "the tree returns at most kMaxK neighbours");

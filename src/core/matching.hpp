@@ -1,5 +1,10 @@
 // SPDX-License-Identifier: MIT
 // Stage 3: correspondences by nearest neighbours in descriptor space (33-D L2).
+// Paper: the mutual matching (reciprocity test) of Sec. III-C (\label{subsec:fpfh}) and the top-N_tau
+// selection by descriptor distance ratio of Sec. III-D (\label{subsec:robin}); it numbers no equation for
+// them. Deviations: candidates come from a 6-D projection and are re-ranked by exact distance (see
+// matching.cpp), the ratio is on squared distances and also rejects above ratio_test, and N_tau defaults to
+// 5000 (the paper's Sec. IV-B: 3000; docs/parameters.md).
 #pragma once
 
 #include "cloud.hpp"

@@ -6,7 +6,7 @@
 
 #include "radix_sort.hpp"
 
-// SSE2 is part of every x86-64 target (see fpfh.cpp for why not 32-bit x86).
+// SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_NEIGHBORS_SSE2 1
 #  include <emmintrin.h>
@@ -131,11 +131,10 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
 
     const float r2 = radius * radius;
     constexpr std::size_t kChunk = Neighborhoods::kBlockRows;
-    const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
-    nb.blocks.resize(num_chunks);
     std::vector<std::uint32_t> counts(n, 0);
 
-    ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
+    // One block per chunk, indexed by chunk.
+    nb.blocks = ctx.map_chunks(n, kChunk, [&](std::size_t b, std::size_t e) {
         // The chunk's rows go to a scratch list first (its final length is known only at the end), then
         // into the block at its exact size.
         std::vector<std::uint32_t> idx;
@@ -154,7 +153,7 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
             }
             counts[i] = static_cast<std::uint32_t>(used - before);
         }
-        nb.blocks[b / kChunk].assign(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(used));
+        return std::vector<std::uint32_t>(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(used));
     });
 
     for (std::size_t i = 0; i < n; ++i) nb.offsets[i + 1] = nb.offsets[i] + counts[i];

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 // Stage 2a: the one radius search per point (Faster-PFH): every neighbour within the FPFH radius.
 // Normals use the subset within the normal radius, so no second search is ever made.
+// Paper: Sec. III-C (\label{subsec:fpfh}) and Eq. (A1) of its appendix (\label{eqn:radius_neighbor_search}),
+// I = {s : |p_s - p_q| < r_FPFH}: strictly closer, the query itself included. The paper searches a K-d tree;
+// a uniform grid here finds the same set.
 #pragma once
 
 #include "cloud.hpp"

@@ -1,6 +1,13 @@
 // SPDX-License-Identifier: MIT
 // Stage 2b: normals and linearity from the neighbours within the normal radius (a subset of the one
 // radius search), then the keypoint filter of Faster-PFH.
+// Paper: Sec. III-C (\label{subsec:fpfh}) and Algorithm 1 of its appendix (\label{alg:faster_pfh}).
+// estimate_normals is its step 1 (lines \label{line:skip}, \label{line:cond_num}, \label{line:cond_lin}):
+// at least tau_num neighbours within r_FPFH and within r_normal, linearity p_lin = (l1 - l2) / l1 from the
+// PCA's eigenvalues l1 >= l2 >= l3. Deviation: a point is kept when p_lin <= tau_lin (the paper: p_lin <
+// tau_lin), which differs only at exact equality. select_keypoints is its step 2 (\label{line:second_condition_start}
+// to \label{line:second_condition_end}): at least tau_num neighbours with a normal, the point itself among
+// them as in the paper's I. The paper numbers no equation for either.
 #pragma once
 
 #include "cloud.hpp"

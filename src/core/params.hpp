@@ -1,5 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Plain C++ mirror of kissm_config, as the pipeline sees it (already validated at the boundary).
+// Defaults as in the paper's Sec. IV-B ("Parameters of KISS-Matcher"): r_normal = 3.5 v, r_FPFH = 5.0 v,
+// tau_num = 3, tau_lin = 0.99. Not the paper's: the pruning bound (beta = 1.5 v there) and N_tau (3000
+// there); docs/parameters.md has the evidence for every default.
 #pragma once
 
 #include <array>

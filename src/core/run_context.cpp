@@ -19,9 +19,8 @@ KISSM_DETAIL_BEGIN
 namespace {
 
 // How long a thread spins for the next event before it sleeps. A registration runs about a hundred
-// parallel loops (forty in the solver alone) with short serial stretches between them; a sleep and a
-// wake-up through the kernel took about 50 us per loop here (VM). With the spin a small_gicp registration
-// at two threads went from 34 to 31.7 ms.
+// parallel loops (forty in the solver alone) with short serial stretches between them, and a sleep and a
+// wake-up through the kernel cost more than most of those stretches (docs/performance.md, "Thread pool").
 constexpr auto kSpin = std::chrono::microseconds(100);
 
 inline void cpu_relax() {

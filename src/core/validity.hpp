@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Stage 5b: whether a solved pose can be trusted.
+// Paper: Sec. III-E (\label{subsec:nonminimal_solver}): valid when the final inlier set I_final is large
+// enough (no numbered equation). The test that the inliers span a volume is an addition of this library.
 #pragma once
 
 #include <Eigen/Core>

@@ -145,10 +145,8 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     // Fixed-chunk partial sums (a function of the input, not of the thread count), merged afterwards. A
     // chunk is small enough that a 70K-point scan still splits over a few threads.
     constexpr std::size_t kChunk = 16384;
-    const std::size_t num_chunks = (n + kChunk - 1) / kChunk;
-    std::vector<VoxelTable> partial(num_chunks);
-    ctx.parallel_for(n, kChunk, [&](std::size_t b, std::size_t e) {
-        VoxelTable table; // moved into place at the end: neighbouring tables' counters share cache lines
+    std::vector<VoxelTable> partial = ctx.map_chunks(n, kChunk, [&](std::size_t b, std::size_t e) {
+        VoxelTable table; // built locally, stored once: neighbouring tables' counters share cache lines
         table.reserve(std::min<std::size_t>(e - b, 4096));
         const bool skip = input.skip_nonfinite;
         input.for_each_point(b, e, [&](std::size_t, const Vec3d &p) {
@@ -166,13 +164,15 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
             }
             table.add((c[0] * cells[1] + c[1]) * cells[2] + c[2], q);
         });
-        partial[b / kChunk] = std::move(table);
+        return table;
     });
+    const std::size_t num_chunks = partial.size();
     // Merge by key range: keys are x-major, so a range is a slab of the scene. Each range is merged on its
     // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
     // key order, so the output is in key order (the table's slot order depends on its growth history, the
     // key order does not). One table for the whole cloud was merged serially, by random probes far out of
-    // cache (1.0 s of 1.9 s at 3M voxels). About 8K entries per range (a function of the data alone), at
+    // cache, and that merge grew faster than the point count (docs/performance.md, "What the profiles
+    // showed"). About 8K entries per range (a function of the data alone), at
     // most 256 ranges; a small cloud is one range, merged straight from the chunks' tables.
     std::size_t all_entries = 0;
     for (const VoxelTable &t : partial) all_entries += t.size();

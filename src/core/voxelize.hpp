@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Stage 1: one centroid per occupied voxel.
+// The paper (KISS-Matcher, Sec. III-A, \label{subsec:problem}) takes clouds voxelised with voxel size v as
+// its input; it numbers no equation for the voxel centroid, which is here the mean of the voxel's points.
 #pragma once
 
 #include <string>

@@ -1,0 +1,188 @@
+// SPDX-License-Identifier: MIT
+#include "pair_features.hpp"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+// SSE2 is part of every x86-64 target. (Not 32-bit x86: its scalar code may use x87 precision, and the
+// vector lanes must match the scalar pair feature bit for bit.)
+#if defined(__x86_64__) || defined(_M_X64)
+#  define KISSM_PAIR_FEATURES_SSE2 1
+#  include <emmintrin.h>
+#else
+#  define KISSM_PAIR_FEATURES_SSE2 0
+#endif
+
+KISSM_DETAIL_BEGIN
+
+namespace {
+
+int bin_of(float value, float lo, float hi) {
+    const float t = (value - lo) / (hi - lo) * static_cast<float>(kBinsPerFeature);
+    if (!(t > 0.0f)) return 0; // also NaN: never reached for valid pairs, but never out of range either
+    const int b = static_cast<int>(t);
+    return b < kBinsPerFeature ? b : kBinsPerFeature - 1;
+}
+
+// Bin of the angle atan2(y, x) in [-pi, pi] split into 11 equal sectors, without calling atan2 (a large
+// part of the pair feature's cost; docs/performance.md, "Pair features"): the sector boundaries -pi + 2 pi k / 11
+// for k = 1..5 lie in the lower half plane and k = 6..10 in the upper, and within a half plane "angle >= boundary" is
+// the sign of a cross product with the boundary direction.
+struct AngleBins {
+    float c[kBinsPerFeature], s[kBinsPerFeature];
+    AngleBins() {
+        for (int k = 0; k < kBinsPerFeature; ++k) {
+            const double a = -3.14159265358979323846 + 2.0 * 3.14159265358979323846 * k / kBinsPerFeature;
+            c[k] = static_cast<float>(std::cos(a));
+            s[k] = static_cast<float>(std::sin(a));
+        }
+    }
+    int operator()(float y, float x) const {
+        if (y == 0.0f && x == 0.0f) return kBinsPerFeature / 2; // atan2(0, 0) = 0
+        const int first = y >= 0.0f ? 6 : 1;
+        int bin = first - 1;
+        for (int k = first; k < first + 5; ++k) bin += c[k] * y - s[k] * x >= 0.0f;
+        return bin;
+    }
+};
+
+const AngleBins kAngleBins;
+
+// The pair feature, and whether the other order of the two points could give different bins: only when the
+// two normals make exactly the same angle with the line (or a comparison is NaN), because otherwise both
+// orders pick the same source point, and the reversed direction is an exact negation in float, so every
+// intermediate value is the same.
+inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3],
+                      bool &order_matters) {
+    order_matters = false;
+    Vec3f d = p2 - p1;
+    const float len2 = d.squaredNorm();
+    if (!(len2 > 0.0f)) return false; // the same in both orders
+    d *= 1.0f / std::sqrt(len2);
+    // u is the normal of the point whose normal is closer to the line; d points from it to the other.
+    const float c1 = n1.dot(d), c2 = n2.dot(d);
+    const float a1 = std::fabs(c1), a2 = std::fabs(c2);
+    const bool swap = a1 < a2;
+    order_matters = !swap && !(a2 < a1);
+    const Vec3f &u = swap ? n2 : n1;
+    const Vec3f &nb = swap ? n1 : n2;
+    if (swap) d = -d;
+    const float f3 = swap ? -c2 : c1;
+    Vec3f v = d.cross(u);
+    const float vlen2 = v.squaredNorm();
+    if (!(vlen2 > 0.0f)) return false;
+    v *= 1.0f / std::sqrt(vlen2);
+    const Vec3f w = u.cross(v);
+    bins[0] = kAngleBins(w.dot(nb), u.dot(nb));
+    bins[1] = bin_of(v.dot(nb), -1.0f, 1.0f);
+    bins[2] = bin_of(f3, -1.0f, 1.0f);
+    return true;
+}
+
+} // namespace
+
+#if KISSM_PAIR_FEATURES_SSE2
+// Intrinsics because GCC does not vectorise the plain loop: under its default -ftrapping-math the selects
+// become branches around comparisons and products that may trap, which it will not if-convert.
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
+    // Padding lanes (copies of p itself) only produce codes nobody reads; NaNs in them are harmless.
+    for (std::size_t m = batch.size; m < ((batch.size + 3) & ~std::size_t(3)); ++m) {
+        batch.x[m] = p.x(), batch.y[m] = p.y(), batch.z[m] = p.z();
+        batch.nx[m] = n.x(), batch.ny[m] = n.y(), batch.nz[m] = n.z();
+    }
+    const __m128 px = _mm_set1_ps(p.x()), py = _mm_set1_ps(p.y()), pz = _mm_set1_ps(p.z());
+    const __m128 n1x = _mm_set1_ps(n.x()), n1y = _mm_set1_ps(n.y()), n1z = _mm_set1_ps(n.z());
+    const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    // Sector boundaries of the angle bins: lanes with y >= 0 use k = 6..10, the others k = 1..5.
+    __m128 cl[5], sl[5], cu[5], su[5];
+    for (int k = 0; k < 5; ++k) {
+        cl[k] = _mm_set1_ps(kAngleBins.c[1 + k]), sl[k] = _mm_set1_ps(kAngleBins.s[1 + k]);
+        cu[k] = _mm_set1_ps(kAngleBins.c[6 + k]), su[k] = _mm_set1_ps(kAngleBins.s[6 + k]);
+    }
+    // bin_of(value, -1, 1): t = (value - lo) / (hi - lo) * 11; t <= 0 or NaN gives 0, t >= 11 gives 10.
+    // Clamping t to [0, 10.5] before the truncation gives the same bins.
+    const __m128 lo = _mm_set1_ps(-1.0f), range = _mm_set1_ps(2.0f);
+    const __m128 bins = _mm_set1_ps(static_cast<float>(kBinsPerFeature));
+    const __m128 top = _mm_set1_ps(static_cast<float>(kBinsPerFeature) - 0.5f);
+    const __m128i five = _mm_set1_epi32(kBinsPerFeature / 2);
+    const __m128i frame_bit = _mm_set1_epi32(kLaneFrame), tie_bit = _mm_set1_epi32(kLaneTie);
+    auto select = [](__m128 mask, __m128 a, __m128 b) {
+        return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+    };
+    auto dot = [](__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
+        return _mm_add_ps(_mm_mul_ps(ax, bx), _mm_add_ps(_mm_mul_ps(ay, by), _mm_mul_ps(az, bz)));
+    };
+    auto bin_of = [&](__m128 value) {
+        __m128 t = _mm_mul_ps(_mm_div_ps(_mm_sub_ps(value, lo), range), bins);
+        t = _mm_and_ps(_mm_cmpgt_ps(t, zero), t);
+        return _mm_cvttps_epi32(_mm_min_ps(t, top));
+    };
+
+    for (std::size_t m = 0; m < batch.size; m += 4) {
+        __m128 dx = _mm_sub_ps(_mm_loadu_ps(&batch.x[m]), px);
+        __m128 dy = _mm_sub_ps(_mm_loadu_ps(&batch.y[m]), py);
+        __m128 dz = _mm_sub_ps(_mm_loadu_ps(&batch.z[m]), pz);
+        const __m128 len2 = dot(dx, dy, dz, dx, dy, dz);
+        const __m128 inv = _mm_div_ps(one, _mm_sqrt_ps(len2));
+        dx = _mm_mul_ps(dx, inv), dy = _mm_mul_ps(dy, inv), dz = _mm_mul_ps(dz, inv);
+        const __m128 n2x = _mm_loadu_ps(&batch.nx[m]), n2y = _mm_loadu_ps(&batch.ny[m]);
+        const __m128 n2z = _mm_loadu_ps(&batch.nz[m]);
+        const __m128 c1 = dot(n1x, n1y, n1z, dx, dy, dz), c2 = dot(n2x, n2y, n2z, dx, dy, dz);
+        const __m128 a1 = _mm_andnot_ps(sign, c1), a2 = _mm_andnot_ps(sign, c2);
+        const __m128 swap = _mm_cmplt_ps(a1, a2);
+        const __m128 tie = _mm_andnot_ps(swap, _mm_cmpnlt_ps(a2, a1));
+        const __m128 ux = select(swap, n2x, n1x), uy = select(swap, n2y, n1y), uz = select(swap, n2z, n1z);
+        const __m128 bx = select(swap, n1x, n2x), by = select(swap, n1y, n2y), bz = select(swap, n1z, n2z);
+        const __m128 flip = _mm_and_ps(swap, sign); // d = -d where swapped
+        dx = _mm_xor_ps(dx, flip), dy = _mm_xor_ps(dy, flip), dz = _mm_xor_ps(dz, flip);
+        const __m128 f3 = select(swap, _mm_xor_ps(c2, sign), c1);
+        __m128 vx = _mm_sub_ps(_mm_mul_ps(dy, uz), _mm_mul_ps(dz, uy));
+        __m128 vy = _mm_sub_ps(_mm_mul_ps(dz, ux), _mm_mul_ps(dx, uz));
+        __m128 vz = _mm_sub_ps(_mm_mul_ps(dx, uy), _mm_mul_ps(dy, ux));
+        const __m128 vlen2 = dot(vx, vy, vz, vx, vy, vz);
+        const __m128 vinv = _mm_div_ps(one, _mm_sqrt_ps(vlen2));
+        vx = _mm_mul_ps(vx, vinv), vy = _mm_mul_ps(vy, vinv), vz = _mm_mul_ps(vz, vinv);
+        const __m128 wx = _mm_sub_ps(_mm_mul_ps(uy, vz), _mm_mul_ps(uz, vy));
+        const __m128 wy = _mm_sub_ps(_mm_mul_ps(uz, vx), _mm_mul_ps(ux, vz));
+        const __m128 wz = _mm_sub_ps(_mm_mul_ps(ux, vy), _mm_mul_ps(uy, vx));
+        const __m128 ay = dot(wx, wy, wz, bx, by, bz), ax = dot(ux, uy, uz, bx, by, bz);
+        const __m128 f2 = dot(vx, vy, vz, bx, by, bz);
+
+        const __m128 upper = _mm_cmpge_ps(ay, zero);
+        __m128i b0 = _mm_and_si128(_mm_castps_si128(upper), five);
+        for (int k = 0; k < 5; ++k) {
+            const __m128 ck = select(upper, cu[k], cl[k]), sk = select(upper, su[k], sl[k]);
+            const __m128 ge = _mm_cmpge_ps(_mm_sub_ps(_mm_mul_ps(ck, ay), _mm_mul_ps(sk, ax)), zero);
+            b0 = _mm_sub_epi32(b0, _mm_castps_si128(ge)); // true is -1
+        }
+        const __m128i at_origin = _mm_castps_si128(_mm_and_ps(_mm_cmpeq_ps(ay, zero), _mm_cmpeq_ps(ax, zero)));
+        b0 = _mm_or_si128(_mm_and_si128(at_origin, five), _mm_andnot_si128(at_origin, b0));
+        const __m128i b1 = bin_of(f2), b2 = bin_of(f3);
+        const __m128 has_len = _mm_cmpgt_ps(len2, zero);
+        const __m128i frame = _mm_castps_si128(_mm_and_ps(has_len, _mm_cmpgt_ps(vlen2, zero)));
+        const __m128i order_matters = _mm_castps_si128(_mm_and_ps(has_len, tie));
+        __m128i c = _mm_or_si128(b0, _mm_or_si128(_mm_slli_epi32(b1, 4), _mm_slli_epi32(b2, 8)));
+        c = _mm_or_si128(c, _mm_or_si128(_mm_and_si128(frame, frame_bit), _mm_and_si128(order_matters, tie_bit)));
+        _mm_storeu_si128(reinterpret_cast<__m128i *>(&batch.code[m]), c);
+    }
+}
+#else
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
+    int bins[3];
+    for (std::size_t m = 0; m < batch.size; ++m) {
+        bool order_matters;
+        const Vec3f q(batch.x[m], batch.y[m], batch.z[m]), nq(batch.nx[m], batch.ny[m], batch.nz[m]);
+        const bool frame = pair_bins(p, n, q, nq, bins, order_matters);
+        batch.code[m] = (frame ? pack_bins(bins) : 0) | (order_matters ? kLaneTie : 0);
+    }
+}
+#endif
+
+bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]) {
+    bool order_matters;
+    return pair_bins(p1, n1, p2, n2, bins, order_matters);
+}
+
+KISSM_DETAIL_END

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: MIT
+// Stage 2c, the pair-feature kernel: the three Darboux-frame angle features of one pair of oriented points
+// (paper Eq. (A2), \label{eqn:angular_features}) and their histogram bins (Eq. (A3), \label{eqn:histogram}),
+// one pair at a time or a row of neighbours four at a time (SSE2), bitwise alike. What fpfh.cpp shares with
+// it: the bins' packed code and the batch of a row's pairs. fpfh.cpp sums the bins into SPFH and FPFH.
+//
+// Eq. (A2) as the paper has it: p_a is the point whose normal makes the smaller angle with the line, d the
+// unit vector from p_a to p_b, u = n_a, v = d x u, w = u x v; f1 = atan2(w . n_b, u . n_b), f2 = v . n_b,
+// f3 = u . d. Eq. (A3) bins f in [f_min, f_max] into H = 11 bins as floor(H (f - f_min) / (f_max + eps -
+// f_min)) + 1; here bins are 0-based and the top value is clamped into the last bin instead of the eps, and
+// f1 is binned by its sector in [-pi, pi] without computing atan2 (the sector tests are float cross products,
+// so a value within rounding of a sector boundary may fall on the other side of it). A pair without a frame
+// (coincident points, or u parallel to d) gives no bins; the paper does not discuss that case.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "cloud.hpp"
+#include "detail_namespace.hpp"
+
+KISSM_DETAIL_BEGIN
+
+constexpr int kBinsPerFeature = 11;
+
+// Bins (0..10) of the three Darboux-frame angle features of a pair of oriented points; false when the pair
+// has no defined frame (coincident points, or a normal parallel to the connecting line). The source point
+// of the frame is the one whose normal makes the smaller angle with the connecting line, so the result
+// does not depend on the order of the two points.
+bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]);
+
+// A pair's bins for the second point of the pair, parked in the edge's slot until that point's owner
+// collects them: 4 bits per feature, bit 12 set when the pair has a frame (0 = nothing to add).
+constexpr std::uint16_t kCodeValid = 0x1000;
+
+inline std::uint16_t pack_bins(const int bins[3]) {
+    return static_cast<std::uint16_t>(kCodeValid | bins[0] | (bins[1] << 4) | (bins[2] << 8));
+}
+
+// The neighbours of one point that it pairs with, as structure of arrays, so that the pair features of a
+// whole row are computed four at a time. Each lane performs exactly the operations of pair_bins in the same
+// order (Eigen sums a 3-vector's terms as x + (y + z); no FMA), and nothing is reduced across lanes, so the
+// bins are bitwise those of the scalar code. The arrays are padded to a multiple of 4 lanes.
+struct PairBatch {
+    std::vector<float> x, y, z, nx, ny, nz;
+    std::vector<std::uint32_t> index; // the neighbour's point index
+    std::vector<std::uint64_t> slot;  // its position in the neighbour list
+    std::vector<std::int32_t> code;   // bins and flags, see below
+    std::size_t size = 0;
+
+    void reserve(std::size_t n) {
+        n = (n + 3) & ~std::size_t(3);
+        if (x.size() >= n) return;
+        for (auto *v : {&x, &y, &z, &nx, &ny, &nz}) v->resize(n);
+        index.resize(n), slot.resize(n), code.resize(n);
+    }
+};
+
+// Code of a lane: bins in bits 0-3, 4-7, 8-11; kLaneFrame when the pair has a frame; kLaneTie when the
+// other order of the points could give other bins (equal angles of the normals with the line).
+constexpr std::int32_t kLaneFrame = kCodeValid, kLaneTie = kCodeValid << 1;
+
+// Fills batch.code[0, batch.size) with the codes of the pairs (p, n) - (batch point m, its normal): exactly
+// the bins pair_feature_bins gives for that order, kLaneFrame when the pair has a frame, kLaneTie when the
+// other order must be evaluated separately. Uses (and may overwrite) the padding lanes up to a multiple of 4.
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch);
+
+KISSM_DETAIL_END
