@@ -13,6 +13,7 @@
 
 #include "harness.h"
 #include "kissm.h"
+#include "splitmix64.h"
 
 int host_cpp_self_test(void);
 
@@ -72,13 +73,6 @@ static void test_host_functions_are_the_hosts(void) {
 #define SIDE 24
 static double g_source[3 * SIDE * SIDE * 3], g_target[3 * SIDE * SIDE * 3];
 
-static uint64_t next_random(uint64_t *state) {
-    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
 static size_t make_scene(void) {
     uint64_t state = 12345;
     size_t n = 0;
@@ -89,7 +83,7 @@ static size_t make_scene(void) {
             for (j = 0; j < SIDE; ++j) {
                 const double u = 0.17 * i, v = 0.17 * j;
                 const double bump = 0.3 * sin(1.3 * u + 0.4 * wall) * cos(0.9 * v);
-                const double noise = 0.002 * ((double)(next_random(&state) >> 11) / 9007199254740992.0 - 0.5);
+                const double noise = 0.002 * (splitmix64_uniform(&state) - 0.5);
                 double *p = &g_source[3 * n], *q = &g_target[3 * n];
                 if (wall == 0)
                     p[0] = u, p[1] = v, p[2] = bump + noise;

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "../../src/common/splitmix64.h" // the shared generator (not on this test's include path)
 #include "harness.h"
 #include "kissm.h"
+#include "splitmix64.h"
 
 namespace {
 
