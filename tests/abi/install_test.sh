@@ -19,23 +19,9 @@ if (($# != 10)); then
 fi
 build=$1 source=$2 work=$3 cmake=$4 generator=$5 cc=$6 libdir=$7 cloud_source=$8 shared=$9 static=${10}
 prefix=$work/prefix
-failures=0
-
-step() { echo "== $*"; }
-fail() {
-  echo "FAIL: $*"
-  failures=$((failures + 1))
-}
-# run LOG command...: runs quietly, shows the log on failure.
-run() {
-  local log=$1
-  shift
-  if ! "$@" >"$log" 2>&1; then
-    echo "command failed: $*"
-    sed 's/^/  | /' "$log"
-    return 1
-  fi
-}
+# step, fail, run and run_consumers (and `failures`, `binaries`), shared with the .deb test.
+# shellcheck source=../package/consumers.sh
+source "$(dirname "$0")/../package/consumers.sh"
 
 rm -rf "$work"
 mkdir -p "$work"
@@ -102,7 +88,6 @@ else
 fi
 
 # --- consumers ------------------------------------------------------------------------------------------
-binaries=()
 # check_linkage NAME PATH WANT_SHARED(0|1): uses the installed libkissm.so, or no libkissm.so at all.
 check_linkage() {
   local name=$1 exe=$2 want_shared=$3
@@ -115,7 +100,7 @@ check_linkage() {
   fi
 }
 
-cmake_consumer() { # cmake_consumer NAME STATIC(ON|OFF)
+prefix_cmake_consumer() { # prefix_cmake_consumer NAME STATIC(ON|OFF)
   local name=$1 dir=$work/$1
   step "$name: find_package(kissm) with CMAKE_PREFIX_PATH=$prefix"
   run "$dir.configure.log" "$cmake" -S "$source/examples/c" -B "$dir" -G "$generator" -DCMAKE_BUILD_TYPE=Release \
@@ -129,7 +114,7 @@ cmake_consumer() { # cmake_consumer NAME STATIC(ON|OFF)
   binaries+=("$name:$dir/kissm_example")
 }
 
-pkg_config_consumer() { # pkg_config_consumer NAME STATIC(0|1)
+prefix_pkg_config_consumer() { # prefix_pkg_config_consumer NAME STATIC(0|1)
   local name=$1 exe=$work/$1/kissm_example libs
   command -v pkg-config >/dev/null || return
   mkdir -p "$work/$1"
@@ -155,33 +140,16 @@ if ! command -v pkg-config >/dev/null; then
   fail "pkg-config not found: the pkg-config consumers cannot be checked (tools/setup.sh installs pkg-config)"
 fi
 if ((shared)); then
-  cmake_consumer cmake-shared OFF
-  pkg_config_consumer pkgconfig-shared 0
+  prefix_cmake_consumer cmake-shared OFF
+  prefix_pkg_config_consumer pkgconfig-shared 0
 fi
 if ((static)); then
-  cmake_consumer cmake-static ON
-  pkg_config_consumer pkgconfig-static 1
+  prefix_cmake_consumer cmake-static ON
+  prefix_pkg_config_consumer pkgconfig-static 1
 fi
 
 # --- run them -------------------------------------------------------------------------------------------
-reference=""
-for entry in "${binaries[@]}"; do
-  name=${entry%%:*} exe=${entry#*:}
-  step "run $name"
-  # No LD_LIBRARY_PATH: the binaries must find the installed library by themselves.
-  env -u LD_LIBRARY_PATH "$exe" "${clouds[@]}" >"$work/$name.out" 2>&1
-  status=$?
-  sed 's/^/  | /' "$work/$name.out"
-  ((status == 0)) || fail "$name: exit status $status (0 = valid pose)"
-  grep -q '^valid: yes$' "$work/$name.out" || fail "$name: no valid pose printed"
-  if [[ -z $reference ]]; then
-    reference=$name
-  elif ! cmp -s "$work/$reference.out" "$work/$name.out"; then
-    fail "$name printed something else than $reference"
-    diff "$work/$reference.out" "$work/$name.out" | sed 's/^/  | /'
-  fi
-done
-((${#binaries[@]})) || fail "no consumer was built"
+run_consumers "${clouds[@]}"
 
 if ((failures)); then
   echo "FAIL: $failures problems"
