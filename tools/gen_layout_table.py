@@ -122,13 +122,13 @@ def new_rows(table: str, header: str) -> tuple[dict[str, list[tuple[str, str, in
         size, offsets = layout[struct]
         now = [(name, ctype, *offsets[name]) for name, ctype in fields[struct]]
         old = published[struct]
-        if now[: len(old)] != old:
-            for a, b in zip(old, now + [("(missing)", "", -1, -1)] * len(old)):
-                if a != b:
-                    raise LayoutError(
-                        f"{struct}: the published row {a} is now {b}. Published fields never change "
-                        "(docs/abi-policy.md); append new fields at the end instead."
-                    )
+        for i, row in enumerate(old):
+            if i >= len(now) or now[i] != row:
+                became = now[i] if i < len(now) else "gone"
+                raise LayoutError(
+                    f"{struct}: the published row {row} is now {became}. Published fields never change "
+                    "(docs/abi-policy.md); append new fields at the end instead."
+                )
         if len(now) > len(old) and old and not may_grow:
             raise LayoutError(f"{struct} is frozen (it has no struct_size): {now[len(old)][0]} cannot be added")
         rows[struct] = now

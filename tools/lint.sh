@@ -7,8 +7,8 @@
 #   .editorconfig basics             no trailing whitespace, a final newline, no tabs in source files
 #   bindings/python/lint.sh          ruff check, ruff format --check, mypy --strict
 #   bindings/rust/lint.sh            cargo fmt --check, cargo clippy --all-targets -- -D warnings
-# Installs clang-format and shellcheck with apt-get when run as root; the Python tools come from PyPI
-# into a venv, the Rust ones with the toolchain (rustup components).
+# clang-format and shellcheck come from tools/setup.sh (apt-get as root); the Python tools from PyPI into a
+# venv, the Rust ones with the toolchain (rustup components).
 #
 #   bash tools/lint.sh            all of them
 #   bash tools/lint.sh --fix      apply clang-format in place first (then check everything)
@@ -25,20 +25,9 @@ fail() {
   failed+=("$1")
 }
 
-# ---- tools -----------------------------------------------------------------------------------------
-need=()
-command -v clang-format >/dev/null || need+=(clang-format)
-command -v shellcheck >/dev/null || need+=(shellcheck)
-if ((${#need[@]})); then
-  if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
-    echo "lint: installing ${need[*]}"
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
-  else
-    echo "lint: missing ${need[*]} (sudo apt-get install ${need[*]})" >&2
-    exit 1
-  fi
+# ---- tools: clang-format and shellcheck come with tools/setup.sh (apt as root, else it says what is missing)
+if ! command -v clang-format >/dev/null || ! command -v shellcheck >/dev/null; then
+  bash "$here/tools/setup.sh"
 fi
 
 # Files git knows (tracked and new, not ignored): the lint sees what a clean clone has.
