@@ -152,6 +152,12 @@ KISSM_API const char *kissm_last_error_message(void);
 #define KISSM_REASON_SOLVER_FAILED 4           /**< The robust solver found no consistent rotation. */
 #define KISSM_REASON_TOO_FEW_INLIERS 5         /**< Final inliers below kissm_config.min_inliers. */
 #define KISSM_REASON_DEGENERATE 6              /**< The inliers are collinear or planar: the pose is ambiguous. */
+/** Refinement ran and its pose lays too little of the source onto the target (kissm_result.overlap below
+ * kissm_config.min_overlap, or fewer than 6 correspondences). */
+#define KISSM_REASON_LOW_OVERLAP 7
+/** Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
+ * kissm_result.refine_condition and kissm_result.information. */
+#define KISSM_REASON_UNCONSTRAINED 8
 
 /**
  * @brief Describes a reason code.
@@ -185,6 +191,13 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 #define KISSM_VIEWPOINT_CLOUD_CENTER 1 /**< Each cloud's bounding-box centre (maps, no sensor). */
 /** @} */
 
+/** @name Fine registration after the solver (kissm_config.refine_mode) */
+/** @{ */
+#define KISSM_REFINE_NONE 0           /**< The solver's pose as it is. */
+#define KISSM_REFINE_GICP 1           /**< Generalized ICP (plane-to-plane) on the voxelised clouds. */
+#define KISSM_REFINE_POINT_TO_PLANE 2 /**< Point-to-plane ICP on the voxelised clouds. */
+/** @} */
+
 /** @name Log levels for kissm_log_fn (kissm_config.log_level) */
 /** @{ */
 #define KISSM_LOG_ERROR 1 /**< Errors. */
@@ -200,6 +213,7 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 #define KISSM_STAGE_MATCHING 3 /**< Descriptor matching. */
 #define KISSM_STAGE_PRUNING 4  /**< Compatibility graph and max k-core. */
 #define KISSM_STAGE_SOLVER 5   /**< GNC-TLS rotation, translation, inliers, validity. */
+#define KISSM_STAGE_REFINE 6   /**< Fine registration (kissm_config.refine_mode, kissm_refine()). */
 /** @} */
 
 /**
@@ -215,7 +229,8 @@ typedef void (*kissm_log_fn)(void *user_data, int32_t level, const char *message
  *        within long stages.
  *
  * Stages never go back within a call and fractions never decrease within a stage; the last call of a
- * registration that ran to the end is (#KISSM_STAGE_SOLVER, 1.0).
+ * registration that ran to the end is (#KISSM_STAGE_SOLVER, 1.0), or (#KISSM_STAGE_REFINE, 1.0) when it
+ * refined its pose.
  * @param[in] user_data kissm_config.progress_user_data, as given.
  * @param[in] stage The KISSM_STAGE_* stage running.
  * @param[in] fraction How much of that stage is done, in [0, 1].
@@ -275,6 +290,24 @@ typedef struct kissm_config {
     kissm_progress_fn progress_fn;
     /** Passed to progress_fn as it is. */
     void *progress_user_data;
+
+    /** KISSM_REFINE_*: refine the solver's pose on the voxelised clouds in the same call. kissm_refine()
+     * uses this cost too (GICP when it is #KISSM_REFINE_NONE). Default #KISSM_REFINE_NONE. */
+    int32_t refine_mode;
+    /** Refinement iteration cap, 1..1000. Default 30. */
+    int32_t refine_max_iterations;
+    /** Refinement's correspondence distance, and kissm_result.overlap's, = gain * voxel_size; in (0, 100].
+     * Default 3.0. */
+    double refine_max_distance_gain;
+    /** Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]. Default 1.0. */
+    double refine_kernel_gain;
+    /** Refinement has converged when a step turns the pose by less than this (radians) ...; in [0, 1].
+     * Default 1e-4. */
+    double refine_rotation_epsilon;
+    /** ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3. */
+    double refine_translation_epsilon_gain;
+    /** With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0. */
+    double min_overlap;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -346,7 +379,8 @@ typedef struct kissm_points {
 
 /**
  * @brief What a registration call found: the pose, whether it can be trusted, and the counts and timings
- *        of every stage. Always fully overwritten by kissm_register() and kissm_register_features().
+ *        of every stage. Always fully overwritten by kissm_register(), kissm_register_features(), kissm_refine()
+ *        and kissm_refine_features().
  *
  * The time_*_ms fields are wall-clock milliseconds per stage; time_total_ms is their sum. Stages not run
  * are 0. Timings are the only fields that differ between identical calls.
@@ -415,8 +449,36 @@ typedef struct kissm_result {
     double time_pruning_ms;
     /** Wall-clock ms: GNC-TLS rotation, translation, inliers, validity (0 if not run). */
     double time_solver_ms;
-    /** Sum of the stage times. Timings are the only fields that differ between identical calls. */
+    /** Sum of the stage times (time_refine_ms included). Timings are the only fields that differ between
+     * identical calls. */
     double time_total_ms;
+
+    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform. transform is the
+     * refined pose when refinement ran and this one otherwise. NaN when no pose was estimated. */
+    double coarse_transform[16];
+    /** 6x6 information matrix of the refined pose, row-major, symmetric: the inverse covariance of the error
+     * xi in T_true = T exp(xi), xi = (rotation [rad], translation [m]) in the source's frame (the perturbation
+     * GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the refinement's
+     * cost scaled by its residual variance: correspondences count as independent, so it is optimistic;
+     * a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run. */
+    double information[36];
+    /** Share of the source's voxels that the refined pose lays within the refinement's correspondence distance
+     * of a target voxel, in [0, 1]. NaN when refinement did not run. */
+    double overlap;
+    /** Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, metres). NaN
+     * when refinement did not run or found no correspondence. */
+    double refine_rmse;
+    /** Weakest over strongest direction of the information, with rotations as displacements at the matched
+     * points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run. */
+    double refine_condition;
+    /** Wall-clock ms: refinement (0 if not run). */
+    double time_refine_ms;
+    /** Correspondences of the refinement at its final pose (0 if not run). */
+    uint64_t num_refine_correspondences;
+    /** Refinement iterations run (0 if not run). */
+    int32_t refine_iterations;
+    /** 1 when refinement stopped on its convergence test rather than its iteration cap. */
+    int32_t refine_converged;
     /* New fields are only ever appended here. */
 } kissm_result;
 
@@ -509,6 +571,33 @@ KISSM_API int32_t kissm_register(kissm_matcher *matcher, const kissm_points *sou
  */
 KISSM_API void kissm_cancel(kissm_matcher *matcher);
 
+/**
+ * @brief Fine registration from a known pose (tracking, re-localisation from a prior): voxelises both clouds,
+ *        estimates their normals and refines @p initial_transform with kissm_config.refine_mode (GICP when it
+ *        is #KISSM_REFINE_NONE). No descriptors, no global search.
+ *
+ * result->coarse_transform is the initial transform; result->transform the refined pose; valid = 1 when the
+ * refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. The result is
+ * always fully overwritten.
+ * @param[in,out] matcher The matcher (its settings; one call at a time).
+ * @param[in] source The cloud to move; read during the call only.
+ * @param[in] target The cloud it is registered against; read during the call only.
+ * @param[in] initial_transform 4x4 row-major, p_target = R p_source + t: finite, R a rotation (orthonormal to
+ *            1e-3, det +1), last row (0, 0, 0, 1), |t| at most 1e9.
+ * @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ * @retval KISSM_OK The inputs were acceptable; result->valid says whether the refined pose can be trusted.
+ * @retval KISSM_ERR_NULL_ARGUMENT A pointer argument, or source->data or target->data, is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p initial_transform is not finite or not rigid, or a kissm_points field
+ *         is out of range.
+ * @retval KISSM_ERR_EMPTY_INPUT, KISSM_ERR_TOO_FEW_POINTS, KISSM_ERR_NONFINITE, KISSM_ERR_VOXEL_RANGE As
+ *         for kissm_register().
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
+                               const double initial_transform[16], kissm_result *result);
+
 /** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
@@ -581,6 +670,29 @@ KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features);
  */
 KISSM_API int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source,
                                           const kissm_features *target, kissm_result *result);
+/**
+ * @brief kissm_refine() on described clouds: the same refined pose as kissm_refine() on the clouds the features
+ *        were computed from. Features computed with refinement enabled carry the index refinement searches, so
+ *        a map described once is not indexed again.
+ *
+ * Voxelisation and feature times are reported as 0. The result is always fully overwritten.
+ * @param[in,out] matcher The matcher (its settings; one call at a time).
+ * @param[in] source Features of the cloud to move.
+ * @param[in] target Features of the cloud it is registered against.
+ * @param[in] initial_transform As for kissm_refine().
+ * @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ * @retval KISSM_OK The inputs were acceptable; result->valid says whether the refined pose can be trusted.
+ * @retval KISSM_ERR_NULL_ARGUMENT A pointer argument is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p initial_transform is not finite or not rigid.
+ * @retval KISSM_ERR_FEATURES_MISMATCH Either was computed under a config whose descriptor parameters differ
+ *         from matcher's.
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_refine_features(kissm_matcher *matcher, const kissm_features *source,
+                                        const kissm_features *target, const double initial_transform[16],
+                                        kissm_result *result);
 
 /** @} */
 

@@ -15,6 +15,8 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/kcore.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/gnc_solver.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/validity.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/point_index.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/refine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
 )
 # The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).
@@ -25,5 +27,6 @@ set(KISSM_CAPI_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/capi/result.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/matcher.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/features.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/files.cpp
 )

@@ -65,13 +65,32 @@ int32_t guarded(const char *function, Body &&body) noexcept {
 // Throws Failure(NullArgument, "<name> is NULL") when p is null.
 void require_non_null(const void *p, const char *name);
 
+// The sizes of a growable struct: its name, the sizes of its earlier published layouts (an older caller's,
+// ascending) and this kissm's.
+struct StructSizes {
+    const char *type;
+    const uint32_t *published;
+    std::size_t num_published;
+    std::size_t known;
+};
+// Published layouts: 0.1.0's kissm_config of 152 bytes and kissm_result of 440 (docs/abi-policy.md; the same
+// list as tests/abi/test_struct_versioning.c). A release that grows a struct appends its size here.
+constexpr uint32_t kPublishedConfigSizes[] = {152};
+constexpr uint32_t kPublishedResultSizes[] = {440};
+constexpr StructSizes kConfigSizes{"kissm_config", kPublishedConfigSizes, 1, sizeof(kissm_config)};
+constexpr StructSizes kResultSizes{"kissm_result", kPublishedResultSizes, 1, sizeof(kissm_result)};
+
 // The one struct_size rule, for every versioned struct (docs/abi-policy.md). `label` names the size as the
-// caller wrote it ("config->struct_size", or "struct_size" for an argument), `type` the struct. A size above
-// 65536 (an uninitialised field) or below this kissm's struct is refused. For a struct the library reads
-// (`given_struct` non-null), bytes beyond the known size must be zero: they are fields of a newer kissm that
-// this one would silently ignore. Structs the library writes take any larger size (the tail is zeroed).
-void check_struct_size(const char *label, uint32_t given, std::size_t known, const char *type,
-                       const void *given_struct = nullptr);
+// caller wrote it ("config->struct_size", or "struct_size" for an argument). A size above 65536 (an
+// uninitialised field) is refused; so is one below this kissm's struct unless it is a published layout's (an
+// older caller's, whose missing fields take their defaults in configs and are left unwritten in results). For a struct
+// the library reads (`given_struct` non-null), bytes beyond the known size must be zero: they are fields of a newer
+// kissm that this one would silently ignore. Structs the library writes take any larger size (the tail is zeroed).
+void check_struct_size(const char *label, uint32_t given, const StructSizes &sizes, const void *given_struct = nullptr);
+
+// Writes a full struct of this kissm (`known` bytes) into a caller's struct of `size` bytes: the first
+// min(size, known) bytes, then zeros up to `size`; never a byte beyond it. The caller's struct_size stays.
+void store_struct(void *dst, uint32_t size, const void *full, std::size_t known) noexcept;
 
 // A double as the messages print it (6 significant digits).
 std::string number(double v);

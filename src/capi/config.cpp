@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // kissm_config: defaults (from the core's Params, stated once), validation with messages naming the field,
 // and the conversion to the core's Params and Hooks.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -14,7 +15,8 @@ namespace capi {
 namespace {
 
 // The fields with one name and one meaning in kissm_config and Params: copied by name both ways.
-// (viewpoint, nonfinite_policy and viewpoint_mode have other types in the core and are converted by hand.)
+// (viewpoint, nonfinite_policy, viewpoint_mode and refine_mode have other types in the core and are converted by
+// hand.)
 #define KISSM_SAME_FIELDS(X)                                                                                           \
   X(num_threads)                                                                                                       \
   X(voxel_size)                                                                                                        \
@@ -27,7 +29,13 @@ namespace {
   X(noise_bound_max)                                                                                                   \
   X(min_normal_neighbors)                                                                                              \
   X(max_correspondences)                                                                                               \
-  X(min_inliers)
+  X(min_inliers)                                                                                                       \
+  X(refine_max_iterations)                                                                                             \
+  X(refine_max_distance_gain)                                                                                          \
+  X(refine_kernel_gain)                                                                                                \
+  X(refine_rotation_epsilon)                                                                                           \
+  X(refine_translation_epsilon_gain)                                                                                   \
+  X(min_overlap)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -57,10 +65,29 @@ constexpr int32_t stage_code(Stage stage) {
     case Stage::Matching: return KISSM_STAGE_MATCHING;
     case Stage::Pruning: return KISSM_STAGE_PRUNING;
     case Stage::Solver: return KISSM_STAGE_SOLVER;
+    case Stage::Refine: return KISSM_STAGE_REFINE;
     }
     return KISSM_STAGE_SOLVER;
 }
-static_assert(stage_code(Stage::Voxelize) == 1 && stage_code(Stage::Solver) == 5, "stage codes are pinned");
+static_assert(stage_code(Stage::Voxelize) == 1 && stage_code(Stage::Solver) == 5 && stage_code(Stage::Refine) == 6,
+              "stage codes are pinned");
+
+constexpr int32_t refine_code(RefineMode mode) {
+    switch (mode) {
+    case RefineMode::None: return KISSM_REFINE_NONE;
+    case RefineMode::Gicp: return KISSM_REFINE_GICP;
+    case RefineMode::PointToPlane: return KISSM_REFINE_POINT_TO_PLANE;
+    }
+    return KISSM_REFINE_NONE;
+}
+
+RefineMode refine_mode_of(int32_t code) {
+    switch (code) {
+    case KISSM_REFINE_GICP: return RefineMode::Gicp;
+    case KISSM_REFINE_POINT_TO_PLANE: return RefineMode::PointToPlane;
+    default: return RefineMode::None;
+    }
+}
 static_assert(log_code(LogLevel::Error) == 1 && log_code(LogLevel::Debug) == 4, "log levels are pinned");
 
 constexpr int32_t kMaxThreads = 1024;
@@ -96,14 +123,16 @@ kissm_config default_config() {
     c.viewpoint_mode =
         p.viewpoint_mode == ViewpointMode::CloudCenter ? KISSM_VIEWPOINT_CLOUD_CENTER : KISSM_VIEWPOINT_FIXED;
     c.log_level = log_code(h.log_level);
+    c.refine_mode = refine_code(p.refine_mode);
     return c;
 }
 
 kissm_config validated_config(const kissm_config *given) {
     kissm_config c = default_config();
     if (given == nullptr) return c;
-    check_struct_size("config->struct_size", given->struct_size, sizeof(kissm_config), "kissm_config", given);
-    std::memcpy(&c, given, sizeof(kissm_config));
+    check_struct_size("config->struct_size", given->struct_size, kConfigSizes, given);
+    // An older caller's smaller struct: the fields it lacks keep their defaults.
+    std::memcpy(&c, given, std::min<std::size_t>(given->struct_size, sizeof(kissm_config)));
     c.struct_size = sizeof(kissm_config);
 
     require_int(c.num_threads, 0, kMaxThreads, "num_threads");
@@ -126,6 +155,13 @@ kissm_config validated_config(const kissm_config *given) {
     require_int(c.nonfinite_policy, KISSM_NONFINITE_REJECT, KISSM_NONFINITE_DROP, "nonfinite_policy");
     require_int(c.viewpoint_mode, KISSM_VIEWPOINT_FIXED, KISSM_VIEWPOINT_CLOUD_CENTER, "viewpoint_mode");
     require_int(c.log_level, 0, KISSM_LOG_DEBUG, "log_level");
+    require_int(c.refine_mode, KISSM_REFINE_NONE, KISSM_REFINE_POINT_TO_PLANE, "refine_mode");
+    require_int(c.refine_max_iterations, 1, 1000, "refine_max_iterations");
+    require_range(c.refine_max_distance_gain, 0.0, 100.0, true, "refine_max_distance_gain");
+    require_range(c.refine_kernel_gain, 0.0, 100.0, true, "refine_kernel_gain");
+    require_range(c.refine_rotation_epsilon, 0.0, 1.0, false, "refine_rotation_epsilon");
+    require_range(c.refine_translation_epsilon_gain, 0.0, 1.0, false, "refine_translation_epsilon_gain");
+    require_range(c.min_overlap, 0.0, 1.0, false, "min_overlap");
     return c;
 }
 
@@ -138,6 +174,7 @@ Params to_params(const kissm_config &c) {
     p.nonfinite = c.nonfinite_policy == KISSM_NONFINITE_DROP ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
     p.viewpoint_mode =
         c.viewpoint_mode == KISSM_VIEWPOINT_CLOUD_CENTER ? ViewpointMode::CloudCenter : ViewpointMode::Fixed;
+    p.refine_mode = refine_mode_of(c.refine_mode);
     return p;
 }
 
@@ -169,11 +206,9 @@ extern "C" {
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size) {
     return guarded("kissm_config_init", [&] {
         require_non_null(config, "config");
-        check_struct_size("struct_size", struct_size, sizeof(kissm_config), "kissm_config");
+        check_struct_size("struct_size", struct_size, kConfigSizes);
         const kissm_config c = default_config();
-        std::memset(static_cast<void *>(config), 0, struct_size); // a newer caller's unknown tail: zero = default
-        std::memcpy(static_cast<void *>(config), &c, sizeof(c));
-        config->struct_size = struct_size;
+        store_struct(config, struct_size, &c, sizeof c); // a newer caller's unknown tail: zero = default
         return ok();
     });
 }

@@ -24,6 +24,11 @@ Hooks hooks_of(const kissm_config &config);
 // The caller's points, checked (scalar type, count, stride); `name` is the argument's name for messages.
 PointsView points_view(const kissm_points *points, const char *name);
 
+// A caller's 4x4 row-major rigid transform: finite, last row (0, 0, 0, 1), rotation block orthonormal to 1e-3
+// with det > 0, translation within 1e9. Throws Failure(NullArgument or InvalidArgument) naming `name`; R is
+// the nearest rotation to the block.
+void rigid_transform(const double *m, const char *name, Eigen::Matrix3d &R, Eigen::Vector3d &t);
+
 // A result pointer the library may write: non-null, with a struct_size it can hold.
 void check_result(const kissm_result *result);
 // No pose: zero counts, NaN transform. What every failing or degenerate call leaves behind.

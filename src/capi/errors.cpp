@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Status codes and reasons as text, the thread-local last error, versions and the ABI self-check.
+#include <cstring>
 #include <sstream>
 #include <string>
 
@@ -50,18 +51,30 @@ bool tail_is_zero(const void *p, std::size_t known, std::size_t given) {
 }
 } // namespace
 
-void check_struct_size(const char *label, uint32_t given, std::size_t known, const char *type,
-                       const void *given_struct) {
+void check_struct_size(const char *label, uint32_t given, const StructSizes &sizes, const void *given_struct) {
     const std::string head = std::string(label) + " is " + std::to_string(given);
-    const std::string set_it = std::string("set it to sizeof(") + type + ")";
+    const std::string set_it = std::string("set it to sizeof(") + sizes.type + ")";
     if (given > kMaxStructSize)
         fail(ErrorKind::StructSize, head + ", larger than any kissm struct (was it initialised? " + set_it + ")");
-    if (given < known)
-        fail(ErrorKind::StructSize,
-             head + "; this kissm needs at least " + std::to_string(known) + " (" + set_it + ")");
-    if (given_struct != nullptr && given > known && !tail_is_zero(given_struct, known, given))
-        fail(ErrorKind::StructSize, head + " with non-zero fields beyond the " + std::to_string(known) +
+    if (given < sizes.known) {
+        std::string older;
+        for (std::size_t i = 0; i < sizes.num_published; ++i) {
+            if (given == sizes.published[i]) return; // an older caller's layout
+            older += (i ? ", " : "") + std::to_string(sizes.published[i]);
+        }
+        fail(ErrorKind::StructSize, head + "; this kissm takes an earlier release's size (" + older + ") or at least " +
+                                        std::to_string(sizes.known) + " (" + set_it + ")");
+    }
+    if (given_struct != nullptr && given > sizes.known && !tail_is_zero(given_struct, sizes.known, given))
+        fail(ErrorKind::StructSize, head + " with non-zero fields beyond the " + std::to_string(sizes.known) +
                                         " bytes this kissm " KISSM_VERSION_STRING " knows; upgrade kissm");
+}
+
+void store_struct(void *dst, uint32_t size, const void *full, std::size_t known) noexcept {
+    const std::size_t n = size < known ? size : known;
+    std::memcpy(dst, full, n);
+    if (size > n) std::memset(static_cast<unsigned char *>(dst) + n, 0, size - n);
+    std::memcpy(dst, &size, sizeof size); // struct_size is the first field of every growable struct
 }
 
 std::string number(double v) {
@@ -115,6 +128,8 @@ const char *kissm_reason_string(int32_t reason) {
     case KISSM_REASON_SOLVER_FAILED: return "no consistent rotation found";
     case KISSM_REASON_TOO_FEW_INLIERS: return "too few inliers";
     case KISSM_REASON_DEGENERATE: return "inliers are collinear or planar";
+    case KISSM_REASON_LOW_OVERLAP: return "the refined pose overlaps too little";
+    case KISSM_REASON_UNCONSTRAINED: return "the refined pose is not constrained in every direction";
     default: return "unknown reason";
     }
 }

@@ -42,4 +42,19 @@ int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *so
     });
 }
 
+int32_t kissm_refine_features(kissm_matcher *matcher, const kissm_features *source, const kissm_features *target,
+                              const double initial_transform[16], kissm_result *result) {
+    return with_result("kissm_refine_features", result, [&] {
+        require_non_null(matcher, "matcher");
+        require_non_null(source, "source");
+        require_non_null(target, "target");
+        Eigen::Matrix3d R;
+        Eigen::Vector3d t;
+        rigid_transform(initial_transform, "initial_transform", R, t);
+        core::RunContext ctx = matcher->begin_call();
+        fill_result(core::refine_features(source->data, target->data, R, t, matcher->params, ctx), result);
+        return ok();
+    });
+}
+
 } // extern "C"

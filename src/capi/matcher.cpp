@@ -30,10 +30,8 @@ int32_t kissm_get_config(const kissm_matcher *matcher, kissm_config *out_config)
         require_non_null(matcher, "matcher");
         require_non_null(out_config, "out_config");
         const uint32_t size = out_config->struct_size;
-        check_struct_size("out_config->struct_size", size, sizeof(kissm_config), "kissm_config");
-        std::memset(static_cast<void *>(out_config), 0, size);
-        std::memcpy(static_cast<void *>(out_config), &matcher->config, sizeof(kissm_config));
-        out_config->struct_size = size;
+        check_struct_size("out_config->struct_size", size, kConfigSizes);
+        store_struct(out_config, size, &matcher->config, sizeof(kissm_config));
         return ok();
     });
 }
@@ -50,6 +48,21 @@ int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source, const
         const core::PointsView tv = points_view(target, "target");
         core::RunContext ctx = matcher->begin_call();
         fill_result(core::register_points(sv, tv, matcher->params, ctx), result);
+        return ok();
+    });
+}
+
+int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
+                     const double initial_transform[16], kissm_result *result) {
+    return with_result("kissm_refine", result, [&] {
+        require_non_null(matcher, "matcher");
+        const core::PointsView sv = points_view(source, "source");
+        const core::PointsView tv = points_view(target, "target");
+        Eigen::Matrix3d R;
+        Eigen::Vector3d t;
+        rigid_transform(initial_transform, "initial_transform", R, t);
+        core::RunContext ctx = matcher->begin_call();
+        fill_result(core::refine_points(sv, tv, R, t, matcher->params, ctx), result);
         return ok();
     });
 }

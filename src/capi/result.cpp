@@ -23,44 +23,81 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::SolverFailed: return KISSM_REASON_SOLVER_FAILED;
     case Reason::TooFewInliers: return KISSM_REASON_TOO_FEW_INLIERS;
     case Reason::Degenerate: return KISSM_REASON_DEGENERATE;
+    case Reason::LowOverlap: return KISSM_REASON_LOW_OVERLAP;
+    case Reason::Unconstrained: return KISSM_REASON_UNCONSTRAINED;
     }
     return KISSM_REASON_NONE;
 }
-static_assert(reason_code(Reason::None) == 0 && reason_code(Reason::Degenerate) == 6, "reason codes are pinned");
+static_assert(reason_code(Reason::None) == 0 && reason_code(Reason::Degenerate) == 6 &&
+                  reason_code(Reason::Unconstrained) == 8,
+              "reason codes are pinned");
+
+// 4x4 row-major from R and t.
+void write_transform(const Eigen::Matrix3d &R, const Eigen::Vector3d &t, double out[16]) {
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) out[4 * i + j] = R(i, j);
+        out[4 * i + 3] = t[i];
+    }
+    out[12] = out[13] = out[14] = 0.0;
+    out[15] = 1.0;
+}
 
 } // namespace
 
 void check_result(const kissm_result *r) {
     require_non_null(r, "result");
-    check_struct_size("result->struct_size", r->struct_size, sizeof(kissm_result), "kissm_result");
+    check_struct_size("result->struct_size", r->struct_size, kResultSizes);
 }
 
-void reset_result(kissm_result *r) noexcept {
-    const uint32_t size = r->struct_size;
-    std::memset(static_cast<void *>(r), 0, size);
-    r->struct_size = size;
+namespace {
+
+// A whole result of this kissm with no pose: zero counts, NaN where "not computed" is not 0.
+void reset_full(kissm_result *r) noexcept {
+    std::memset(static_cast<void *>(r), 0, sizeof *r);
+    r->struct_size = sizeof *r;
     const double nan = std::nan("");
     for (double &v : r->transform) v = nan;
     for (double &v : r->rotation) v = nan;
     for (double &v : r->translation) v = nan;
     r->residual_rms = nan;
+    for (double &v : r->coarse_transform) v = nan;
+    for (double &v : r->information) v = nan;
+    r->overlap = nan;
+    r->refine_rmse = nan;
+    r->refine_condition = nan;
 }
 
-void fill_result(const Registration &g, kissm_result *r) {
-    reset_result(r);
+} // namespace
+
+void reset_result(kissm_result *r) noexcept {
+    kissm_result full;
+    reset_full(&full);
+    store_struct(r, r->struct_size, &full, sizeof full); // an older caller's struct gets its fields only
+}
+
+void fill_result(const Registration &g, kissm_result *caller) {
+    kissm_result full;
+    kissm_result *r = &full;
+    reset_full(r);
     r->valid = g.solved && g.reason == Reason::None;
     r->reason = reason_code(g.reason);
     if (g.solved) {
         for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) {
-                r->rotation[3 * i + j] = g.rotation(i, j);
-                r->transform[4 * i + j] = g.rotation(i, j);
-            }
+            for (int j = 0; j < 3; ++j) r->rotation[3 * i + j] = g.rotation(i, j);
             r->translation[i] = g.translation[i];
-            r->transform[4 * i + 3] = g.translation[i];
         }
-        r->transform[12] = r->transform[13] = r->transform[14] = 0.0;
-        r->transform[15] = 1.0;
+        write_transform(g.rotation, g.translation, r->transform);
+        write_transform(g.coarse_rotation, g.coarse_translation, r->coarse_transform);
+    }
+    if (g.refined) {
+        for (int i = 0; i < 6; ++i)
+            for (int j = 0; j < 6; ++j) r->information[6 * i + j] = g.information(i, j);
+        r->overlap = g.overlap;
+        r->refine_rmse = g.refine_rmse;
+        r->refine_condition = g.refine_condition;
+        r->num_refine_correspondences = g.num_refine_correspondences;
+        r->refine_iterations = g.refine_iterations;
+        r->refine_converged = g.refine_converged ? 1 : 0;
     }
     r->num_source_points = g.num_source_points;
     r->num_target_points = g.num_target_points;
@@ -84,8 +121,10 @@ void fill_result(const Registration &g, kissm_result *r) {
     r->time_matching_ms = g.time_matching_ms;
     r->time_pruning_ms = g.time_pruning_ms;
     r->time_solver_ms = g.time_solver_ms;
-    r->time_total_ms =
-        g.time_voxelize_ms + g.time_features_ms + g.time_matching_ms + g.time_pruning_ms + g.time_solver_ms;
+    r->time_refine_ms = g.time_refine_ms;
+    r->time_total_ms = g.time_voxelize_ms + g.time_features_ms + g.time_matching_ms + g.time_pruning_ms +
+                       g.time_solver_ms + g.time_refine_ms;
+    store_struct(caller, caller->struct_size, &full, sizeof full);
 }
 
 } // namespace capi
@@ -98,7 +137,7 @@ extern "C" {
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size) {
     return guarded("kissm_result_init", [&] {
         require_non_null(result, "result");
-        check_struct_size("struct_size", struct_size, sizeof(kissm_result), "kissm_result");
+        check_struct_size("struct_size", struct_size, kResultSizes);
         result->struct_size = struct_size;
         reset_result(result);
         return ok();

@@ -15,6 +15,8 @@ KISSM_DETAIL_BEGIN
 
 enum class NonFinitePolicy { Reject, Drop };
 enum class ViewpointMode { Fixed, CloudCenter };
+// Stage 6 (refine.hpp): none, GICP (plane-to-plane) or point-to-plane.
+enum class RefineMode { None, Gicp, PointToPlane };
 
 struct Params {
     int num_threads = 0; // 0 = hardware concurrency
@@ -32,11 +34,19 @@ struct Params {
     int min_inliers = 15;
     NonFinitePolicy nonfinite = NonFinitePolicy::Reject;
     ViewpointMode viewpoint_mode = ViewpointMode::Fixed;
+    RefineMode refine_mode = RefineMode::None;
+    int refine_max_iterations = 30;
+    double refine_max_distance_gain = 3.0;
+    double refine_kernel_gain = 1.0;
+    double refine_rotation_epsilon = 1e-4;         // radians
+    double refine_translation_epsilon_gain = 1e-3; // times voxel_size
+    double min_overlap = 0.0;                      // validity with refinement
 
     double normal_radius() const { return normal_radius_gain * voxel_size; }
     double fpfh_radius() const { return fpfh_radius_gain * voxel_size; }
     double prune_noise_bound() const { return capped(prune_noise_bound_gain * voxel_size); }
     double solver_noise_bound() const { return capped(solver_noise_bound_gain * voxel_size); }
+    double refine_max_distance() const { return refine_max_distance_gain * voxel_size; }
 
 private:
     double capped(double b) const { return (noise_bound_max > 0.0 && b > noise_bound_max) ? noise_bound_max : b; }

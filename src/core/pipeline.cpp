@@ -23,6 +23,10 @@ namespace {
 // reported no wrong pose as valid (docs/parameters.md, "FPFH weighting").
 constexpr int kFpfhWeightPower = 2;
 
+// A refined pose is not trusted when its weakest direction carries less than this share of the information of
+// its strongest (RefineOutput::condition; docs/accuracy.md has the measurements).
+constexpr double kMinCondition = 1e-3;
+
 class Stopwatch {
 public:
     Stopwatch() : last_(std::chrono::steady_clock::now()) {}
@@ -69,7 +73,7 @@ void voxelize_cloud(const PointsView &view, const Params &params, const std::str
 }
 
 void describe_voxels(const Params &params, const std::string &name, double progress_from, double progress_to,
-                     CloudFeatures &f, RunContext &ctx) {
+                     bool with_descriptors, CloudFeatures &f, RunContext &ctx) {
     Stopwatch clock;
     auto progress = [&](double part) {
         ctx.checkpoint(Stage::Features, progress_from + part * (progress_to - progress_from));
@@ -88,12 +92,19 @@ void describe_voxels(const Params &params, const std::string &name, double progr
                 ? Vec3d(Vec3d::Zero()) // the local origin is the bounding-box centre
                 : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
         np.viewpoint = vp.cast<float>();
-        const Normals normals = estimate_normals(pts, nb, np, ctx);
+        f.normals = estimate_normals(pts, nb, np, ctx);
         progress(0.6);
-        std::vector<std::uint32_t> keypoints = select_keypoints(nb, normals, params.min_normal_neighbors);
-        f.descriptors = compute_fpfh(pts, nb, normals, std::move(keypoints), static_cast<float>(params.voxel_size),
-                                     kFpfhWeightPower, ctx);
+        if (with_descriptors) {
+            std::vector<std::uint32_t> keypoints = select_keypoints(nb, f.normals, params.min_normal_neighbors);
+            f.descriptors = compute_fpfh(pts, nb, f.normals, std::move(keypoints),
+                                         static_cast<float>(params.voxel_size), kFpfhWeightPower, ctx);
+        }
+    } else {
+        f.normals.normal.assign(pts.size(), Vec3f::Zero());
+        f.normals.valid.assign(pts.size(), 0);
     }
+    // The index refinement searches, kept with the features so that a map is indexed once.
+    if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts);
     f.time_features_ms = clock.lap();
     if (ctx.logs(LogLevel::Info)) {
         std::ostringstream msg;
@@ -108,19 +119,92 @@ void describe_voxels(const Params &params, const std::string &name, double progr
 CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
     CloudFeatures f;
     voxelize_cloud(view, params, name, 0.0, f, ctx);
-    describe_voxels(params, name, 0.0, 1.0, f, ctx);
+    describe_voxels(params, name, 0.0, 1.0, true, f, ctx);
     return f;
 }
 
-std::pair<CloudFeatures, CloudFeatures> describe_pair(const PointsView &source, const PointsView &target,
-                                                      const Params &params, RunContext &ctx) {
+namespace {
+
+std::pair<CloudFeatures, CloudFeatures> describe_both(const PointsView &source, const PointsView &target,
+                                                      const Params &params, bool with_descriptors, RunContext &ctx) {
     // Both clouds pass each stage before either enters the next, so progress never goes back.
     std::pair<CloudFeatures, CloudFeatures> p;
     voxelize_cloud(source, params, "source", 0.0, p.first, ctx);
     voxelize_cloud(target, params, "target", 0.5, p.second, ctx);
-    describe_voxels(params, "source", 0.0, 0.5, p.first, ctx);
-    describe_voxels(params, "target", 0.5, 1.0, p.second, ctx);
+    describe_voxels(params, "source", 0.0, 0.5, with_descriptors, p.first, ctx);
+    describe_voxels(params, "target", 0.5, 1.0, with_descriptors, p.second, ctx);
     return p;
+}
+
+void require_same_settings(const CloudFeatures &source, const CloudFeatures &target, const Params &params) {
+    for (const auto *f : {&source, &target}) {
+        if (!same_descriptor_settings(f->params, params))
+            fail(ErrorKind::FeaturesMismatch, std::string(f == &source ? "source" : "target") +
+                                                  " features were computed with descriptor settings (voxel size, "
+                                                  "radii, tau, viewpoint) that differ from the matcher's");
+    }
+}
+
+RefinedEvidence refined_evidence(const Registration &r) {
+    RefinedEvidence e;
+    e.num_final_inliers = r.num_final_inliers;
+    e.num_correspondences = r.num_refine_correspondences;
+    e.overlap = r.overlap;
+    e.rmse = r.refine_rmse;
+    e.condition = r.refine_condition;
+    e.converged = r.refine_converged;
+    return e;
+}
+
+RefinedRule refined_rule(const Params &params) { return RefinedRule{params.min_overlap, kMinCondition}; }
+
+RefineParams refine_params(const Params &params) {
+    RefineParams rp;
+    rp.mode = params.refine_mode;
+    rp.max_iterations = params.refine_max_iterations;
+    rp.max_distance = params.refine_max_distance();
+    rp.kernel_scale = params.refine_kernel_gain * params.voxel_size;
+    rp.rotation_epsilon = params.refine_rotation_epsilon;
+    rp.translation_epsilon = params.refine_translation_epsilon_gain * params.voxel_size;
+    return rp;
+}
+
+// Stage 6 from (R, t) in the callers' frames: r's pose becomes the refined one, with its numbers.
+void refine_registration(const CloudFeatures &source, const CloudFeatures &target, const Eigen::Matrix3d &R,
+                         const Eigen::Vector3d &t, const Params &params, Registration &r, RunContext &ctx) {
+    Stopwatch clock;
+    ctx.checkpoint(Stage::Refine, 0.0);
+    const Vec3d &os = source.voxels.origin, &ot = target.voxels.origin;
+    // p_t - o_t = R (p_s - o_s) + (t + R o_s - o_t): the same pose between the local frames.
+    const Eigen::Vector3d t_local = t + R * os - ot;
+    PointIndex built;
+    const PointIndex *index = &target.index;
+    if (index->empty()) {
+        built = PointIndex(target.voxels.points);
+        index = &built;
+    }
+    const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.normals},
+                                       RefineCloud{&target.voxels.points, &target.normals}, *index, R, t_local,
+                                       refine_params(params), ctx);
+    r.refined = true;
+    r.rotation = o.rotation;
+    r.translation = o.translation + ot - o.rotation * os;
+    r.information = information_in_caller_frame(o, os, params.voxel_size);
+    r.overlap = o.overlap;
+    r.refine_rmse = o.num_correspondences > 0 ? o.rmse : std::numeric_limits<double>::quiet_NaN();
+    r.refine_iterations = o.iterations;
+    r.refine_converged = o.converged;
+    r.num_refine_correspondences = o.num_correspondences;
+    r.refine_condition = o.condition;
+    r.time_refine_ms = clock.lap();
+    ctx.checkpoint(Stage::Refine, 1.0);
+}
+
+} // namespace
+
+std::pair<CloudFeatures, CloudFeatures> describe_pair(const PointsView &source, const PointsView &target,
+                                                      const Params &params, RunContext &ctx) {
+    return describe_both(source, target, params, true, ctx);
 }
 
 Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
@@ -214,6 +298,8 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
                                       r.rotation, r.translation);
     r.reason = v.reason;
     r.inlier_extent = v.extent;
+    r.coarse_rotation = r.rotation;
+    r.coarse_translation = r.translation;
     r.time_solver_ms = clock.lap();
     if (ctx.logs(LogLevel::Info)) {
         std::ostringstream msg;
@@ -223,6 +309,10 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         ctx.log(LogLevel::Info, msg.str());
     }
     ctx.checkpoint(Stage::Solver, 1.0);
+    if (params.refine_mode != RefineMode::None && r.rotation.allFinite() && r.translation.allFinite()) {
+        refine_registration(source, target, r.coarse_rotation, r.coarse_translation, params, r, ctx);
+        r.reason = check_refined_validity(r.reason, refined_evidence(r), refined_rule(params));
+    }
     return r;
 }
 
@@ -237,13 +327,48 @@ Registration register_points(const PointsView &source, const PointsView &target,
 
 Registration register_features(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
                                RunContext &ctx) {
-    for (const auto *f : {&source, &target}) {
-        if (!same_descriptor_settings(f->params, params))
-            fail(ErrorKind::FeaturesMismatch, std::string(f == &source ? "source" : "target") +
-                                                  " features were computed with descriptor settings (voxel size, "
-                                                  "radii, tau, viewpoint) that differ from the matcher's");
-    }
+    require_same_settings(source, target, params);
     return register_described(source, target, params, ctx);
+}
+
+namespace {
+
+// A refinement from the caller's pose: no solver ran, so only the refined evidence decides.
+Registration refine_described(const CloudFeatures &source, const CloudFeatures &target, const Eigen::Matrix3d &R,
+                              const Eigen::Vector3d &t, const Params &params, RunContext &ctx) {
+    Registration r;
+    r.num_source_points = source.num_points, r.num_target_points = target.num_points;
+    r.num_source_nonfinite = source.num_nonfinite, r.num_target_nonfinite = target.num_nonfinite;
+    r.num_source_voxels = source.voxels.points.size(), r.num_target_voxels = target.voxels.points.size();
+    r.num_source_keypoints = source.descriptors.keypoint.size();
+    r.num_target_keypoints = target.descriptors.keypoint.size();
+    r.noise_bound = params.solver_noise_bound();
+    r.coarse_rotation = R;
+    r.coarse_translation = t;
+    r.solved = true;
+    Params p = params;
+    if (p.refine_mode == RefineMode::None) p.refine_mode = RefineMode::Gicp;
+    refine_registration(source, target, R, t, p, r, ctx);
+    r.reason = check_refined_validity(Reason::None, refined_evidence(r), refined_rule(p));
+    return r;
+}
+
+} // namespace
+
+Registration refine_points(const PointsView &source, const PointsView &target, const Eigen::Matrix3d &initial_rotation,
+                           const Eigen::Vector3d &initial_translation, const Params &params, RunContext &ctx) {
+    const auto clouds = describe_both(source, target, params, false, ctx);
+    Registration r = refine_described(clouds.first, clouds.second, initial_rotation, initial_translation, params, ctx);
+    r.time_voxelize_ms = clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
+    r.time_features_ms = clouds.first.time_features_ms + clouds.second.time_features_ms;
+    return r;
+}
+
+Registration refine_features(const CloudFeatures &source, const CloudFeatures &target,
+                             const Eigen::Matrix3d &initial_rotation, const Eigen::Vector3d &initial_translation,
+                             const Params &params, RunContext &ctx) {
+    require_same_settings(source, target, params);
+    return refine_described(source, target, initial_rotation, initial_translation, params, ctx);
 }
 
 KISSM_DETAIL_END

@@ -10,18 +10,23 @@
 #include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "params.hpp"
+#include "point_index.hpp"
+#include "refine.hpp"
 #include "run_context.hpp"
 #include "validity.hpp"
 
 KISSM_DETAIL_BEGIN
 
-// A cloud described once: voxels (local frame) and keypoint descriptors. Immutable after construction.
+// A cloud described once: voxels (local frame), their normals, keypoint descriptors and, when it was
+// described for refinement, the index of its voxels (so a map is indexed once). Immutable after construction.
 struct CloudFeatures {
     Params params; // the config it was computed under (descriptor-relevant fields are compared on use)
     std::uint64_t num_points = 0;
     std::uint64_t num_nonfinite = 0;
     VoxelCloud voxels;
+    Normals normals; // per voxel; empty when the cloud had too few voxels for any
     Descriptors descriptors;
+    PointIndex index; // empty unless params.refine_mode != None
     double time_voxelize_ms = 0.0;
     double time_features_ms = 0.0;
 };
@@ -41,7 +46,20 @@ struct Registration {
     double residual_rms = std::numeric_limits<double>::quiet_NaN();
     double noise_bound = 0.0;
     Eigen::Vector3d inlier_extent = Eigen::Vector3d::Zero();
-    double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0;
+    // The solver's pose (NaN when none); rotation/translation above become the refined pose when refinement ran.
+    Eigen::Matrix3d coarse_rotation = Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    Eigen::Vector3d coarse_translation = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    // Stage 6 (NaN / 0 when it did not run).
+    bool refined = false;
+    Matrix6d information = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
+    double overlap = std::numeric_limits<double>::quiet_NaN();
+    double refine_rmse = std::numeric_limits<double>::quiet_NaN();
+    int refine_iterations = 0;
+    bool refine_converged = false;
+    std::uint64_t num_refine_correspondences = 0;
+    double refine_condition = std::numeric_limits<double>::quiet_NaN(); // see validity.hpp
+    double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0,
+           time_refine_ms = 0;
 };
 
 // Throws Failure for unacceptable input (empty, too few points, non-finite under Reject, voxel range).
@@ -64,5 +82,14 @@ Registration register_points(const PointsView &source, const PointsView &target,
 // settings. Voxelise and feature times are 0 (nothing was described in this call).
 Registration register_features(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
                                RunContext &ctx);
+
+// kissm_refine: both clouds voxelised and given normals (no descriptors), then refined from `initial` (the
+// callers' frames, p_target = R p_source + t; checked by the C boundary: finite and rigid).
+Registration refine_points(const PointsView &source, const PointsView &target, const Eigen::Matrix3d &initial_rotation,
+                           const Eigen::Vector3d &initial_translation, const Params &params, RunContext &ctx);
+// kissm_refine_features: the same from features; Failure(FeaturesMismatch) as register_features.
+Registration refine_features(const CloudFeatures &source, const CloudFeatures &target,
+                             const Eigen::Matrix3d &initial_rotation, const Eigen::Vector3d &initial_translation,
+                             const Params &params, RunContext &ctx);
 
 KISSM_DETAIL_END

@@ -25,7 +25,7 @@ class ThreadPool;
 enum class LogLevel { Error, Warn, Info, Debug };
 
 // The stages, in the order a registration runs them (progress never goes back).
-enum class Stage { Voxelize, Features, Matching, Pruning, Solver };
+enum class Stage { Voxelize, Features, Matching, Pruning, Solver, Refine };
 
 struct Hooks {
     // Returns true to cancel. Called on the calling thread only.

@@ -32,4 +32,11 @@ Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::
     return v;
 }
 
+Reason check_refined_validity(Reason coarse, const RefinedEvidence &e, const RefinedRule &rule) {
+    if (coarse != Reason::None) return coarse;
+    if (e.num_correspondences < 6 || e.overlap < rule.min_overlap) return Reason::LowOverlap;
+    if (e.condition < rule.min_condition) return Reason::Unconstrained;
+    return Reason::None;
+}
+
 KISSM_DETAIL_END

@@ -16,9 +16,9 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 152)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 200)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 440)
+  X(kissm_result, KISSM_STRUCT_RESULT, 904)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -41,7 +41,14 @@
   X(kissm_config, log_fn, kissm_log_fn, 120, 8)                                                                        \
   X(kissm_config, log_user_data, void *, 128, 8)                                                                       \
   X(kissm_config, progress_fn, kissm_progress_fn, 136, 8)                                                              \
-  X(kissm_config, progress_user_data, void *, 144, 8)
+  X(kissm_config, progress_user_data, void *, 144, 8)                                                                  \
+  X(kissm_config, refine_mode, int32_t, 152, 4)                                                                        \
+  X(kissm_config, refine_max_iterations, int32_t, 156, 4)                                                              \
+  X(kissm_config, refine_max_distance_gain, double, 160, 8)                                                            \
+  X(kissm_config, refine_kernel_gain, double, 168, 8)                                                                  \
+  X(kissm_config, refine_rotation_epsilon, double, 176, 8)                                                             \
+  X(kissm_config, refine_translation_epsilon_gain, double, 184, 8)                                                     \
+  X(kissm_config, min_overlap, double, 192, 8)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \
@@ -80,7 +87,16 @@
   X(kissm_result, time_matching_ms, double, 408, 8)                                                                    \
   X(kissm_result, time_pruning_ms, double, 416, 8)                                                                     \
   X(kissm_result, time_solver_ms, double, 424, 8)                                                                      \
-  X(kissm_result, time_total_ms, double, 432, 8)
+  X(kissm_result, time_total_ms, double, 432, 8)                                                                       \
+  X(kissm_result, coarse_transform, double[16], 440, 128)                                                              \
+  X(kissm_result, information, double[36], 568, 288)                                                                   \
+  X(kissm_result, overlap, double, 856, 8)                                                                             \
+  X(kissm_result, refine_rmse, double, 864, 8)                                                                         \
+  X(kissm_result, refine_condition, double, 872, 8)                                                                    \
+  X(kissm_result, time_refine_ms, double, 880, 8)                                                                      \
+  X(kissm_result, num_refine_correspondences, uint64_t, 888, 8)                                                        \
+  X(kissm_result, refine_iterations, int32_t, 896, 4)                                                                  \
+  X(kissm_result, refine_converged, int32_t, 900, 4)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

@@ -51,6 +51,10 @@ const char *kissm_last_error_message(void);
 #define KISSM_REASON_TOO_FEW_INLIERS 5
 #define KISSM_REASON_DEGENERATE 6
 
+#define KISSM_REASON_LOW_OVERLAP 7
+
+#define KISSM_REASON_UNCONSTRAINED 8
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0
@@ -58,6 +62,10 @@ const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_VIEWPOINT_FIXED 0
 #define KISSM_VIEWPOINT_CLOUD_CENTER 1
+
+#define KISSM_REFINE_NONE 0
+#define KISSM_REFINE_GICP 1
+#define KISSM_REFINE_POINT_TO_PLANE 2
 
 #define KISSM_LOG_ERROR 1
 #define KISSM_LOG_WARN 2
@@ -69,6 +77,7 @@ const char *kissm_reason_string(int32_t reason);
 #define KISSM_STAGE_MATCHING 3
 #define KISSM_STAGE_PRUNING 4
 #define KISSM_STAGE_SOLVER 5
+#define KISSM_STAGE_REFINE 6
 
 typedef void (*kissm_log_fn)(void *user_data, int32_t level, const char *message);
 
@@ -117,6 +126,20 @@ typedef struct kissm_config {
     kissm_progress_fn progress_fn;
 
     void *progress_user_data;
+
+    int32_t refine_mode;
+
+    int32_t refine_max_iterations;
+
+    double refine_max_distance_gain;
+
+    double refine_kernel_gain;
+
+    double refine_rotation_epsilon;
+
+    double refine_translation_epsilon_gain;
+
+    double min_overlap;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
@@ -200,6 +223,24 @@ typedef struct kissm_result {
     double time_solver_ms;
 
     double time_total_ms;
+
+    double coarse_transform[16];
+
+    double information[36];
+
+    double overlap;
+
+    double refine_rmse;
+
+    double refine_condition;
+
+    double time_refine_ms;
+
+    uint64_t num_refine_correspondences;
+
+    int32_t refine_iterations;
+
+    int32_t refine_converged;
 } kissm_result;
 
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
@@ -217,6 +258,9 @@ int32_t kissm_register(kissm_matcher *matcher, const kissm_points *source, const
 
 void kissm_cancel(kissm_matcher *matcher);
 
+int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
+    const double initial_transform[16], kissm_result *result);
+
 typedef struct kissm_features kissm_features;
 
 int32_t kissm_features_compute(kissm_matcher *matcher, const kissm_points *cloud,
@@ -232,6 +276,10 @@ uint64_t kissm_features_num_keypoints(const kissm_features *features);
 
 int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source,
     const kissm_features *target, kissm_result *result);
+
+int32_t kissm_refine_features(kissm_matcher *matcher, const kissm_features *source,
+    const kissm_features *target, const double initial_transform[16],
+    kissm_result *result);
 
 #define KISSM_FORMAT_AUTO 0
 #define KISSM_FORMAT_PLY 1

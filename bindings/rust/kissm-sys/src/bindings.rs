@@ -30,10 +30,15 @@ pub const KISSM_REASON_TOO_FEW_CORRESPONDENCES: i32 = 3;
 pub const KISSM_REASON_SOLVER_FAILED: i32 = 4;
 pub const KISSM_REASON_TOO_FEW_INLIERS: i32 = 5;
 pub const KISSM_REASON_DEGENERATE: i32 = 6;
+pub const KISSM_REASON_LOW_OVERLAP: i32 = 7;
+pub const KISSM_REASON_UNCONSTRAINED: i32 = 8;
 pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
 pub const KISSM_VIEWPOINT_CLOUD_CENTER: i32 = 1;
+pub const KISSM_REFINE_NONE: i32 = 0;
+pub const KISSM_REFINE_GICP: i32 = 1;
+pub const KISSM_REFINE_POINT_TO_PLANE: i32 = 2;
 pub const KISSM_LOG_ERROR: i32 = 1;
 pub const KISSM_LOG_WARN: i32 = 2;
 pub const KISSM_LOG_INFO: i32 = 3;
@@ -43,6 +48,7 @@ pub const KISSM_STAGE_FEATURES: i32 = 2;
 pub const KISSM_STAGE_MATCHING: i32 = 3;
 pub const KISSM_STAGE_PRUNING: i32 = 4;
 pub const KISSM_STAGE_SOLVER: i32 = 5;
+pub const KISSM_STAGE_REFINE: i32 = 6;
 pub const KISSM_SCALAR_FLOAT32: i32 = 1;
 pub const KISSM_SCALAR_FLOAT64: i32 = 2;
 pub const KISSM_FORMAT_AUTO: i32 = 0;
@@ -105,7 +111,8 @@ pub type kissm_log_fn = ::core::option::Option<
         within long stages.
 
  Stages never go back within a call and fractions never decrease within a stage; the last call of a
- registration that ran to the end is (#KISSM_STAGE_SOLVER, 1.0).
+ registration that ran to the end is (#KISSM_STAGE_SOLVER, 1.0), or (#KISSM_STAGE_REFINE, 1.0) when it
+ refined its pose.
  @param[in] user_data kissm_config.progress_user_data, as given.
  @param[in] stage The KISSM_STAGE_* stage running.
  @param[in] fraction How much of that stage is done, in [0, 1].
@@ -166,10 +173,27 @@ pub struct kissm_config {
     pub progress_fn: kissm_progress_fn,
     /// Passed to progress_fn as it is.
     pub progress_user_data: *mut ::core::ffi::c_void,
+    /** KISSM_REFINE_*: refine the solver's pose on the voxelised clouds in the same call. kissm_refine()
+ uses this cost too (GICP when it is #KISSM_REFINE_NONE). Default #KISSM_REFINE_NONE.*/
+    pub refine_mode: i32,
+    /// Refinement iteration cap, 1..1000. Default 30.
+    pub refine_max_iterations: i32,
+    /** Refinement's correspondence distance, and kissm_result.overlap's, = gain * voxel_size; in (0, 100].
+ Default 3.0.*/
+    pub refine_max_distance_gain: f64,
+    /// Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]. Default 1.0.
+    pub refine_kernel_gain: f64,
+    /** Refinement has converged when a step turns the pose by less than this (radians) ...; in [0, 1].
+ Default 1e-4.*/
+    pub refine_rotation_epsilon: f64,
+    /// ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3.
+    pub refine_translation_epsilon_gain: f64,
+    /// With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0.
+    pub min_overlap: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 152usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 200usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -234,6 +258,27 @@ const _: () = {
     [
         "Offset of field: kissm_config::progress_user_data",
     ][::core::mem::offset_of!(kissm_config, progress_user_data) - 144usize];
+    [
+        "Offset of field: kissm_config::refine_mode",
+    ][::core::mem::offset_of!(kissm_config, refine_mode) - 152usize];
+    [
+        "Offset of field: kissm_config::refine_max_iterations",
+    ][::core::mem::offset_of!(kissm_config, refine_max_iterations) - 156usize];
+    [
+        "Offset of field: kissm_config::refine_max_distance_gain",
+    ][::core::mem::offset_of!(kissm_config, refine_max_distance_gain) - 160usize];
+    [
+        "Offset of field: kissm_config::refine_kernel_gain",
+    ][::core::mem::offset_of!(kissm_config, refine_kernel_gain) - 168usize];
+    [
+        "Offset of field: kissm_config::refine_rotation_epsilon",
+    ][::core::mem::offset_of!(kissm_config, refine_rotation_epsilon) - 176usize];
+    [
+        "Offset of field: kissm_config::refine_translation_epsilon_gain",
+    ][::core::mem::offset_of!(kissm_config, refine_translation_epsilon_gain) - 184usize];
+    [
+        "Offset of field: kissm_config::min_overlap",
+    ][::core::mem::offset_of!(kissm_config, min_overlap) - 192usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
@@ -313,12 +358,13 @@ impl Default for kissm_points {
     }
 }
 /** @brief What a registration call found: the pose, whether it can be trusted, and the counts and timings
-        of every stage. Always fully overwritten by kissm_register() and kissm_register_features().
+        of every stage. Always fully overwritten by kissm_register(), kissm_register_features(), kissm_refine()
+        and kissm_refine_features().
 
  The time_*_ms fields are wall-clock milliseconds per stage; time_total_ms is their sum. Stages not run
  are 0. Timings are the only fields that differ between identical calls.*/
 #[repr(C)]
-#[derive(Debug, Default, Copy, Clone)]
+#[derive(Debug, Copy, Clone)]
 pub struct kissm_result {
     /// Set by the caller to sizeof(kissm_result).
     pub struct_size: u32,
@@ -379,12 +425,39 @@ pub struct kissm_result {
     pub time_pruning_ms: f64,
     /// Wall-clock ms: GNC-TLS rotation, translation, inliers, validity (0 if not run).
     pub time_solver_ms: f64,
-    /// Sum of the stage times. Timings are the only fields that differ between identical calls.
+    /** Sum of the stage times (time_refine_ms included). Timings are the only fields that differ between
+ identical calls.*/
     pub time_total_ms: f64,
+    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform. transform is the
+ refined pose when refinement ran and this one otherwise. NaN when no pose was estimated.*/
+    pub coarse_transform: [f64; 16usize],
+    /** 6x6 information matrix of the refined pose, row-major, symmetric: the inverse covariance of the error
+ xi in T_true = T exp(xi), xi = (rotation [rad], translation [m]) in the source's frame (the perturbation
+ GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the refinement's
+ cost scaled by its residual variance: correspondences count as independent, so it is optimistic;
+ a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run.*/
+    pub information: [f64; 36usize],
+    /** Share of the source's voxels that the refined pose lays within the refinement's correspondence distance
+ of a target voxel, in [0, 1]. NaN when refinement did not run.*/
+    pub overlap: f64,
+    /** Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, metres). NaN
+ when refinement did not run or found no correspondence.*/
+    pub refine_rmse: f64,
+    /** Weakest over strongest direction of the information, with rotations as displacements at the matched
+ points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run.*/
+    pub refine_condition: f64,
+    /// Wall-clock ms: refinement (0 if not run).
+    pub time_refine_ms: f64,
+    /// Correspondences of the refinement at its final pose (0 if not run).
+    pub num_refine_correspondences: u64,
+    /// Refinement iterations run (0 if not run).
+    pub refine_iterations: i32,
+    /// 1 when refinement stopped on its convergence test rather than its iteration cap.
+    pub refine_converged: i32,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 440usize];
+    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 904usize];
     ["Alignment of kissm_result"][::core::mem::align_of::<kissm_result>() - 8usize];
     [
         "Offset of field: kissm_result::struct_size",
@@ -476,7 +549,43 @@ const _: () = {
     [
         "Offset of field: kissm_result::time_total_ms",
     ][::core::mem::offset_of!(kissm_result, time_total_ms) - 432usize];
+    [
+        "Offset of field: kissm_result::coarse_transform",
+    ][::core::mem::offset_of!(kissm_result, coarse_transform) - 440usize];
+    [
+        "Offset of field: kissm_result::information",
+    ][::core::mem::offset_of!(kissm_result, information) - 568usize];
+    [
+        "Offset of field: kissm_result::overlap",
+    ][::core::mem::offset_of!(kissm_result, overlap) - 856usize];
+    [
+        "Offset of field: kissm_result::refine_rmse",
+    ][::core::mem::offset_of!(kissm_result, refine_rmse) - 864usize];
+    [
+        "Offset of field: kissm_result::refine_condition",
+    ][::core::mem::offset_of!(kissm_result, refine_condition) - 872usize];
+    [
+        "Offset of field: kissm_result::time_refine_ms",
+    ][::core::mem::offset_of!(kissm_result, time_refine_ms) - 880usize];
+    [
+        "Offset of field: kissm_result::num_refine_correspondences",
+    ][::core::mem::offset_of!(kissm_result, num_refine_correspondences) - 888usize];
+    [
+        "Offset of field: kissm_result::refine_iterations",
+    ][::core::mem::offset_of!(kissm_result, refine_iterations) - 896usize];
+    [
+        "Offset of field: kissm_result::refine_converged",
+    ][::core::mem::offset_of!(kissm_result, refine_converged) - 900usize];
 };
+impl Default for kissm_result {
+    fn default() -> Self {
+        let mut s = ::core::mem::MaybeUninit::<Self>::uninit();
+        unsafe {
+            ::core::ptr::write_bytes(s.as_mut_ptr(), 0, 1);
+            s.assume_init()
+        }
+    }
+}
 extern "C" {
     /** @brief Prepares a result for a registration call: sets result->struct_size = struct_size and leaves the
         rest as a failed call does (valid = 0, reason #KISSM_REASON_NONE, counts 0, NaN pose).
@@ -563,6 +672,37 @@ extern "C" {
  @param[in] matcher The matcher; NULL is ignored.*/
     pub fn kissm_cancel(matcher: *mut kissm_matcher);
 }
+extern "C" {
+    /** @brief Fine registration from a known pose (tracking, re-localisation from a prior): voxelises both clouds,
+        estimates their normals and refines @p initial_transform with kissm_config.refine_mode (GICP when it
+        is #KISSM_REFINE_NONE). No descriptors, no global search.
+
+ result->coarse_transform is the initial transform; result->transform the refined pose; valid = 1 when the
+ refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. The result is
+ always fully overwritten.
+ @param[in,out] matcher The matcher (its settings; one call at a time).
+ @param[in] source The cloud to move; read during the call only.
+ @param[in] target The cloud it is registered against; read during the call only.
+ @param[in] initial_transform 4x4 row-major, p_target = R p_source + t: finite, R a rotation (orthonormal to
+            1e-3, det +1), last row (0, 0, 0, 1), |t| at most 1e9.
+ @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ @retval KISSM_OK The inputs were acceptable; result->valid says whether the refined pose can be trusted.
+ @retval KISSM_ERR_NULL_ARGUMENT A pointer argument, or source->data or target->data, is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p initial_transform is not finite or not rigid, or a kissm_points field
+         is out of range.
+ @retval KISSM_ERR_EMPTY_INPUT, KISSM_ERR_TOO_FEW_POINTS, KISSM_ERR_NONFINITE, KISSM_ERR_VOXEL_RANGE As
+         for kissm_register().
+ @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_refine(
+        matcher: *mut kissm_matcher,
+        source: *const kissm_points,
+        target: *const kissm_points,
+        initial_transform: *const f64,
+        result: *mut kissm_result,
+    ) -> i32;
+}
 /// @brief Immutable once created; may be used from several threads at once and outlive the matcher.
 #[repr(C)]
 #[derive(Debug)]
@@ -630,6 +770,33 @@ extern "C" {
         matcher: *mut kissm_matcher,
         source: *const kissm_features,
         target: *const kissm_features,
+        result: *mut kissm_result,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief kissm_refine() on described clouds: the same refined pose as kissm_refine() on the clouds the features
+        were computed from. Features computed with refinement enabled carry the index refinement searches, so
+        a map described once is not indexed again.
+
+ Voxelisation and feature times are reported as 0. The result is always fully overwritten.
+ @param[in,out] matcher The matcher (its settings; one call at a time).
+ @param[in] source Features of the cloud to move.
+ @param[in] target Features of the cloud it is registered against.
+ @param[in] initial_transform As for kissm_refine().
+ @param[in,out] result Its struct_size is read (sizeof(kissm_result)); then it is fully overwritten.
+ @retval KISSM_OK The inputs were acceptable; result->valid says whether the refined pose can be trusted.
+ @retval KISSM_ERR_NULL_ARGUMENT A pointer argument is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE result->struct_size is smaller than sizeof(kissm_result) or above 65536.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p initial_transform is not finite or not rigid.
+ @retval KISSM_ERR_FEATURES_MISMATCH Either was computed under a config whose descriptor parameters differ
+         from matcher's.
+ @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_refine_features(
+        matcher: *mut kissm_matcher,
+        source: *const kissm_features,
+        target: *const kissm_features,
+        initial_transform: *const f64,
         result: *mut kissm_result,
     ) -> i32;
 }

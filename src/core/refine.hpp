@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: MIT
+// Stage 6: fine registration of the voxelised clouds from a pose (the solver's, or the caller's prior), the
+// paper's "Proposed + G-ICP" row (Sec. IV, Table of KITTI results) done in the same call.
+//
+// Correspondences: each source voxel, moved by the current pose, to its nearest target voxel within
+// max_distance (PointIndex), both with a normal. Cost (Segal et al., "Generalized-ICP", RSS 2009):
+//   GICP:            r^2 = e^T (C_b + R C_a R^T)^-1 e,   e = b - (R a + t),
+//   point-to-plane:  r^2 = (n_b . e)^2,
+// where C = (n n^T + (I - n n^T) / eps) / 2 is the plane-regularised covariance of a voxel with normal n
+// (eps = 1e-3, as in the GICP paper), scaled so that for agreeing normals r is the distance to the plane in
+// metres in both modes. The normals are those of the features stage (radius normal_radius_gain * v): no
+// second neighbour search and no covariance of its own. Robust kernel: Cauchy weights w = 1 / (1 + r^2 / k^2)
+// recomputed at every iteration (IRLS). Each iteration solves the weighted Gauss-Newton system with
+// Levenberg-Marquardt damping (the step is kept only when it lowers the weighted cost of the iteration's
+// correspondences; otherwise the damping grows tenfold, up to 10 tries). Converged when a kept step turns
+// the pose by less than rotation_epsilon radians and moves it by less than translation_epsilon metres.
+//
+// Sums over correspondences run in fixed chunks added in chunk order (RunContext::map_fold), so the result is
+// the same for any thread count.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "cloud.hpp"
+#include "detail_namespace.hpp"
+#include "params.hpp"
+#include "point_index.hpp"
+#include "run_context.hpp"
+
+KISSM_DETAIL_BEGIN
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+struct RefineParams {
+    RefineMode mode = RefineMode::Gicp;
+    int max_iterations = 30;
+    double max_distance = 1.0;         // metres: correspondence gate and the overlap's distance
+    double kernel_scale = 0.3;         // metres: Cauchy k
+    double rotation_epsilon = 1e-4;    // radians
+    double translation_epsilon = 1e-3; // metres
+};
+
+// One cloud as refinement reads it: voxel points and normals in its local frame.
+struct RefineCloud {
+    const std::vector<Vec3f> *points = nullptr;
+    const Normals *normals = nullptr;
+};
+
+struct RefineOutput {
+    // Local frames: p_target_local = rotation * p_source_local + translation.
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+    int iterations = 0;
+    bool converged = false;
+    std::size_t num_correspondences = 0; // at the final pose
+    double weight_sum = 0.0;             // sum of the Cauchy weights at the final pose
+    double rmse = 0.0;                   // sqrt(sum w r^2 / sum w) at the final pose, metres
+    double overlap = 0.0;                // share of source voxels with a target voxel within max_distance
+    // How well the correspondences pin the pose down in its weakest direction: the smallest over the largest
+    // eigenvalue of the information with rotations turned into displacements at the matched points' RMS
+    // radius about their centroid (1 = every direction alike, 0 = a direction the data leaves free).
+    double condition = 0.0;
+    // Gauss-Newton information sum w J^T M J at the final pose, for the right perturbation
+    // T exp(xi), xi = (rotation, translation), in the source's local frame; not yet scaled by the residual
+    // variance (information_in_caller_frame does that).
+    Matrix6d hessian = Matrix6d::Zero();
+};
+
+// Refines (R0, t0) (local frames). `target_index` indexes target.points. Needs nothing but the clouds: a
+// source with no normal anywhere simply finds no correspondence.
+RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, const PointIndex &target_index,
+                         const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0, const RefineParams &params,
+                         RunContext &ctx);
+
+// The information matrix of the pose in the callers' frames, rotation then translation, for the right
+// perturbation T exp(xi) (GTSAM's Pose3 convention; g2o's with its blocks swapped): the Gauss-Newton
+// information of refine_pose moved from the source's local frame (origin `source_origin` in the caller's
+// frame) and divided by the residual variance sum w r^2 / (sum w - 6), floored at (1e-3 * floor_length)^2.
+Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
+                                     double floor_length);
+
+// Aligned overlap alone: the share of source points that (R, t) lays within max_distance of a target point.
+double aligned_overlap(const std::vector<Vec3f> &source, const PointIndex &target_index, const Eigen::Matrix3d &R,
+                       const Eigen::Vector3d &t, double max_distance, RunContext &ctx);
+
+KISSM_DETAIL_END
