@@ -1,11 +1,14 @@
 /* SPDX-License-Identifier: MIT */
-/* Cross-language round trip, C side. Registers the clouds of tests/data (made by
- * tools/make_roundtrip_data.py) as listed in tests/data/golden.json and requires the result to equal the
- * golden values bit for bit: the transform (doubles printed with %.17g, so they parse back exactly),
- * validity, reason and every count. The Python and Rust suites check the same file, so the three
- * languages agree with each other through it. Each case also runs at 2 and 4 threads.
+/* Cross-language round trip, C side. Registers (kissm_register) or refines (kissm_refine, from the case's
+ * "initial_transform") the clouds of tests/data (made by tools/make_roundtrip_data.py) as listed in
+ * tests/data/golden.json, with the case's "refine" mode, and requires the result to equal the golden values
+ * bit for bit: the transforms, the information matrix and every double (printed with %.17g, so they parse
+ * back exactly; NaN is written as null), validity, reason and every count. The Python and Rust suites check
+ * the same file, so the three languages agree with each other through it. Each case also runs at 2 and 4
+ * threads.
  *
  * With --write, prints a fresh golden.json to stdout instead (tests/data/update_golden.sh). */
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,17 +22,58 @@ typedef struct {
     const char *name;
     int32_t scalar_type;
     double voxel_size;
+    int32_t refine_mode; /* KISSM_REFINE_* */
+    int is_refine_call;  /* kissm_refine from initial_transform() instead of kissm_register */
 } golden_case;
 
 static const golden_case kCases[] = {
-    {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25},
-    {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3},
+    {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0},
+    {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0},
+    {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0},
+    {"yard_float32_v0.3_point_to_plane", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_POINT_TO_PLANE, 0},
+    {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1},
 };
+
+static const char *refine_name(int32_t mode) {
+    return mode == KISSM_REFINE_GICP ? "gicp" : mode == KISSM_REFINE_POINT_TO_PLANE ? "point_to_plane" : "none";
+}
 
 #define NUM_CASES (sizeof(kCases) / sizeof(kCases[0]))
 
 static char g_dir[4096];
 
+/* The refine cases' start: the ground truth of tests/data turned by 3 degrees about z and moved by
+ * (0.2, -0.15, 0.05), as a tracking prior would be off. */
+static int initial_transform(double out[16]) {
+    char path[4200];
+    FILE *f;
+    double gt[16];
+    const double a = 3.0 * 3.14159265358979323846 / 180.0, c = cos(a), s = sin(a);
+    const double turn[9] = {c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0}, shift[3] = {0.2, -0.15, 0.05};
+    int i, j, k;
+    char line[512];
+    snprintf(path, sizeof path, "%s/roundtrip_ground_truth.txt", g_dir);
+    f = fopen(path, "r");
+    if (!f) return -1;
+    for (i = 0; i < 4;) {
+        if (!fgets(line, sizeof line, f)) break;
+        if (line[0] == '#') continue;
+        if (sscanf(line, "%lf %lf %lf %lf", &gt[4 * i], &gt[4 * i + 1], &gt[4 * i + 2], &gt[4 * i + 3]) != 4) break;
+        ++i;
+    }
+    fclose(f);
+    if (i != 4) return -1;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 4; ++j) {
+            double v = 0.0;
+            for (k = 0; k < 3; ++k) v += turn[3 * i + k] * gt[4 * k + j];
+            out[4 * i + j] = v + (j == 3 ? shift[i] : 0.0);
+        }
+    }
+    out[12] = out[13] = out[14] = 0.0;
+    out[15] = 1.0;
+    return 0;
+}
 static int run_case(const golden_case *gc, int32_t threads, kissm_result *result) {
     char src_path[4200], tgt_path[4200];
     kissm_cloud *src = NULL, *tgt = NULL;
@@ -61,9 +105,15 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     kissm_config_init(&config, sizeof config);
     config.voxel_size = gc->voxel_size;
     config.num_threads = threads;
+    config.refine_mode = gc->refine_mode;
     result->struct_size = sizeof *result;
     status = kissm_create(&config, &matcher);
-    if (status == KISSM_OK) status = kissm_register(matcher, &sp, &tp, result);
+    if (status == KISSM_OK && gc->is_refine_call) {
+        double initial[16];
+        status = initial_transform(initial) == 0 ? kissm_refine(matcher, &sp, &tp, initial, result) : KISSM_ERR_IO;
+    } else if (status == KISSM_OK) {
+        status = kissm_register(matcher, &sp, &tp, result);
+    }
     if (status != KISSM_OK) fprintf(stderr, "%s: %s\n", gc->name, kissm_last_error_message());
     kissm_destroy(matcher);
     kissm_cloud_destroy(src);
@@ -79,8 +129,48 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
 #define COUNT_FIELDS(X)                                                                                \
     X(num_source_points) X(num_target_points) X(num_source_voxels) X(num_target_voxels)              \
     X(num_source_keypoints) X(num_target_keypoints) X(num_initial_correspondences)                   \
-    X(num_pruned_correspondences) X(num_rotation_inliers) X(num_final_inliers) X(max_core_number)
+    X(num_pruned_correspondences) X(num_rotation_inliers) X(num_final_inliers) X(max_core_number)    \
+    X(num_refine_correspondences) X(refine_iterations) X(refine_converged)
+/* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
+#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition)
+#define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36)
 /* clang-format on */
+
+static void print_double(double v) {
+    if (v != v)
+        printf("null");
+    else
+        printf("%.17g", v);
+}
+
+static void print_array(const char *name, const double *v, int n) {
+    int i;
+    printf("      \"%s\": [", name);
+    for (i = 0; i < n; ++i) {
+        printf("%s", i ? ", " : "");
+        print_double(v[i]);
+    }
+    printf("],\n");
+}
+
+/* Parses a golden number or null (NaN) at *p and moves *p past it and its separator. */
+static double parse_double(const char **p) {
+    double v;
+    char *next;
+    *p += strspn(*p, " \t\r\n");
+    if (strncmp(*p, "null", 4) == 0) {
+        *p += 4;
+        v = nan("");
+    } else {
+        v = strtod(*p, &next);
+        *p = next;
+    }
+    *p += strspn(*p, ", ");
+    return v;
+}
+
+/* Bit for bit, or both NaN. */
+static int same_double(double a, double b) { return (a != a && b != b) || memcmp(&a, &b, sizeof a) == 0; }
 
 static void write_golden(void) {
     size_t c;
@@ -90,18 +180,27 @@ static void write_golden(void) {
     printf("  \"num_threads\": 1,\n  \"cases\": [\n");
     for (c = 0; c < NUM_CASES; ++c) {
         kissm_result r;
-        int i;
         if (run_case(&kCases[c], 1, &r) != 0) exit(1);
         printf("    {\n      \"name\": \"%s\",\n", kCases[c].name);
+        printf("      \"call\": \"%s\",\n", kCases[c].is_refine_call ? "refine" : "register");
+        printf("      \"refine\": \"%s\",\n", refine_name(kCases[c].refine_mode));
         printf("      \"scalar\": \"%s\",\n", kCases[c].scalar_type == KISSM_SCALAR_FLOAT32 ? "float32" : "float64");
         printf("      \"voxel_size\": %.17g,\n", kCases[c].voxel_size);
+        if (kCases[c].is_refine_call) {
+            double initial[16];
+            if (initial_transform(initial) != 0) exit(1);
+            print_array("initial_transform", initial, 16);
+        }
         printf("      \"valid\": %d,\n      \"reason\": %d,\n", r.valid, r.reason);
-        printf("      \"transform\": [");
-        for (i = 0; i < 16; ++i) printf("%s%.17g", i ? ", " : "", r.transform[i]);
-        printf("],\n");
+#define PRINT_ARRAY(f, n) print_array(#f, r.f, n);
+        ARRAY_FIELDS(PRINT_ARRAY)
 #define PRINT_COUNT(f) printf("      \"" #f "\": %llu,\n", (unsigned long long)r.f);
-        COUNT_FIELDS(PRINT_COUNT)
-        printf("      \"residual_rms\": %.17g\n    }%s\n", r.residual_rms, c + 1 < NUM_CASES ? "," : "");
+        COUNT_FIELDS(PRINT_COUNT) {
+            const char *sep = "";
+#define PRINT_SCALAR(f) printf("%s      \"" #f "\": ", sep), print_double(r.f), sep = ",\n";
+            SCALAR_FIELDS(PRINT_SCALAR)
+        }
+        printf("\n    }%s\n", c + 1 < NUM_CASES ? "," : "");
     }
     printf("  ]\n}\n");
 }
@@ -134,34 +233,33 @@ static void check_case(const char *text, const golden_case *gc) {
     for (t = 0; t < sizeof threads / sizeof threads[0]; ++t) {
         kissm_result r;
         int i;
-        char *next;
         REQUIRE(run_case(gc, threads[t], &r) == 0);
         v = value_of(begin, end, "valid");
         CHECK(v && strtol(v, NULL, 10) == r.valid);
         v = value_of(begin, end, "reason");
         CHECK(v && strtol(v, NULL, 10) == r.reason);
-        v = value_of(begin, end, "transform");
-        REQUIRE(v != NULL);
-        v = strchr(v, '[') + 1;
-        for (i = 0; i < 16; ++i) {
-            const double expect = strtod(v, &next);
-            CHECK_MSG(memcmp(&expect, &r.transform[i], sizeof(double)) == 0,
-                      "%s threads %d transform[%d]: %.17g vs %.17g", gc->name, (int)threads[t], i, expect,
-                      r.transform[i]);
-            v = next + strspn(next, ", ");
-        }
+#define CHECK_ARRAY(f, n)                                                                                              \
+  v = value_of(begin, end, #f);                                                                                        \
+  REQUIRE(v != NULL);                                                                                                  \
+  v = strchr(v, '[') + 1;                                                                                              \
+  for (i = 0; i < (n); ++i) {                                                                                          \
+    const double expect = parse_double(&v);                                                                            \
+    CHECK_MSG(same_double(expect, r.f[i]), "%s threads %d " #f "[%d]: %.17g vs %.17g", gc->name, (int)threads[t], i,   \
+              expect, r.f[i]);                                                                                         \
+  }
+        ARRAY_FIELDS(CHECK_ARRAY)
 /* clang-format off */
 #define CHECK_COUNT(f)                                                                                 \
     v = value_of(begin, end, #f);                                                                      \
-    CHECK_MSG(v && strtoull(v, NULL, 10) == r.f, "%s threads %d: " #f " %llu", gc->name, (int)threads[t], \
+    CHECK_MSG(v && strtoull(v, NULL, 10) == (unsigned long long)r.f, "%s threads %d: " #f " %llu", gc->name, (int)threads[t], \
               (unsigned long long)r.f);
         /* clang-format on */
         COUNT_FIELDS(CHECK_COUNT)
-        v = value_of(begin, end, "residual_rms");
-        {
-            const double expect = v ? strtod(v, NULL) : -1.0;
-            CHECK(v && memcmp(&expect, &r.residual_rms, sizeof(double)) == 0);
-        }
+#define CHECK_SCALAR(f)                                                                                                \
+  v = value_of(begin, end, #f);                                                                                        \
+  REQUIRE(v != NULL);                                                                                                  \
+  CHECK_MSG(same_double(parse_double(&v), r.f), "%s threads %d: " #f " %.17g", gc->name, (int)threads[t], r.f);
+        SCALAR_FIELDS(CHECK_SCALAR)
     }
     fprintf(stderr, "%s: matches golden.json at 1, 2 and 4 threads\n", gc->name);
 }
