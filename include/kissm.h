@@ -158,6 +158,12 @@ KISSM_API const char *kissm_last_error_message(void);
 /** Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
  * kissm_result.refine_condition and kissm_result.information. */
 #define KISSM_REASON_UNCONSTRAINED 8
+/** Without refinement: the inliers pin the rotation down no better than kissm_config.max_rotation_uncertainty
+ * (kissm_result.rotation_uncertainty): too few of them, or all on one compact object. */
+#define KISSM_REASON_UNCERTAIN_ROTATION 9
+/** With refinement: the inliers cover less than kissm_config.min_inlier_coverage of the aligned overlap
+ * (kissm_result.inlier_coverage): one object may match itself in several poses. */
+#define KISSM_REASON_CLUSTERED_INLIERS 10
 
 /**
  * @brief Describes a reason code.
@@ -306,8 +312,18 @@ typedef struct kissm_config {
     double refine_rotation_epsilon;
     /** ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3. */
     double refine_translation_epsilon_gain;
-    /** With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0. */
+    /** Without refinement, valid needs kissm_result.rotation_uncertainty <= this (radians); in (0, 3.15].
+     * Default 0.0349 (2 degrees). */
+    double max_rotation_uncertainty;
+    /** With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0.2. */
     double min_overlap;
+    /** With refinement, valid needs kissm_result.inlier_coverage >= this; in [0, 1]. Default 0.25. */
+    double min_inlier_coverage;
+    /** With refinement, valid needs at least this many final inliers (min_inliers applies without
+     * refinement); 3..100000. Default 10. */
+    int32_t refine_min_inliers;
+    /** Must be 0. */
+    int32_t reserved1;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -453,8 +469,9 @@ typedef struct kissm_result {
      * identical calls. */
     double time_total_ms;
 
-    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform. transform is the
-     * refined pose when refinement ran and this one otherwise. NaN when no pose was estimated. */
+    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform with its rotation
+     * block made exactly rigid (the nearest rotation). transform is the refined pose when refinement ran and this
+     * one otherwise. NaN when no pose was estimated. */
     double coarse_transform[16];
     /** 6x6 information matrix of the refined pose, row-major, symmetric: the inverse covariance of the error
      * xi in T_true = T exp(xi), xi = (rotation [rad], translation [m]) in the source's frame (the perturbation
@@ -471,6 +488,13 @@ typedef struct kissm_result {
     /** Weakest over strongest direction of the information, with rotations as displacements at the matched
      * points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run. */
     double refine_condition;
+    /** 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off by
+     * the noise bound: noise_bound / sqrt(N (e1^2 + e2^2)) with e1, e2 the two smaller inlier_extent values.
+     * Infinite without inliers; NaN when no pose was estimated. */
+    double rotation_uncertainty;
+    /** Principal standard deviation of the inliers over that of the source voxels the refined pose overlaps:
+     * how much of the overlap the solver's matches span. NaN unless a registration was refined. */
+    double inlier_coverage;
     /** Wall-clock ms: refinement (0 if not run). */
     double time_refine_ms;
     /** Correspondences of the refinement at its final pose (0 if not run). */
@@ -577,8 +601,9 @@ KISSM_API void kissm_cancel(kissm_matcher *matcher);
  *        is #KISSM_REFINE_NONE). No descriptors, no global search.
  *
  * result->coarse_transform is the initial transform; result->transform the refined pose; valid = 1 when the
- * refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. The result is
- * always fully overwritten.
+ * refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. Keypoint counts
+ * are 0 (no descriptors are computed) and time_features_ms is the time of the normals. The result is always
+ * fully overwritten.
  * @param[in,out] matcher The matcher (its settings; one call at a time).
  * @param[in] source The cloud to move; read during the call only.
  * @param[in] target The cloud it is registered against; read during the call only.

@@ -247,19 +247,25 @@ private:
         Ad.bottomRightCorner<3, 3>() = R;
         out.hessian = Ad.transpose() * H * Ad;
         out.hessian = 0.5 * (out.hessian + out.hessian.transpose()).eval();
-        out.condition = condition(pairs, out.hessian);
+        // Centroid and covariance of the matched source voxels: the aligned overlap's extent.
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();
+        for (const Pair &p : pairs) c += src_[p.source].cast<double>();
+        c /= static_cast<double>(pairs.size());
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (const Pair &p : pairs) {
+            const Eigen::Vector3d d = src_[p.source].cast<double>() - c;
+            cov.noalias() += d * d.transpose();
+        }
+        cov /= static_cast<double>(pairs.size());
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov, Eigen::EigenvaluesOnly);
+        out.overlap_spread = std::sqrt(std::max(0.0, es.eigenvalues()[2]));
+        out.condition = condition(c, std::sqrt(std::max(0.0, cov.trace())), out.hessian);
     }
 
     // Moves the information's rotation centre to the matched source points' centroid c (xi_local =
     // [[I, 0], [[c]x, I]] xi_c) and scales rotations by their RMS radius L, so that all six directions are
     // displacements in metres; then the ratio of the extreme eigenvalues.
-    double condition(const std::vector<Pair> &pairs, const Matrix6d &H) const {
-        Eigen::Vector3d c = Eigen::Vector3d::Zero();
-        for (const Pair &p : pairs) c += src_[p.source].cast<double>();
-        c /= static_cast<double>(pairs.size());
-        double sq = 0.0;
-        for (const Pair &p : pairs) sq += (src_[p.source].cast<double>() - c).squaredNorm();
-        const double L = std::sqrt(sq / static_cast<double>(pairs.size()));
+    static double condition(const Eigen::Vector3d &c, double L, const Matrix6d &H) {
         if (!(L > 0.0)) return 0.0;
         Matrix6d Ad = Matrix6d::Identity();
         Ad.bottomLeftCorner<3, 3>() = skew(c);

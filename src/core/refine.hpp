@@ -62,6 +62,9 @@ struct RefineOutput {
     // eigenvalue of the information with rotations turned into displacements at the matched points' RMS
     // radius about their centroid (1 = every direction alike, 0 = a direction the data leaves free).
     double condition = 0.0;
+    // Standard deviation of the matched source voxels along their principal axis (metres): how far the aligned
+    // overlap extends, against which the solver's inliers are measured (validity.hpp, inlier coverage).
+    double overlap_spread = 0.0;
     // Gauss-Newton information sum w J^T M J at the final pose, for the right perturbation
     // T exp(xi), xi = (rotation, translation), in the source's local frame; not yet scaled by the residual
     // variance (information_in_caller_frame does that).
