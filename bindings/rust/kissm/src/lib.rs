@@ -65,6 +65,9 @@
 //!
 //! - **Input**: `&[[f32; 3]]`, `&[[f64; 3]]`, their `Vec`s, strided flat slices ([`PointsView`]) and
 //!   files ([`read_points`]), without copies; anything implementing [`AsPoints`].
+//! - **Refinement**: [`Config::refine_mode`] refines the global pose with GICP or point-to-plane ICP in
+//!   the same call, and [`Matcher::refine`] refines a known pose; [`Registration::refinement`] then holds
+//!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose.
 //! - **Results** are bitwise identical to the C library's (and the `kissm` tool's) on the same input,
 //!   whatever the thread count and whether the matcher is fresh or reused.
 //! - **Errors**: every failure is an [`Error`] with the C status code and the library's message naming
@@ -90,11 +93,11 @@ use kissm_sys as sys;
 
 #[allow(deprecated)] // the former name, kept as an alias
 pub use config::NonfinitePolicy;
-pub use config::{Config, ConfigBuilder, NonFinitePolicy, Viewpoint};
+pub use config::{Config, ConfigBuilder, NonFinitePolicy, RefineMode, Viewpoint};
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher};
 pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};
-pub use registration::{Counts, Reason, Registration, Timings};
+pub use registration::{Counts, Reason, Refinement, Registration, Timings};
 
 /// Fewest points a cloud may have; smaller clouds fail with [`ErrorKind::TooFewPoints`].
 pub const MIN_POINTS: usize = sys::KISSM_MIN_POINTS as usize;
