@@ -125,6 +125,22 @@ int32_t parse_format(const std::string &option, const std::string &text) {
 
 const char *format_names() { return "auto, ply, pcd, kitti_bin, bin_xyz, npy or xyz"; }
 
+int32_t parse_refine_mode(const std::string &option, const std::string &text) {
+    if (text == "none") return KISSM_REFINE_NONE;
+    if (text == "gicp") return KISSM_REFINE_GICP;
+    if (text == "point-to-plane" || text == "point_to_plane") return KISSM_REFINE_POINT_TO_PLANE;
+    throw UsageError(option + ": unknown refinement '" + one_line(text) + "' (expected gicp, point-to-plane or none)");
+}
+
+const char *refine_mode_name(int32_t mode) {
+    switch (mode) {
+    case KISSM_REFINE_NONE: return "none";
+    case KISSM_REFINE_GICP: return "gicp";
+    case KISSM_REFINE_POINT_TO_PLANE: return "point-to-plane";
+    default: return "unknown";
+    }
+}
+
 std::string one_line(const std::string &text) {
     std::string out = text;
     for (char &c : out) {
