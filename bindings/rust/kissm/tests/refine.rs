@@ -10,17 +10,11 @@
 
 mod common;
 
-use common::{scene, Pose, SCENE_VOXEL};
+use common::{perturbed, scene, Pose, SCENE_VOXEL};
 use kissm::{Config, ErrorKind, Matcher, Reason, RefineMode, Registration};
 
 fn config(mode: RefineMode, threads: usize) -> Config {
     Config::builder().voxel_size(SCENE_VOXEL).num_threads(threads).refine_mode(mode).build().unwrap()
-}
-
-/// The ground truth turned by 3 degrees about a tilted axis and moved by 0.3 (a little over a voxel): a
-/// prior such as odometry gives.
-fn perturbed(truth: &Pose) -> Pose {
-    Pose::axis_angle([0.2, -0.3, 1.0], 3.0, [0.2, -0.15, 0.17]).compose(truth)
 }
 
 /// Pose error (degrees, units) of a 4 x 4 transform against the truth, as one number for comparisons:
