@@ -390,14 +390,8 @@ fn nonfinite_points_are_dropped_and_counted() {
 
 #[test]
 fn degenerate_input_is_invalid_not_an_error() {
-    // A flat, featureless plane (a 71 x 71 grid, 0.14 apart, nudged by a fixed formula so it is not a
-    // perfect lattice): accepted, but no trustworthy pose.
-    let plane: Vec<[f64; 3]> = (0..71 * 71)
-        .map(|i| {
-            let (x, y) = ((i % 71) as f64, (i / 71) as f64);
-            [-5.0 + 0.14 * x + 0.03 * (1.7 * y).sin(), -5.0 + 0.14 * y + 0.03 * (2.3 * x).cos(), 0.0]
-        })
-        .collect();
+    // A flat, featureless plane: accepted, but no trustworthy pose.
+    let plane = common::flat_plane();
     let mut m = Matcher::with_voxel_size(0.3).unwrap();
     let reg = m.register(&plane, &plane).expect("well-formed input is not an error");
     assert!(!reg.valid);

@@ -232,14 +232,8 @@ fn low_overlap_makes_a_refined_pose_invalid() {
 
 #[test]
 fn a_plane_leaves_the_refined_pose_unconstrained() {
-    // A flat, gently rippled plane (a 71 x 71 grid 0.14 apart, by a fixed formula) against itself: the
-    // in-plane translations and the rotation about the normal are free.
-    let plane: Vec<[f64; 3]> = (0..71 * 71)
-        .map(|i| {
-            let (x, y) = ((i % 71) as f64, (i / 71) as f64);
-            [-5.0 + 0.14 * x + 0.03 * (1.7 * y).sin(), -5.0 + 0.14 * y + 0.03 * (2.3 * x).cos(), 0.0]
-        })
-        .collect();
+    // A flat plane against itself: the in-plane translations and the rotation about the normal are free.
+    let plane = common::flat_plane();
     let identity = Pose::axis_angle([0.0, 0.0, 1.0], 0.0, [0.0; 3]).to_matrix();
     let config = Config::builder().voxel_size(0.3).num_threads(2).build().unwrap();
     let reg = Matcher::new(&config).unwrap().refine(&plane, &plane, &identity).unwrap();

@@ -213,6 +213,17 @@ pub fn perturbed(truth: &Pose) -> Pose {
     Pose::axis_angle([0.2, -0.3, 1.0], 3.0, [0.2, -0.15, 0.17]).compose(truth)
 }
 
+/// A flat, featureless plane z = 0: a 71 x 71 grid 0.14 apart, nudged within the plane by a fixed formula
+/// so that it is not a perfect lattice.
+pub fn flat_plane() -> Vec<[f64; 3]> {
+    (0..71 * 71)
+        .map(|i| {
+            let (x, y) = ((i % 71) as f64, (i / 71) as f64);
+            [-5.0 + 0.14 * x + 0.03 * (1.7 * y).sin(), -5.0 + 0.14 * y + 0.03 * (2.3 * x).cos(), 0.0]
+        })
+        .collect()
+}
+
 /// `points` moved by `pose`.
 pub fn moved(points: &[[f64; 3]], pose: &Pose) -> Vec<[f64; 3]> {
     points.iter().map(|&p| pose.apply(p)).collect()
