@@ -435,8 +435,8 @@ impl ConfigBuilder {
         self.raw.refine_translation_epsilon_gain = gain;
         self
     }
-    /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this;
-    /// in [0, 1] (default: the library's; refined poses below it get [`Reason::LowOverlap`](crate::Reason::LowOverlap)).
+    /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this
+    /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default: the library's).
     pub fn min_overlap(mut self, overlap: f64) -> Self {
         self.raw.min_overlap = overlap;
         self

@@ -187,9 +187,10 @@ pub struct Registration {
     pub rotation: [[f64; 3]; 3],
     /// The translation `t`.
     pub translation: [f64; 3],
-    /// The global solver's pose, `coarse_transform[row][col]`; for [`Matcher::refine`](crate::Matcher::refine)
-    /// the initial transform (its rotation block made exactly rigid: the nearest rotation). [`transform`](Registration::transform) is the refined
-    /// pose when refinement ran and equals this one otherwise. NaN when no pose was estimated.
+    /// The global solver's pose, `coarse_transform[row][col]`; for
+    /// [`Matcher::refine`](crate::Matcher::refine) the initial transform (its rotation block made exactly
+    /// rigid: the nearest rotation). [`transform`](Registration::transform) is the refined pose when
+    /// refinement ran and equals this one otherwise. NaN when no pose was estimated.
     pub coarse_transform: [[f64; 4]; 4],
     /// What the fine registration found: `Some` exactly when refinement ran (see
     /// [`Config::refine_mode`](crate::Config::refine_mode) and [`Matcher::refine`](crate::Matcher::refine)).
