@@ -359,8 +359,8 @@ void print_refinement_help(std::FILE *out, PairCommand command, const kissm_conf
                  "  --refine-iterations N   iteration cap, 1..1000 (default %d)\n"
                  "  --refine-distance GAIN  correspondence distance = GAIN * voxel, in (0, 100] (default %g); also\n"
                  "                          the distance within which a source voxel counts as overlapping\n"
-                 "  --min-overlap X         a valid refined pose needs this share of the source's voxels within\n"
-                 "                          that distance of the target, in [0, 1] (default %g)\n"
+                 "  --min-overlap X         least overlap of a valid refined pose, in [0, 1] (default %g): the\n"
+                 "                          share of the source's voxels within that distance of the target\n"
                  "\n",
                  d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap);
 }
