@@ -974,33 +974,27 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "cannot create %s: %s\n", g_work.c_str(), ec.message().c_str());
         return 2;
     }
-    if (which == "usage") {
-        RUN_TEST(test_usage);
-    } else if (which == "errors") {
-        RUN_TEST(test_errors);
-    } else if (which == "malformed") {
-        RUN_TEST(test_malformed);
-    } else if (which == "demo") {
-        RUN_TEST(test_demo);
-    } else if (which == "json") {
-        RUN_TEST(test_json);
-    } else if (which == "threads") {
-        RUN_TEST(test_threads);
-    } else if (which == "realdata") {
-        return test_realdata();
-    } else if (which == "refine_options") {
-        RUN_TEST(test_refine_options);
-    } else if (which == "refine_register") {
-        RUN_TEST(test_refine_register);
-    } else if (which == "refine_command") {
-        RUN_TEST(test_refine_command);
-    } else if (which == "refine_initial") {
-        RUN_TEST(test_refine_initial);
-    } else if (which == "refine_roundtrip") {
-        RUN_TEST(test_refine_roundtrip);
-    } else {
-        std::fprintf(stderr, "unknown case '%s'\n", which.c_str());
-        return 2;
+    if (which == "realdata") return test_realdata(); // 77 when the data is absent
+    const struct {
+        const char *name;
+        void (*run)();
+    } cases[] = {{"usage", test_usage},
+                 {"errors", test_errors},
+                 {"malformed", test_malformed},
+                 {"demo", test_demo},
+                 {"json", test_json},
+                 {"threads", test_threads},
+                 {"refine_options", test_refine_options},
+                 {"refine_register", test_refine_register},
+                 {"refine_command", test_refine_command},
+                 {"refine_initial", test_refine_initial},
+                 {"refine_roundtrip", test_refine_roundtrip}};
+    for (const auto &c : cases) {
+        if (which != c.name) continue;
+        c.run();
+        std::fprintf(stderr, "%s %s\n", harness_failed ? "[FAIL]" : "[ ok ]", c.name);
+        return TEST_SUMMARY();
     }
-    return TEST_SUMMARY();
+    std::fprintf(stderr, "unknown case '%s'\n", which.c_str());
+    return 2;
 }
