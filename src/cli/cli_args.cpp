@@ -51,6 +51,13 @@ void ArgCursor::expect_no_value() const {
     if (has_inline_value_) throw UsageError(name_ + " takes no value");
 }
 
+bool ArgCursor::take_flag(const char *name, bool *flag, const char *alias) const {
+    if (!is_option_ || (name_ != name && (alias == nullptr || name_ != alias))) return false;
+    expect_no_value();
+    *flag = true;
+    return true;
+}
+
 void ArgCursor::unknown() const {
     throw UsageError("unknown option '" + name_ + "' for 'kissm " + command_ + "' (see 'kissm " + command_ +
                      " --help')");

@@ -35,6 +35,9 @@ public:
     std::string value();
     // For flags: rejects "--flag=value".
     void expect_no_value() const;
+    // When the current option is the flag `name` (or its short form `alias`): rejects a value, sets *flag
+    // and returns true.
+    bool take_flag(const char *name, bool *flag, const char *alias = nullptr) const;
     [[noreturn]] void unknown() const;
 
 private:

@@ -125,13 +125,7 @@ int run_demo(const std::vector<std::string> &args) {
             opt.voxel = parse_positive(name, cur.value());
         } else if (name == "--refine") {
             opt.refine_mode = parse_refine_mode(name, cur.value());
-        } else if (name == "--json") {
-            cur.expect_no_value();
-            opt.json = true;
-        } else if (name == "-v" || name == "--verbose") {
-            cur.expect_no_value();
-            opt.verbose = true;
-        } else {
+        } else if (!cur.take_flag("--json", &opt.json) && !cur.take_flag("--verbose", &opt.verbose, "-v")) {
             cur.unknown();
         }
     }

@@ -119,7 +119,7 @@ void write_outputs(PairCommand command, const PairOptions &opt, const kissm_clou
     }
     pic.figure.notes.push_back(note);
     if (refined) {
-        std::snprintf(note, sizeof note, "REFINEMENT MOVED THE %s POSE BY %.3f DEG, %.3g; OVERLAP %.3f",
+        std::snprintf(note, sizeof note, "REFINEMENT MOVED THE %s POSE BY %.3f DEG, %.3g. OVERLAP %.3f",
                       from_initial ? "INITIAL" : "COARSE",
                       rotation_error_deg(result.coarse_transform, result.transform),
                       translation_error(result.coarse_transform, result.transform), result.overlap);
@@ -172,6 +172,12 @@ void print_human(PairCommand command, const PairOptions &opt, const kissm_result
 
 } // namespace
 
+int run_pair_command(PairCommand command, const std::vector<std::string> &args) {
+    PairOptions opt;
+    if (!parse_pair_options(command, args, &opt)) return kExitOk;
+    return run_pair(command, opt);
+}
+
 bool parse_pair_options(PairCommand command, const std::vector<std::string> &args, PairOptions *out) {
     const bool is_register = command == PairCommand::Register;
     PairOptions opt;
@@ -220,25 +226,15 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
             opt.target_format = parse_format(name, cur.value());
         } else if (name == "--format") {
             opt.source_format = opt.target_format = parse_format(name, cur.value());
-        } else if (name == "--drop-nonfinite") {
-            cur.expect_no_value();
-            opt.drop_nonfinite = true;
-        } else if (name == "--viewpoint-center") {
-            cur.expect_no_value();
-            opt.viewpoint_center = true;
-        } else if (name == "--json") {
-            cur.expect_no_value();
-            opt.json = true;
-        } else if (name == "-v" || name == "--verbose") {
-            cur.expect_no_value();
-            opt.verbose = true;
         } else if (name == "--out-transform") {
             opt.out_transform = cur.value();
         } else if (name == "--out-aligned") {
             opt.out_aligned = cur.value();
         } else if (name == "--out-topview") {
             opt.out_topview = cur.value();
-        } else {
+        } else if (!cur.take_flag("--drop-nonfinite", &opt.drop_nonfinite) &&
+                   !cur.take_flag("--viewpoint-center", &opt.viewpoint_center) && !cur.take_flag("--json", &opt.json) &&
+                   !cur.take_flag("--verbose", &opt.verbose, "-v")) {
             cur.unknown();
         }
     }
@@ -261,10 +257,15 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
     return true;
 }
 
-kissm_config pair_config(PairCommand command, const PairOptions &opt) {
+kissm_config config_defaults() {
     kissm_config config{};
-    int32_t status = kissm_config_init(&config, sizeof config);
+    const int32_t status = kissm_config_init(&config, sizeof config);
     if (status != KISSM_OK) throw UsageError("cannot initialise the configuration: " + library_error(status));
+    return config;
+}
+
+kissm_config pair_config(PairCommand command, const PairOptions &opt) {
+    kissm_config config = config_defaults();
     config.voxel_size = opt.voxel;
     config.num_threads = opt.threads;
     if (command == PairCommand::Register) {
@@ -281,7 +282,7 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
         config.log_fn = log_to_stderr;
         config.log_level = KISSM_LOG_INFO;
     }
-    status = kissm_config_validate(&config);
+    const int32_t status = kissm_config_validate(&config);
     if (status != KISSM_OK) throw UsageError(settings_error(status));
     return config;
 }
@@ -359,8 +360,8 @@ void print_refinement_help(std::FILE *out, PairCommand command, const kissm_conf
                  "  --refine-iterations N   iteration cap, 1..1000 (default %d)\n"
                  "  --refine-distance GAIN  correspondence distance = GAIN * voxel, in (0, 100] (default %g); also\n"
                  "                          the distance within which a source voxel counts as overlapping\n"
-                 "  --min-overlap X         a valid refined pose needs this share of the source's voxels within\n"
-                 "                          that distance of the target, in [0, 1] (default %g)\n"
+                 "  --min-overlap X         least overlap of a valid refined pose, in [0, 1] (default %g): the\n"
+                 "                          share of the source's voxels within that distance of the target\n"
                  "\n",
                  d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap);
 }

@@ -44,11 +44,15 @@ struct PairOptions {
 
 // Parses a pair command's arguments into *opt. Returns false when it printed the help (-h, --help).
 bool parse_pair_options(PairCommand command, const std::vector<std::string> &args, PairOptions *opt);
+// kissm_config_init's defaults (the help shows them; nothing in the tool writes a default of its own).
+kissm_config config_defaults();
 // kissm_config_init's defaults with the options applied, checked by kissm_config_validate: a value out of
 // range is a UsageError with the library's message, prefixed by the option that set the field.
 kissm_config pair_config(PairCommand command, const PairOptions &opt);
 // Reads the files, registers or refines, writes the output files, prints; returns the exit status.
 int run_pair(PairCommand command, const PairOptions &opt);
+// Both: parse_pair_options, then run_pair (or 0 after the help).
+int run_pair_command(PairCommand command, const std::vector<std::string> &args);
 
 // The help's blocks shared by both commands: input files, settings, refinement and output options.
 void print_pair_input_help(std::FILE *out);

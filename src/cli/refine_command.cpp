@@ -13,8 +13,7 @@
 namespace kissm_cli {
 
 void print_refine_help(std::FILE *out) {
-    kissm_config defaults{};
-    if (kissm_config_init(&defaults, sizeof defaults) != KISSM_OK) throw UsageError("cannot read the defaults");
+    const kissm_config defaults = config_defaults();
     std::fprintf(out, "usage: kissm refine SOURCE TARGET --initial T.txt --voxel V [options]\n"
                       "\n"
                       "Refines a known pose (tracking, re-localisation, or `kissm register --out-transform`'s\n"
@@ -39,10 +38,6 @@ void print_refine_help(std::FILE *out) {
                       "stderr).\n");
 }
 
-int run_refine(const std::vector<std::string> &args) {
-    PairOptions opt;
-    if (!parse_pair_options(PairCommand::Refine, args, &opt)) return kExitOk;
-    return run_pair(PairCommand::Refine, opt);
-}
+int run_refine(const std::vector<std::string> &args) { return run_pair_command(PairCommand::Refine, args); }
 
 } // namespace kissm_cli

@@ -21,8 +21,7 @@ void log_to_stderr(void *, int32_t level, const char *message) {
 }
 
 void print_register_help(std::FILE *out) {
-    kissm_config defaults{};
-    if (kissm_config_init(&defaults, sizeof defaults) != KISSM_OK) throw UsageError("cannot read the defaults");
+    const kissm_config defaults = config_defaults();
     std::fprintf(out, "usage: kissm register SOURCE TARGET --voxel V [options]\n"
                       "\n"
                       "Globally registers SOURCE against TARGET (no initial guess needed) and prints the rigid\n"
@@ -48,10 +47,6 @@ void print_register_help(std::FILE *out) {
                       "2 usage or input error (one \"kissm: ...\" line on stderr).\n");
 }
 
-int run_register(const std::vector<std::string> &args) {
-    PairOptions opt;
-    if (!parse_pair_options(PairCommand::Register, args, &opt)) return kExitOk;
-    return run_pair(PairCommand::Register, opt);
-}
+int run_register(const std::vector<std::string> &args) { return run_pair_command(PairCommand::Register, args); }
 
 } // namespace kissm_cli
