@@ -104,7 +104,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         f.normals.valid.assign(pts.size(), 0);
     }
     // The index refinement searches, kept with the features so that a map is indexed once.
-    if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts);
+    if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts, params.voxel_size);
     f.time_features_ms = clock.lap();
     if (ctx.logs(LogLevel::Info)) {
         std::ostringstream msg;
@@ -181,7 +181,7 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
     PointIndex built;
     const PointIndex *index = &target.index;
     if (index->empty()) {
-        built = PointIndex(target.voxels.points);
+        built = PointIndex(target.voxels.points, params.voxel_size);
         index = &built;
     }
     const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.normals},
