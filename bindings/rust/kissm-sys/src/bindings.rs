@@ -458,15 +458,16 @@ pub struct kissm_result {
     pub coarse_transform: [f64; 16usize],
     /** 6x6 information matrix of the refined pose, row-major, symmetric: the inverse covariance of the error
  xi in T_true = T exp(xi), xi = (rotation [rad], translation [m]) in the source's frame (the perturbation
- GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the refinement's
- cost scaled by its residual variance: correspondences count as independent, so it is optimistic;
- a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run.*/
+ GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the point-to-plane
+ distances of the final correspondences (in both modes: GICP's along-plane weights are a regularisation,
+ not a measurement), divided by their residual variance. Correspondences count as independent, so it is
+ optimistic; a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run.*/
     pub information: [f64; 36usize],
     /** Share of the source's voxels that the refined pose lays within the refinement's correspondence distance
  of a target voxel, in [0, 1]. NaN when refinement did not run.*/
     pub overlap: f64,
-    /** Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, metres). NaN
- when refinement did not run or found no correspondence.*/
+    /** Weighted (Cauchy) RMS distance of the final correspondences to the target's planes, metres. NaN when
+ refinement did not run or found no correspondence.*/
     pub refine_rmse: f64,
     /** Weakest over strongest direction of the information, with rotations as displacements at the matched
  points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run.*/
