@@ -134,6 +134,16 @@ class Matcher:
             raise ValueError("operation on a closed kissm.Matcher")
         return ptr
 
+    def _call_for_result(self, function: Any, *args: Any) -> Result:
+        """``function(matcher, *args, result)``, one call at a time: its Result, or the library's exception.
+        The caller keeps what ``args`` point into alive (its locals) until this returns."""
+        result = _new_result()
+        with self._call_lock:
+            status = function(self._handle(), *args, result)
+            if status != 0:
+                raise_status(status)  # reads the thread-local message before any other call
+        return Result._from_c(result)
+
     def register(self, source: PointsLike, target: PointsLike) -> Result:
         """Globally register ``source`` against ``target``; no initial guess is needed.
 
@@ -150,12 +160,7 @@ class Matcher:
         """
         src = points_view(source, "source")
         tgt = points_view(target, "target")
-        result = _new_result()
-        with self._call_lock:
-            status = lib.kissm_register(self._handle(), src.c, tgt.c, result)
-            if status != 0:
-                raise_status(status)  # reads the thread-local message before any other call
-        return Result._from_c(result)
+        return self._call_for_result(lib.kissm_register, src.c, tgt.c)
 
     def compute_features(self, cloud: PointsLike) -> Features:
         """Describe ``cloud`` once (``kissm_features_compute``), for :meth:`register_features` against any
@@ -183,12 +188,7 @@ class Matcher:
         """Register two described clouds: the same pose, counts and validity as :meth:`register` on the
         clouds they were computed from (voxelisation and feature times are reported as 0)."""
         _check_features(source, target)
-        result = _new_result()
-        with self._call_lock:
-            status = lib.kissm_register_features(self._handle(), source._ptr, target._ptr, result)
-            if status != 0:
-                raise_status(status)
-        return Result._from_c(result)
+        return self._call_for_result(lib.kissm_register_features, source._ptr, target._ptr)
 
     def refine(self, source: PointsLike, target: PointsLike, initial: TransformLike) -> Result:
         """Fine registration from a known pose (tracking, re-localisation from a prior): no descriptors, no
@@ -211,13 +211,7 @@ class Matcher:
         """
         src = points_view(source, "source")
         tgt = points_view(target, "target")
-        transform = transform_view(initial)
-        result = _new_result()
-        with self._call_lock:
-            status = lib.kissm_refine(self._handle(), src.c, tgt.c, transform, result)
-            if status != 0:
-                raise_status(status)
-        return Result._from_c(result)
+        return self._call_for_result(lib.kissm_refine, src.c, tgt.c, transform_view(initial))
 
     def refine_features(self, source: Features, target: Features, initial: TransformLike) -> Result:
         """:meth:`refine` on described clouds: the same refined pose as :meth:`refine` on the clouds they were
@@ -230,13 +224,7 @@ class Matcher:
             kissm.FeaturesMismatchError: as :meth:`register_features`.
         """
         _check_features(source, target)
-        transform = transform_view(initial)
-        result = _new_result()
-        with self._call_lock:
-            status = lib.kissm_refine_features(self._handle(), source._ptr, target._ptr, transform, result)
-            if status != 0:
-                raise_status(status)
-        return Result._from_c(result)
+        return self._call_for_result(lib.kissm_refine_features, source._ptr, target._ptr, transform_view(initial))
 
     def cancel(self) -> None:
         """Ask the call running on this matcher (in another thread) to stop with
