@@ -381,11 +381,15 @@ def test_low_overlap(pair, refined) -> None:
 
 def test_unconstrained_plane() -> None:
     """A plane against itself: the refined pose may slide in the plane and turn about its normal."""
-    plane = np.c_[np.random.default_rng(0).random((4000, 2)) * 10.0, np.zeros(4000)]
+    rng = np.random.default_rng(0)
+    plane = np.c_[rng.random((4000, 2)) * 10.0, np.zeros(4000)]
     result = kissm.refine(plane, plane, np.eye(4), voxel_size=0.3)
     assert not result.valid and result.reason_code == _ffi.lib.KISSM_REASON_UNCONSTRAINED
     assert result.reason == "the refined pose is not constrained in every direction"
     assert result.refined and result.refine_condition < 0.01 and result.overlap == 1.0
+    noisy = plane + np.c_[np.zeros((4000, 2)), rng.normal(scale=0.01, size=4000)]  # 1 cm of range noise
+    result = kissm.refine(noisy, plane, np.eye(4), voxel_size=0.3, refine="point_to_plane")
+    assert not result.valid and result.reason_code == _ffi.lib.KISSM_REASON_UNCONSTRAINED
 
 
 # ---- Result plumbing --------------------------------------------------------------------------------------
