@@ -214,8 +214,9 @@ class Matcher:
         return self._call_for_result(lib.kissm_refine, src.c, tgt.c, transform_view(initial))
 
     def refine_features(self, source: Features, target: Features, initial: TransformLike) -> Result:
-        """:meth:`refine` on described clouds: the same refined pose as :meth:`refine` on the clouds they were
-        computed from (voxelisation and feature times are reported as 0). Features computed by a matcher with
+        """:meth:`refine` on described clouds: the same refined pose and counts as :meth:`refine` on the clouds they
+        were computed from (no keypoints, as refinement uses no descriptors; voxelisation and feature times are
+        reported as 0). Features computed by a matcher with
         refinement on (``refine_mode`` other than 'none') carry the search index refinement uses, so a map
         described once is not indexed again for every scan.
 
