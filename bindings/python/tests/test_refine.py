@@ -393,6 +393,32 @@ def test_unconstrained_plane() -> None:
     assert not result.valid and result.reason_code == _ffi.lib.KISSM_REASON_UNCONSTRAINED
 
 
+@pytest.mark.parametrize("mode", MODES)
+def test_noisy_plane_against_itself_is_unconstrained_along_the_plane(mode: str) -> None:
+    """A noisy plane (z = 0 plus 1 cm of noise) refined against itself: the noise tilts the normals a little,
+    but neither cost may count that as information (GICP's plane regularisation once did): the information
+    leaves translations in the plane and the turn about its normal (near) free, and pins the rest."""
+    rng = np.random.default_rng(0)
+    noisy = np.c_[rng.random((4000, 2)) * 10.0, rng.normal(scale=0.01, size=4000)]
+    result = kissm.refine(noisy, noisy, np.eye(4), voxel_size=0.3, refine=mode)
+    assert not result.valid and result.reason_code == _ffi.lib.KISSM_REASON_UNCONSTRAINED, result
+    assert result.refined and result.overlap == 1.0 and result.refine_condition < 1e-4
+    info = result.information
+    assert np.array_equal(info, info.T) and np.isfinite(info).all()
+    strongest = np.linalg.eigvalsh(info).max()
+
+    def along(*twist: float) -> float:  # the information along a unit twist (rx, ry, rz, tx, ty, tz)
+        unit = np.array(twist) / np.linalg.norm(twist)
+        return float(unit @ info @ unit) / strongest
+
+    for angle in np.radians([0.0, 30.0, 90.0, 135.0]):  # any direction in the plane
+        assert along(0, 0, 0, math.cos(angle), math.sin(angle), 0) < 1e-5
+    assert along(0, 0, 1, 0, 0, 0) < 1e-4  # turning about the normal (in radians; about 4 m of lever arm)
+    assert along(0, 0, 0, 0, 0, 1) > 1e-3  # the normal's direction is pinned
+    assert along(1, 0, 0, 0, 0, 0) > 0.1 and along(0, 1, 0, 0, 0, 0) > 0.1  # and so is the tilt
+    weakest = np.linalg.eigh(info)[1][:, 0]  # its near-null direction lies along the plane
+    assert np.linalg.norm(weakest[[0, 1, 5]]) < 1e-2, weakest
+
 
 # ---- Result plumbing --------------------------------------------------------------------------------------
 
