@@ -164,6 +164,9 @@ KISSM_API const char *kissm_last_error_message(void);
 /** With refinement: the inliers cover less than kissm_config.min_inlier_coverage of the aligned overlap
  * (kissm_result.inlier_coverage): one object may match itself in several poses. */
 #define KISSM_REASON_CLUSTERED_INLIERS 10
+/** Refinement was still moving the pose at kissm_config.refine_max_iterations (kissm_result.refine_converged
+ * = 0): it was crossing from one basin to another, as refinements from a wrong start do. */
+#define KISSM_REASON_NOT_CONVERGED 11
 
 /**
  * @brief Describes a reason code.
@@ -308,9 +311,9 @@ typedef struct kissm_config {
     /** Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]. Default 1.0. */
     double refine_kernel_gain;
     /** Refinement has converged when a step turns the pose by less than this (radians) ...; in [0, 1].
-     * Default 1e-4. */
+     * Default 5e-4. */
     double refine_rotation_epsilon;
-    /** ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3. */
+    /** ... and moves it by less than gain * voxel_size; in [0, 1]. Default 5e-3. */
     double refine_translation_epsilon_gain;
     /** Without refinement, valid needs kissm_result.rotation_uncertainty <= this (radians); in (0, 3.15].
      * Default 0.0349 (2 degrees). */
@@ -324,6 +327,9 @@ typedef struct kissm_config {
     int32_t refine_min_inliers;
     /** Must be 0. */
     int32_t reserved1;
+    /** With refinement, valid needs kissm_result.refine_condition >= this (a direction carrying less than this
+     * share of the strongest one's information slides); in [0, 1]. Default 0.01. */
+    double min_refine_condition;
     /* New fields are only ever appended here. */
 } kissm_config;
 

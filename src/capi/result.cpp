@@ -27,11 +27,12 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::Unconstrained: return KISSM_REASON_UNCONSTRAINED;
     case Reason::UncertainRotation: return KISSM_REASON_UNCERTAIN_ROTATION;
     case Reason::ClusteredInliers: return KISSM_REASON_CLUSTERED_INLIERS;
+    case Reason::NotConverged: return KISSM_REASON_NOT_CONVERGED;
     }
     return KISSM_REASON_NONE;
 }
 static_assert(reason_code(Reason::None) == 0 && reason_code(Reason::Degenerate) == 6 &&
-                  reason_code(Reason::ClusteredInliers) == 10,
+                  reason_code(Reason::NotConverged) == 11,
               "reason codes are pinned");
 
 // 4x4 row-major from R and t.

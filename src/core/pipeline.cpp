@@ -23,10 +23,6 @@ namespace {
 // reported no wrong pose as valid (docs/parameters.md, "FPFH weighting").
 constexpr int kFpfhWeightPower = 2;
 
-// A refined pose is not trusted when its weakest direction carries less than this share of the information of
-// its strongest (RefineOutput::condition; docs/accuracy.md has the measurements).
-constexpr double kMinCondition = 1e-3;
-
 class Stopwatch {
 public:
     Stopwatch() : last_(std::chrono::steady_clock::now()) {}
@@ -151,12 +147,13 @@ RefinedEvidence refined_evidence(const Registration &r) {
     e.overlap = r.overlap;
     e.condition = r.refine_condition;
     e.inlier_coverage = r.inlier_coverage;
+    e.converged = r.refine_converged;
     return e;
 }
 
 RefinedRule refined_rule(const Params &params) {
-    return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers), params.min_overlap, kMinCondition,
-                       params.min_inlier_coverage};
+    return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers), params.min_overlap,
+                       params.min_refine_condition, params.min_inlier_coverage};
 }
 
 RefineParams refine_params(const Params &params) {

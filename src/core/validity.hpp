@@ -26,6 +26,7 @@ enum class Reason {
     Unconstrained,
     UncertainRotation,
     ClusteredInliers,
+    NotConverged,
 };
 
 // What the solver's inliers say about its pose.
@@ -58,6 +59,7 @@ struct RefinedEvidence {
     double overlap = 0.0;                  // share of source voxels with a target voxel within the distance
     double condition = 0.0;                // see RefineOutput::condition
     double inlier_coverage = 0.0;          // solver inliers' spread over the aligned overlap's (NaN: no solver)
+    bool converged = false;                // stopped on its convergence test, not its iteration cap
 };
 
 struct RefinedRule {
@@ -70,13 +72,14 @@ struct RefinedRule {
 // The rule with refinement, for a registration: the dense alignment decides the accuracy, so the inliers
 // only need to show that the refinement started in the right basin: at least refine_min_inliers, not
 // degenerate, and spread over at least min_inlier_coverage of the aligned overlap (inliers on one compact
-// object cover a small part of it, whatever the pose). Then the refined pose must overlap (min_overlap) and
-// be constrained in every direction (min_condition).
+// object cover a small part of it, whatever the pose). Then the refined pose must overlap (min_overlap), be
+// constrained in every direction (min_condition) and have converged: a refinement still moving at its
+// iteration cap is crossing from one basin to another (most wrong local optima measured did).
 Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const RefinedEvidence &refined,
                         const RefinedRule &rule);
 
-// The rule for a refinement from the caller's pose (kissm_refine): overlap and conditioning only. It cannot
-// tell a prior outside the convergence basin that ends in a wrong local optimum (docs/accuracy.md).
+// The rule for a refinement from the caller's pose (kissm_refine): overlap, conditioning, convergence. It
+// cannot tell every prior outside the convergence basin that ends in a wrong local optimum (docs/accuracy.md).
 Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule);
 
 KISSM_DETAIL_END

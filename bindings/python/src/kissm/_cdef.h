@@ -59,6 +59,8 @@ const char *kissm_last_error_message(void);
 
 #define KISSM_REASON_CLUSTERED_INLIERS 10
 
+#define KISSM_REASON_NOT_CONVERGED 11
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0
@@ -152,6 +154,8 @@ typedef struct kissm_config {
     int32_t refine_min_inliers;
 
     int32_t reserved1;
+
+    double min_refine_condition;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);

@@ -34,6 +34,7 @@ pub const KISSM_REASON_LOW_OVERLAP: i32 = 7;
 pub const KISSM_REASON_UNCONSTRAINED: i32 = 8;
 pub const KISSM_REASON_UNCERTAIN_ROTATION: i32 = 9;
 pub const KISSM_REASON_CLUSTERED_INLIERS: i32 = 10;
+pub const KISSM_REASON_NOT_CONVERGED: i32 = 11;
 pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
@@ -186,9 +187,9 @@ pub struct kissm_config {
     /// Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]. Default 1.0.
     pub refine_kernel_gain: f64,
     /** Refinement has converged when a step turns the pose by less than this (radians) ...; in [0, 1].
- Default 1e-4.*/
+ Default 5e-4.*/
     pub refine_rotation_epsilon: f64,
-    /// ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3.
+    /// ... and moves it by less than gain * voxel_size; in [0, 1]. Default 5e-3.
     pub refine_translation_epsilon_gain: f64,
     /** Without refinement, valid needs kissm_result.rotation_uncertainty <= this (radians); in (0, 3.15].
  Default 0.0349 (2 degrees).*/
@@ -202,10 +203,13 @@ pub struct kissm_config {
     pub refine_min_inliers: i32,
     /// Must be 0.
     pub reserved1: i32,
+    /** With refinement, valid needs kissm_result.refine_condition >= this (a direction carrying less than this
+ share of the strongest one's information slides); in [0, 1]. Default 0.01.*/
+    pub min_refine_condition: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 224usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 232usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -303,6 +307,9 @@ const _: () = {
     [
         "Offset of field: kissm_config::reserved1",
     ][::core::mem::offset_of!(kissm_config, reserved1) - 220usize];
+    [
+        "Offset of field: kissm_config::min_refine_condition",
+    ][::core::mem::offset_of!(kissm_config, min_refine_condition) - 224usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
