@@ -78,6 +78,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         max_rotation_uncertainty=0.05,
         min_inlier_coverage=0.3,
         refine_min_inliers=25,
+        min_refine_condition=0.05,
     )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
@@ -90,6 +91,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
     assert (c.refine_max_distance_gain, c.refine_kernel_gain, c.refine_rotation_epsilon) == (2.5, 0.75, 2e-4)
     assert (c.refine_translation_epsilon_gain, c.min_overlap) == (5e-3, 0.4)
     assert (c.max_rotation_uncertainty, c.min_inlier_coverage, c.refine_min_inliers) == (0.05, 0.3, 25)
+    assert c.min_refine_condition == 0.05
     assert c.reserved1 == 0
     assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
     # what the matcher got is what was asked for
@@ -143,6 +145,8 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         ("min_inlier_coverage", 1.5, "config.min_inlier_coverage is 1.5"),
         ("refine_min_inliers", 2, "config.refine_min_inliers is 2; it must be in [3, 100000]"),
         ("refine_min_inliers", 100001, "config.refine_min_inliers is 100001"),
+        ("min_refine_condition", -0.1, "config.min_refine_condition is -0.1; it must be in [0, 1]"),
+        ("min_refine_condition", float("nan"), "config.min_refine_condition is nan"),
     ],
 )
 def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:
@@ -179,6 +183,7 @@ def test_out_of_int32_range_is_a_valueerror() -> None:
         ("max_rotation_uncertainty", "0.1"),
         ("min_inlier_coverage", True),
         ("refine_min_inliers", 10.0),
+        ("min_refine_condition", None),
     ],
 )
 def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
@@ -272,6 +277,7 @@ def test_pickle_and_copy() -> None:
         max_rotation_uncertainty=0.02,
         min_inlier_coverage=0.1,
         refine_min_inliers=12,
+        min_refine_condition=0.02,
     )
     for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
         assert pickle.loads(pickle.dumps(config, protocol)) == config

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """The validity rules and their measures: Result.rotation_uncertainty (without refinement, against
 Config.max_rotation_uncertainty), Result.inlier_coverage (with refinement, against Config.min_inlier_coverage),
-Config.refine_min_inliers against min_inliers, and what a refinement from a prior reports. Each setting is
+Config.refine_min_inliers against min_inliers, Result.refine_condition against Config.min_refine_condition,
+convergence, and what a refinement from a prior reports. Each setting is
 moved to the value the committed pair measures and one step past it: the decision flips there, in its own rule
 only, and the pose is kept for inspection."""
 
@@ -21,6 +22,8 @@ from helpers import TIME_FIELDS, assert_same_result, bits
 VOXEL = testdata.VOXEL_SIZE
 UNCERTAIN_ROTATION = "the inliers leave the rotation uncertain"
 CLUSTERED_INLIERS = "the inliers cover too little of the overlap"
+UNCONSTRAINED = "the refined pose is not constrained in every direction"
+NOT_CONVERGED = "refinement did not converge"
 
 
 @pytest.fixture(scope="module")
@@ -35,8 +38,11 @@ def refined(pair) -> kissm.Result:
 
 def test_reason_codes_and_strings() -> None:
     assert _ffi.lib.KISSM_REASON_UNCERTAIN_ROTATION == 9 and _ffi.lib.KISSM_REASON_CLUSTERED_INLIERS == 10
+    assert _ffi.lib.KISSM_REASON_NOT_CONVERGED == 11
+    assert _ffi.text(_ffi.lib.kissm_reason_string(8)) == UNCONSTRAINED
     assert _ffi.text(_ffi.lib.kissm_reason_string(9)) == UNCERTAIN_ROTATION
     assert _ffi.text(_ffi.lib.kissm_reason_string(10)) == CLUSTERED_INLIERS
+    assert _ffi.text(_ffi.lib.kissm_reason_string(11)) == NOT_CONVERGED
 
 
 def test_rotation_uncertainty_is_the_documented_measure(coarse, refined) -> None:
@@ -108,6 +114,39 @@ def test_refine_min_inliers_replaces_min_inliers_with_refinement(pair, coarse, r
     assert kissm.register(pair.source, pair.target, VOXEL, refine_min_inliers=100000).valid
     unrefined = kissm.register(pair.source, pair.target, VOXEL, min_inliers=n + 1)
     assert not unrefined.valid and unrefined.reason_code == _ffi.lib.KISSM_REASON_TOO_FEW_INLIERS
+
+
+def test_min_refine_condition_decides_with_refinement_and_from_a_prior(pair, coarse, refined) -> None:
+    measured = refined.refine_condition
+    assert measured >= kissm.Config().min_refine_condition
+    assert kissm.register(pair.source, pair.target, VOXEL, refine="gicp", min_refine_condition=measured).valid
+    above = kissm.register(
+        pair.source, pair.target, VOXEL, refine="gicp", min_refine_condition=np.nextafter(measured, 1.0)
+    )
+    assert not above.valid and above.reason_code == _ffi.lib.KISSM_REASON_UNCONSTRAINED
+    assert above.reason == UNCONSTRAINED
+    assert_same_result(above, refined, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})
+    assert_same_result(kissm.register(pair.source, pair.target, VOXEL, min_refine_condition=1.0), coarse)
+    # the rule of a refinement from a prior too
+    prior = kissm.refine(pair.source, pair.target, pair.transform, VOXEL)
+    assert prior.valid
+    strict = kissm.refine(
+        pair.source, pair.target, pair.transform, VOXEL, min_refine_condition=np.nextafter(prior.refine_condition, 1)
+    )
+    assert not strict.valid and strict.reason_code == _ffi.lib.KISSM_REASON_UNCONSTRAINED
+
+
+def test_a_refinement_stopped_by_its_cap_is_not_valid(pair) -> None:
+    """From 8 degrees and 1 m off, one iteration cannot converge: the pose is refused (and kept); with the
+    default cap the same start converges to the truth."""
+    start = testdata.pose(testdata.rotation_zyx(8.0), [1.0, 0.0, 0.0]) @ pair.transform
+    capped = kissm.refine(pair.source, pair.target, start, VOXEL, refine_max_iterations=1)
+    assert capped.refine_iterations == 1 and not capped.refine_converged
+    assert not capped.valid and capped.reason_code == _ffi.lib.KISSM_REASON_NOT_CONVERGED
+    assert capped.reason == NOT_CONVERGED and capped.has_pose
+    done = kissm.refine(pair.source, pair.target, start, VOXEL)
+    assert done.valid and done.refine_converged
+    assert testdata.rotation_error_deg(done.rotation, pair.rotation) < 0.1
 
 
 def test_refinement_from_a_prior_has_no_solver_measures(pair) -> None:

@@ -45,6 +45,7 @@ _FLOAT_FIELDS = (
     "max_rotation_uncertainty",
     "min_overlap",
     "min_inlier_coverage",
+    "min_refine_condition",
 )
 _INT_FIELDS = (
     "num_threads",
@@ -178,6 +179,10 @@ class Config:
     refine_min_inliers: int = _DEFAULTS["refine_min_inliers"]
     """With refinement, the final inliers ``Result.valid`` needs (``min_inliers`` applies without refinement);
     3..100000."""
+    min_refine_condition: float = _DEFAULTS["min_refine_condition"]
+    """With refinement (and :meth:`Matcher.refine`), ``Result.valid`` needs ``Result.refine_condition`` >= this
+    (else reason "the refined pose is not constrained in every direction": a direction carrying less than this
+    share of the strongest one's information slides, as along a corridor); in [0, 1]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object

@@ -198,7 +198,8 @@ class Matcher:
         Both clouds are voxelised, their normals estimated, and ``initial`` refined with ``config.refine_mode``
         ('gicp' when it is 'none'). The Result's ``coarse_transform`` is ``initial`` (made exactly rigid),
         ``transform`` the refined pose, ``information`` its information matrix; ``valid`` says whether the
-        refined pose overlaps the target enough and is constrained in every direction (else ``reason``).
+        refined pose overlaps the target enough, is constrained in every direction and refinement converged
+        (else ``reason``).
 
         Raises:
             TypeError, ValueError: ``initial`` is not a (4, 4) array of real numbers, or the clouds are not

@@ -85,8 +85,9 @@ class Result:
     ``valid`` follows one of two rules. Without refinement: at least ``Config.min_inliers`` final inliers, not
     collinear or planar, and ``rotation_uncertainty`` <= ``Config.max_rotation_uncertainty``. With it: at least
     ``Config.refine_min_inliers``, not collinear or planar, ``overlap`` >= ``Config.min_overlap``,
-    ``inlier_coverage`` >= ``Config.min_inlier_coverage`` and a pose constrained in every direction
-    (``refine_condition``). :meth:`Matcher.refine` checks only the overlap and the constraint.
+    ``inlier_coverage`` >= ``Config.min_inlier_coverage``, ``refine_condition`` >= ``Config.min_refine_condition``
+    (a pose constrained in every direction) and a refinement that converged (``refine_converged``).
+    :meth:`Matcher.refine` checks only the overlap, the condition and the convergence.
     """
 
     valid: bool
@@ -173,7 +174,8 @@ class Result:
     when refinement did not run or found no correspondence."""
     refine_condition: float
     """Weakest over strongest direction of ``information`` (rotations as displacements at the matched points'
-    radius), in [0, 1]: near 0 the pose slides along some direction. NaN when refinement did not run."""
+    radius), in [0, 1]: near 0 the pose slides along some direction (``Config.min_refine_condition`` is checked
+    against it). NaN when refinement did not run."""
     rotation_uncertainty: float
     """How well the solver's inliers pin the rotation down, in radians: its 1-sigma uncertainty about the worst
     axis if every inlier were off by ``noise_bound``, ``noise_bound / sqrt(N (e1**2 + e2**2))`` with ``N``
@@ -195,7 +197,9 @@ class Result:
     refine_iterations: int
     """Refinement iterations run (0 when it did not run)."""
     refine_converged: bool
-    """Whether refinement stopped on its convergence test rather than its iteration cap."""
+    """Whether refinement stopped on its convergence test rather than its iteration cap; a refined pose that did
+    not is not valid (reason "refinement did not converge": it was still crossing between basins, as from a
+    wrong start)."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
