@@ -60,6 +60,9 @@ constexpr FieldOption kFieldOptions[] = {
     {"config.refine_max_iterations ", "--refine-iterations"},
     {"config.refine_max_distance_gain ", "--refine-distance"},
     {"config.min_overlap ", "--min-overlap"},
+    {"config.max_rotation_uncertainty ", "--max-rotation-uncertainty"},
+    {"config.min_inlier_coverage ", "--min-inlier-coverage"},
+    {"config.refine_min_inliers ", "--refine-min-inliers"},
 };
 
 std::string settings_error(int32_t status) {
@@ -204,6 +207,15 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
             opt.min_inliers = parse_int32(name, cur.value(), 3, 1 << 30);
         } else if (is_register && name == "--max-correspondences") {
             opt.max_correspondences = parse_int32(name, cur.value(), 3, 1 << 30);
+        } else if (is_register && name == "--max-rotation-uncertainty") {
+            opt.max_rotation_uncertainty = parse_double(name, cur.value());
+            opt.have_max_rotation_uncertainty = true;
+        } else if (is_register && name == "--min-inlier-coverage") {
+            opt.min_inlier_coverage = parse_double(name, cur.value());
+            opt.have_min_inlier_coverage = true;
+        } else if (is_register && name == "--refine-min-inliers") {
+            opt.refine_min_inliers = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
+            opt.have_refine_min_inliers = true;
         } else if (!is_register && name == "--initial") {
             opt.initial = cur.value();
         } else if (name == "--refine") {
@@ -271,6 +283,9 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
     if (command == PairCommand::Register) {
         if (opt.min_inliers >= 0) config.min_inliers = opt.min_inliers;
         if (opt.max_correspondences >= 0) config.max_correspondences = opt.max_correspondences;
+        if (opt.have_max_rotation_uncertainty) config.max_rotation_uncertainty = opt.max_rotation_uncertainty;
+        if (opt.have_min_inlier_coverage) config.min_inlier_coverage = opt.min_inlier_coverage;
+        if (opt.have_refine_min_inliers) config.refine_min_inliers = opt.refine_min_inliers;
     }
     config.refine_mode = opt.refine_mode;
     if (opt.have_refine_iterations) config.refine_max_iterations = opt.refine_iterations;
@@ -361,9 +376,18 @@ void print_refinement_help(std::FILE *out, PairCommand command, const kissm_conf
                  "  --refine-distance GAIN  correspondence distance = GAIN * voxel, in (0, 100] (default %g); also\n"
                  "                          the distance within which a source voxel counts as overlapping\n"
                  "  --min-overlap X         least overlap of a valid refined pose, in [0, 1] (default %g): the\n"
-                 "                          share of the source's voxels within that distance of the target\n"
-                 "\n",
+                 "                          share of the source's voxels within that distance of the target\n",
                  d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap);
+    if (command == PairCommand::Register) {
+        std::fprintf(out,
+                     "  --refine-min-inliers N  final inliers a valid refined pose needs, 3..100000 (default %d);\n"
+                     "                          --min-inliers applies without refinement\n"
+                     "  --min-inlier-coverage X least inlier coverage of a valid refined pose (default %g), in\n"
+                     "                          [0, 1]: the spread of the solver's inliers over that of the aligned\n"
+                     "                          overlap (inliers on one object cover little of it)\n",
+                     d.refine_min_inliers, d.min_inlier_coverage);
+    }
+    std::fprintf(out, "\n");
 }
 
 void print_pair_output_help(std::FILE *out) {

@@ -24,6 +24,14 @@ struct PairOptions {
     int32_t threads = 0;
     int32_t min_inliers = -1;         // register only; -1: library default
     int32_t max_correspondences = -1; // register only; -1: library default
+    // The validity rules' settings (register only: kissm_refine has no solver inliers to judge); unset ones
+    // keep kissm_config_init's values and the library checks the ranges.
+    bool have_max_rotation_uncertainty = false;
+    double max_rotation_uncertainty = 0.0; // radians
+    bool have_min_inlier_coverage = false;
+    double min_inlier_coverage = 0.0;
+    bool have_refine_min_inliers = false;
+    int32_t refine_min_inliers = 0;
     bool drop_nonfinite = false;
     bool viewpoint_center = false;
     bool json = false;

@@ -9,6 +9,7 @@
 #include "cli_args.hpp"
 #include "commands.hpp"
 #include "pair_command.hpp"
+#include "pose_math.hpp"
 
 namespace kissm_cli {
 
@@ -35,12 +36,17 @@ void print_register_help(std::FILE *out) {
                  "                          0.05 for indoor RGB-D fragments\n"
                  "  --threads N             worker threads, 0 = all hardware threads (default 0); the result\n"
                  "                          does not depend on N\n"
-                 "  --min-inliers N         final inliers needed for a valid pose (default %d)\n"
+                 "  --min-inliers N         final inliers a valid pose needs without refinement (default %d)\n"
                  "  --max-correspondences N cap on the matches kept, best first (default %d)\n"
+                 "  --max-rotation-uncertainty RAD (default %g, i.e. %.3g deg)\n"
+                 "                          without refinement, a valid pose needs inliers that pin its rotation\n"
+                 "                          down to RAD radians (rotation_uncertainty), in (0, 3.15]: few inliers,\n"
+                 "                          or all on one compact object, do not\n"
                  "  --viewpoint-center      orient normals toward each cloud's centre (maps, merged clouds)\n"
                  "                          instead of the sensor at the frame origin (single scans)\n"
                  "\n",
-                 defaults.min_inliers, defaults.max_correspondences);
+                 defaults.min_inliers, defaults.max_correspondences, defaults.max_rotation_uncertainty,
+                 rad_to_deg(defaults.max_rotation_uncertainty));
     print_refinement_help(out, PairCommand::Register, defaults);
     print_pair_output_help(out);
     std::fprintf(out, "Exit status: 0 valid pose, 1 registration ran but the pose is not valid (see the reason),\n"

@@ -39,12 +39,30 @@ bool refinement_ran(const kissm_result &r) {
 
 namespace {
 
+// A number for the summary, "-" when it is NaN (not measured) and "unbounded" when infinite.
+struct NumberText {
+    char text[40];
+};
+NumberText number_text(double v, const char *format) {
+    NumberText t{};
+    if (std::isnan(v)) {
+        std::snprintf(t.text, sizeof t.text, "-");
+    } else if (std::isinf(v)) {
+        std::snprintf(t.text, sizeof t.text, "unbounded");
+    } else {
+        std::snprintf(t.text, sizeof t.text, format, v);
+    }
+    return t;
+}
+
 void print_refinement(std::FILE *out, const kissm_result &r, ResultKind kind) {
     std::fprintf(out, "refinement: %d iterations, %s; %" PRIu64 " correspondences\n", r.refine_iterations,
                  r.refine_converged ? "converged" : "stopped at the iteration cap", r.num_refine_correspondences);
-    char rmse[32] = "-"; // NaN when no correspondence was left
-    if (std::isfinite(r.refine_rmse)) std::snprintf(rmse, sizeof rmse, "%.4g", r.refine_rmse);
-    std::fprintf(out, "  overlap %.4f, rmse %s, condition %.4g\n", r.overlap, rmse, r.refine_condition);
+    // rmse is NaN when no correspondence was left; the inlier coverage needs the solver's inliers.
+    std::fprintf(out, "  overlap %.4f, ", r.overlap);
+    if (kind == ResultKind::Global)
+        std::fprintf(out, "inlier coverage %s, ", number_text(r.inlier_coverage, "%.4f").text);
+    std::fprintf(out, "rmse %s, condition %.4g\n", number_text(r.refine_rmse, "%.4g").text, r.refine_condition);
     if (matrix_is_finite(r.coarse_transform) && matrix_is_finite(r.transform)) {
         std::fprintf(out, "  moved the %s pose by %.4f deg, %.4g\n", kind == ResultKind::Global ? "coarse" : "initial",
                      rotation_error_deg(r.coarse_transform, r.transform),
@@ -79,6 +97,9 @@ void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind
         } else {
             std::fprintf(out, "residual rms: - (noise bound %.4g)\n", r.noise_bound);
         }
+        // How well the inliers pin the solver's rotation down (radians in the JSON, degrees for people).
+        std::fprintf(out, "rotation uncertainty: %s\n",
+                     number_text(rad_to_deg(r.rotation_uncertainty), "%.4g deg").text);
     }
     if (refinement_ran(r)) print_refinement(out, r, kind);
     if (global) {
@@ -112,6 +133,7 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field("overlap", r.overlap);
     json.field("refine_rmse", r.refine_rmse);
     json.field("refine_condition", r.refine_condition);
+    json.field("inlier_coverage", r.inlier_coverage);
     json.field("refine_iterations", r.refine_iterations);
     json.field("refine_converged", r.refine_converged != 0);
     json.field("final_inliers", r.num_final_inliers);
@@ -136,6 +158,7 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field("residual_rms", r.residual_rms);
     json.field("noise_bound", r.noise_bound);
     json.field_vector("inlier_extent", r.inlier_extent, 3);
+    json.field("rotation_uncertainty", r.rotation_uncertainty);
     json.key("time_ms");
     json.begin_object();
     json.field("voxelize", r.time_voxelize_ms);

@@ -20,13 +20,15 @@ void print_matrix(std::FILE *out, const double T[16], const char *indent);
 // True when refinement ran, i.e. the library filled kissm_result.information (it leaves all of it NaN
 // otherwise). The JSON writes "information": null exactly when this is false.
 bool refinement_ran(const kissm_result &result);
-// Valid, reason, counts per stage, inlier ratio, residual, the refinement's numbers when it ran (how far
-// it moved the coarse or initial pose, overlap, rmse, condition, iterations), per-stage times.
+// Valid, reason, counts per stage, inlier ratio, residual, rotation uncertainty (degrees), the refinement's
+// numbers when it ran (how far it moved the coarse or initial pose, overlap, inlier coverage, rmse,
+// condition, iterations), per-stage times.
 void print_result_summary(std::FILE *out, const kissm_result &result, ResultKind kind);
 // Adds the result's fields to the open JSON object, in the order of the CLI JSON contract (src/cli/README.md):
 // valid, reason, reason_code, [initial_transform,] transform, rotation, translation, coarse_transform,
-// refine, information, overlap, refine_rmse, refine_condition, refine_iterations, refine_converged,
-// final_inliers, counts, inlier_ratio, residual_rms, noise_bound, inlier_extent, time_ms.
+// refine, information, overlap, refine_rmse, refine_condition, inlier_coverage, refine_iterations,
+// refine_converged, final_inliers, counts, inlier_ratio, residual_rms, noise_bound, inlier_extent,
+// rotation_uncertainty, time_ms.
 // refine_mode: the config's KISSM_REFINE_* (the mode used). initial_transform: kissm_refine's, or null.
 void add_result_json(JsonWriter &json, const kissm_result &result, int32_t refine_mode,
                      const double *initial_transform = nullptr);

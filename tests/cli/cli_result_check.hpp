@@ -23,10 +23,27 @@ inline std::vector<std::string> contract_keys(bool refine_command) {
     std::vector<std::string> keys = {"version", "source", "target", "voxel_size",
                                      "threads", "valid",  "reason", "reason_code"};
     if (refine_command) keys.push_back("initial_transform");
-    for (const char *k :
-         {"transform", "rotation", "translation", "coarse_transform", "refine", "information", "overlap", "refine_rmse",
-          "refine_condition", "refine_iterations", "refine_converged", "final_inliers", "counts", "inlier_ratio",
-          "residual_rms", "noise_bound", "inlier_extent", "time_ms", "read_ms"}) {
+    for (const char *k : {"transform",
+                          "rotation",
+                          "translation",
+                          "coarse_transform",
+                          "refine",
+                          "information",
+                          "overlap",
+                          "refine_rmse",
+                          "refine_condition",
+                          "inlier_coverage",
+                          "refine_iterations",
+                          "refine_converged",
+                          "final_inliers",
+                          "counts",
+                          "inlier_ratio",
+                          "residual_rms",
+                          "noise_bound",
+                          "inlier_extent",
+                          "rotation_uncertainty",
+                          "time_ms",
+                          "read_ms"}) {
         keys.push_back(k);
     }
     return keys;
@@ -76,8 +93,8 @@ inline void check_contract(const Json &j, bool refine_command, const char *what)
     CHECK_MSG(j.at("rotation").is_matrix(3, 3, true), "%s: rotation", what);
     const Json &info = j.at("information");
     CHECK_MSG(info.is(T::Null) || info.is_matrix(6, 6, false), "%s: information is neither null nor 6x6", what);
-    for (const char *k :
-         {"overlap", "refine_rmse", "refine_condition", "inlier_ratio", "residual_rms", "noise_bound"}) {
+    for (const char *k : {"overlap", "refine_rmse", "refine_condition", "inlier_coverage", "inlier_ratio",
+                          "residual_rms", "noise_bound", "rotation_uncertainty"}) {
         CHECK_MSG(is_number_or_null(j.at(k)), "%s: %s is not a number or null", what, k);
     }
     for (const std::string &k : contract_count_keys()) {
@@ -91,6 +108,18 @@ inline void check_contract(const Json &j, bool refine_command, const char *what)
 // Same bits, or both NaN (the JSON's null).
 inline bool same_double(double a, double b) {
     return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// A JSON number against the library's double: the same bits, or null for NaN and for the infinities (which
+// the writer also prints as null; rotation_uncertainty is +inf without inliers).
+inline void check_scalar(const Json &v, double want, const char *what, const char *key) {
+    if (std::isfinite(want)) {
+        CHECK_MSG(v.is(Json::Type::Number) && same_double(v.as_double(), want), "%s: %s is %s, the library's %.17g",
+                  what, key, v.text.c_str(), want);
+    } else {
+        CHECK_MSG(v.is(Json::Type::Null), "%s: %s is %s, expected null for the library's %g", what, key, v.text.c_str(),
+                  want);
+    }
 }
 
 inline void check_doubles(const std::vector<double> &got, const double *want, size_t n, const char *what,
@@ -127,10 +156,15 @@ inline void check_matches_library(const Json &j, const kissm_result &r, const ch
     const struct {
         const char *key;
         double value;
-    } scalars[] = {
-        {"overlap", r.overlap},           {"refine_rmse", r.refine_rmse},   {"refine_condition", r.refine_condition},
-        {"inlier_ratio", r.inlier_ratio}, {"residual_rms", r.residual_rms}, {"noise_bound", r.noise_bound}};
-    for (const auto &s : scalars) check_doubles({j.at(s.key).as_double()}, &s.value, 1, what, s.key);
+    } scalars[] = {{"overlap", r.overlap},
+                   {"refine_rmse", r.refine_rmse},
+                   {"refine_condition", r.refine_condition},
+                   {"inlier_coverage", r.inlier_coverage},
+                   {"inlier_ratio", r.inlier_ratio},
+                   {"residual_rms", r.residual_rms},
+                   {"noise_bound", r.noise_bound},
+                   {"rotation_uncertainty", r.rotation_uncertainty}};
+    for (const auto &s : scalars) check_scalar(j.at(s.key), s.value, what, s.key);
     check_doubles(j.at("inlier_extent").flat(), r.inlier_extent, 3, what, "inlier_extent");
     check_count(j.at("refine_iterations"), static_cast<uint64_t>(r.refine_iterations), what, "refine_iterations");
     CHECK_MSG(j.at("refine_converged").boolean == (r.refine_converged != 0), "%s: refine_converged", what);

@@ -5,8 +5,9 @@
 //   cli_test KISSM_BINARY WORK_DIR CASE
 //
 // CASE: usage | errors | malformed | demo | json | threads | realdata | refine_options | refine_register |
-// refine_command | refine_initial | refine_roundtrip. Cases that need ../shared/data (KISSM_DATA_DIR) return 77
-// (skipped) when it is absent; the refine cases use the committed pair of tests/data (KISSM_TEST_DATA).
+// refine_command | refine_initial | refine_roundtrip | validity_options. Cases that need ../shared/data
+// (KISSM_DATA_DIR) return 77 (skipped) when it is absent; the refine and validity cases use the committed
+// pair of tests/data (KISSM_TEST_DATA).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -247,6 +248,19 @@ void test_usage() {
         }
     }
     CHECK(contains(help_line(run("register --help").out, "--refine"), "(default none)"));
+    // The validity rules' options, register only, with the library's defaults.
+    char validity[3][64];
+    std::snprintf(validity[0], sizeof validity[0], "(default %g, i.e. %.3g deg)", defaults.max_rotation_uncertainty,
+                  kissm_cli::rad_to_deg(defaults.max_rotation_uncertainty));
+    std::snprintf(validity[1], sizeof validity[1], "(default %d)", defaults.refine_min_inliers);
+    std::snprintf(validity[2], sizeof validity[2], "(default %g)", defaults.min_inlier_coverage);
+    const char *validity_options[3] = {"--max-rotation-uncertainty", "--refine-min-inliers", "--min-inlier-coverage"};
+    const std::string register_help = run("register --help").out, refine_help = run("refine --help").out;
+    for (int i = 0; i < 3; ++i) {
+        const std::string line = help_line(register_help, validity_options[i]);
+        CHECK_MSG(contains(line, validity[i]), "'kissm register --help': [%s] lacks %s", line.c_str(), validity[i]);
+        CHECK_MSG(!contains(refine_help, validity_options[i]), "'kissm refine --help' offers %s", validity_options[i]);
+    }
     r = run("refine --help");
     CHECK(contains(r.out, "usage: kissm refine"));
     CHECK(contains(help_line(r.out, "--refine"), "(default gicp)"));
@@ -765,12 +779,114 @@ void test_refine_register() {
     // The summary shows the refinement.
     const Run human = run("register " + pair_args(pair) + " --voxel 0.25 --refine gicp");
     CHECK_EQ_INT(human.code, 0);
-    for (const char *word : {"refinement gicp", "refined transform", "coarse transform", "refinement:", "converged",
-                             "overlap", "rmse", "condition", "moved the coarse pose", "refine "}) {
+    for (const char *word :
+         {"refinement gicp", "refined transform", "coarse transform", "refinement:", "converged", "overlap",
+          "inlier coverage", "rmse", "condition", "moved the coarse pose", "refine ", "rotation uncertainty:"}) {
         CHECK_MSG(contains(human.out, word), "summary lacks '%s':\n%s", word, human.out.c_str());
     }
     const Run human_plain = run("register " + pair_args(pair) + " --voxel 0.25");
     CHECK(!contains(human_plain.out, "refinement:") && !contains(human_plain.out, "coarse transform"));
+}
+
+// %.17g: the double itself on the command line.
+std::string exact(double v) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.17g", v);
+    return text;
+}
+
+// A run's reason code, checked against its exit status and reason text.
+int reason_of(const Run &r, const char *what) {
+    const Json j = contract_json(r, false, what);
+    const int code = static_cast<int>(j.at("reason_code").number);
+    CHECK_MSG(r.code == (code == KISSM_REASON_NONE ? 0 : 1), "%s: exit %d with reason %d (%s)", what, r.code, code,
+              r.err.c_str());
+    CHECK_MSG(j.at("reason").text == kissm_reason_string(code), "%s: reason '%s' for code %d", what,
+              j.at("reason").text.c_str(), code);
+    return code;
+}
+
+// --max-rotation-uncertainty, --refine-min-inliers and --min-inlier-coverage: the tool's and the library's
+// range checks, refused by `refine`, and each moves the decision exactly at the value the JSON reports.
+void test_validity_options() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string plain = "register " + pair_args(pair) + " --voxel 0.25 ";
+    const std::string reg = plain + "--refine gicp ";
+    const std::string ref = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path) + " ";
+
+    for (const char *bad : {"abc", "nan", "inf", "''"}) {
+        expect_usage_error(plain + "--max-rotation-uncertainty " + bad, "--max-rotation-uncertainty");
+        expect_usage_error(reg + "--min-inlier-coverage " + bad, "--min-inlier-coverage");
+    }
+    for (const char *bad : {"abc", "1.5", "99999999999"}) {
+        expect_usage_error(reg + "--refine-min-inliers " + bad, "--refine-min-inliers");
+    }
+    for (const char *bad : {"0", "-0.01", "3.2"}) {
+        expect_usage_error(plain + "--max-rotation-uncertainty " + bad,
+                           "--max-rotation-uncertainty: config.max_rotation_uncertainty");
+    }
+    for (const char *bad : {"-0.1", "1.01"}) {
+        expect_usage_error(reg + "--min-inlier-coverage " + bad, "--min-inlier-coverage: config.min_inlier_coverage");
+    }
+    for (const char *bad : {"2", "-5", "100001"}) {
+        expect_usage_error(reg + "--refine-min-inliers " + bad, "--refine-min-inliers: config.refine_min_inliers");
+    }
+    // kissm_refine has no solver inliers to judge.
+    for (const char *option : {"--max-rotation-uncertainty", "--min-inlier-coverage", "--refine-min-inliers"}) {
+        expect_usage_error(ref + option + " 0.5", option);
+    }
+
+    // Without refinement: the rule's boundary is the rotation uncertainty the JSON reports.
+    const Run base = run(plain + "--json");
+    CHECK_MSG(base.code == 0, "register: exit %d (%s)", base.code, base.err.c_str());
+    const Json b = contract_json(base, false, "register");
+    const double u = b.at("rotation_uncertainty").as_double();
+    const uint64_t inliers = static_cast<uint64_t>(b.at("final_inliers").number);
+    CHECK_MSG(std::isfinite(u) && u > 0.0, "rotation_uncertainty %s", b.at("rotation_uncertainty").text.c_str());
+    CHECK(b.at("inlier_coverage").is(Json::Type::Null));
+    CHECK_EQ_INT(reason_of(run(plain + "--max-rotation-uncertainty " + exact(u) + " --json"), "at u"),
+                 KISSM_REASON_NONE);
+    const Run below = run(plain + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json");
+    CHECK_EQ_INT(reason_of(below, "just below u"), KISSM_REASON_UNCERTAIN_ROTATION);
+    // Only the decision moves, not the pose.
+    CHECK(json_line_value(below.out, "transform") == json_line_value(base.out, "transform"));
+    CHECK(json_line_value(below.out, "rotation_uncertainty") == json_line_value(base.out, "rotation_uncertainty"));
+    // Each rule ignores the other's settings.
+    CHECK_EQ_INT(reason_of(run(reg + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json"),
+                           "refined, strict rotation"),
+                 KISSM_REASON_NONE);
+    CHECK_EQ_INT(reason_of(run(plain + "--refine-min-inliers " + std::to_string(inliers + 1) +
+                               " --min-inlier-coverage 1 --json"),
+                           "unrefined, strict refined rule"),
+                 KISSM_REASON_NONE);
+
+    // The summary shows the same uncertainty in degrees (4 significant digits).
+    const Run human = run(plain);
+    const size_t at = human.out.find("\nrotation uncertainty: ");
+    REQUIRE(at != std::string::npos);
+    const double deg = std::atof(human.out.c_str() + at + 23);
+    CHECK_MSG(std::fabs(deg - kissm_cli::rad_to_deg(u)) <= 5e-4 * kissm_cli::rad_to_deg(u),
+              "summary says %g deg, the JSON %.17g rad", deg, u);
+
+    // With refinement: at least refine_min_inliers final inliers, covering at least min_inlier_coverage.
+    const Run fine = run(reg + "--json");
+    CHECK_MSG(fine.code == 0, "register --refine gicp: exit %d (%s)", fine.code, fine.err.c_str());
+    const Json f = contract_json(fine, false, "register --refine gicp");
+    const double coverage = f.at("inlier_coverage").as_double();
+    const uint64_t fine_inliers = static_cast<uint64_t>(f.at("final_inliers").number);
+    CHECK_MSG(coverage > 0.0 && coverage < 1.0, "inlier_coverage %s", f.at("inlier_coverage").text.c_str());
+    CHECK_EQ_INT(reason_of(run(reg + "--min-inlier-coverage " + exact(coverage) + " --json"), "at the coverage"),
+                 KISSM_REASON_NONE);
+    const Run clustered = run(reg + "--min-inlier-coverage " + exact(std::nextafter(coverage, 2.0)) + " --json");
+    CHECK_EQ_INT(reason_of(clustered, "just above the coverage"), KISSM_REASON_CLUSTERED_INLIERS);
+    CHECK(json_line_value(clustered.out, "transform") == json_line_value(fine.out, "transform"));
+    CHECK_EQ_INT(
+        reason_of(run(reg + "--refine-min-inliers " + std::to_string(fine_inliers) + " --json"), "at the inliers"),
+        KISSM_REASON_NONE);
+    CHECK_EQ_INT(reason_of(run(reg + "--refine-min-inliers " + std::to_string(fine_inliers + 1) + " --json"),
+                           "one inlier short"),
+                 KISSM_REASON_TOO_FEW_INLIERS);
 }
 
 // The ground truth moved by 2 degrees about a skew axis and by (0.15, -0.1, 0.08) m: exactly rigid.
@@ -826,6 +942,8 @@ void test_refine_command() {
         const std::vector<double> coarse = j.at("coarse_transform").flat();
         for (size_t i = 0; i < 16 && coarse.size() == 16; ++i) CHECK_NEAR(coarse[i], initial[i], 1e-12);
         CHECK(j.at("counts").at("source_keypoints").text == "0" && j.at("final_inliers").text == "0");
+        // No solver inliers: nothing for them to cover.
+        CHECK(j.at("inlier_coverage").is(Json::Type::Null));
         CHECK(j.at("refine_converged").boolean);
         const PoseError end = error_of(j.at("transform").flat(), pair.truth);
         std::printf("%s from %.3f deg %.3f m off: %.4f deg %.4f m\n", what.c_str(), start.deg, start.m, end.deg, end.m);
@@ -842,7 +960,7 @@ void test_refine_command() {
                              "refinement:", "moved the initial pose", "valid: yes", "normals"}) {
         CHECK_MSG(contains(from_truth.out, word), "summary lacks '%s':\n%s", word, from_truth.out.c_str());
     }
-    CHECK(!contains(from_truth.out, "keypoints"));
+    CHECK(!contains(from_truth.out, "keypoints") && !contains(from_truth.out, "inlier coverage"));
 
     // Threads do not change the result.
     const std::string base = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(initial_path) + " --json";
@@ -988,7 +1106,8 @@ int main(int argc, char **argv) {
                  {"refine_register", test_refine_register},
                  {"refine_command", test_refine_command},
                  {"refine_initial", test_refine_initial},
-                 {"refine_roundtrip", test_refine_roundtrip}};
+                 {"refine_roundtrip", test_refine_roundtrip},
+                 {"validity_options", test_validity_options}};
     for (const auto &c : cases) {
         if (which != c.name) continue;
         c.run();

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: MIT
 // Unit tests of the command-line tool's own pieces: checksums, the deflate/PNG encoder, the JSON writer,
-// the PLY writer, the transform file, the argument parsers, the result's JSON, the top view and its
-// coarse/refined detail, and the demo scene simulator.
+// the PLY writer, the transform file, the argument parsers, the result's JSON and summary, the top view and
+// its coarse/refined detail, and the demo scene simulator.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -360,6 +361,16 @@ void test_result_json() {
     CHECK(j.at("overlap").is(cli_test::Json::Type::Null) && j.at("refine_rmse").is(cli_test::Json::Type::Null));
     CHECK(j.at("refine").text == "none" && !j.at("refine_converged").boolean);
     CHECK(!refinement_ran(r));
+    // kissm_result_init leaves both validity measures NaN: null.
+    CHECK(j.at("rotation_uncertainty").is(cli_test::Json::Type::Null) &&
+          j.at("inlier_coverage").is(cli_test::Json::Type::Null));
+    // +inf (no inliers spread out) is null too; finite values are written exactly.
+    r.rotation_uncertainty = std::numeric_limits<double>::infinity();
+    CHECK(object_of(r, KISSM_REFINE_NONE, nullptr).at("rotation_uncertainty").is(cli_test::Json::Type::Null));
+    r.rotation_uncertainty = 0.1 + 0.2; // 0.30000000000000004: needs 17 digits
+    j = object_of(r, KISSM_REFINE_NONE, nullptr);
+    cli_test::check_scalar(j.at("rotation_uncertainty"), 0.1 + 0.2, "result json", "rotation_uncertainty");
+    CHECK(j.at("rotation_uncertainty").text == "0.30000000000000004");
 
     // A refined result: information as 6x6, an entry left NaN written as null inside it.
     for (int i = 0; i < 36; ++i) r.information[i] = i == 7 ? std::nan("") : 0.5 * i;
@@ -376,7 +387,52 @@ void test_result_json() {
     CHECK(j.at("information").items[5].items[5].number == 17.5);
     CHECK(j.at("refine").text == "point-to-plane" && j.at("refine_converged").boolean);
     CHECK(j.at("refine_iterations").text == "3" && j.at("overlap").text == "0.75");
+    CHECK(j.at("inlier_coverage").is(cli_test::Json::Type::Null));
+    r.inlier_coverage = 0.625;
+    CHECK(object_of(r, KISSM_REFINE_GICP, nullptr).at("inlier_coverage").text == "0.625");
     cli_test::check_doubles(j.at("initial_transform").flat(), initial, 16, "result json", "initial_transform");
+}
+
+// The summary a result prints, as text.
+std::string summary_of(const kissm_result &r, ResultKind kind) {
+    std::FILE *f = std::tmpfile();
+    if (!f) return std::string();
+    print_result_summary(f, r, kind);
+    std::string text;
+    std::rewind(f);
+    for (int c = std::fgetc(f); c != EOF; c = std::fgetc(f)) text.push_back(static_cast<char>(c));
+    std::fclose(f);
+    return text;
+}
+
+// The summary's rotation uncertainty (degrees; "-" without a pose, "unbounded" when infinite) and, for a
+// refined registration only, the inlier coverage.
+void test_summary_validity_measures() {
+    kissm_result r{};
+    REQUIRE(kissm_result_init(&r, sizeof r) == KISSM_OK);
+    using cli_test::contains;
+    CHECK(contains(summary_of(r, ResultKind::Global), "\nrotation uncertainty: -\n"));
+    r.rotation_uncertainty = deg_to_rad(1.25);
+    std::string text = summary_of(r, ResultKind::Global);
+    CHECK_MSG(contains(text, "\nrotation uncertainty: 1.25 deg\n"), "%s", text.c_str());
+    CHECK(!contains(text, "inlier coverage"));
+    r.rotation_uncertainty = std::numeric_limits<double>::infinity();
+    CHECK(contains(summary_of(r, ResultKind::Global), "\nrotation uncertainty: unbounded\n"));
+
+    // Refined: the coverage on the refinement's line; a refinement from a prior has no solver inliers.
+    for (int i = 0; i < 36; ++i) r.information[i] = 1.0;
+    r.overlap = 0.8;
+    r.refine_rmse = 0.01;
+    r.refine_condition = 0.2;
+    r.inlier_coverage = 0.4375;
+    text = summary_of(r, ResultKind::Global);
+    CHECK_MSG(contains(text, "overlap 0.8000, inlier coverage 0.4375, rmse 0.01, condition 0.2\n"), "%s", text.c_str());
+    r.inlier_coverage = std::nan("");
+    CHECK(contains(summary_of(r, ResultKind::Global), "inlier coverage -, "));
+    text = summary_of(r, ResultKind::Refine);
+    CHECK_MSG(contains(text, "overlap 0.8000, rmse 0.01") && !contains(text, "inlier coverage") &&
+                  !contains(text, "rotation uncertainty"),
+              "%s", text.c_str());
 }
 
 // A cloud in a square of side 40 m: flat ground everywhere (denser than the floor's cells), and a 2 m high
@@ -577,6 +633,7 @@ int main() {
     RUN_TEST(test_args);
     RUN_TEST(test_transform_file);
     RUN_TEST(test_result_json);
+    RUN_TEST(test_summary_validity_measures);
     RUN_TEST(test_alignment_detail);
     RUN_TEST(test_rng);
     RUN_TEST(test_pose_math);

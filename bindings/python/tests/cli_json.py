@@ -31,9 +31,11 @@ COUNTS = {
     "rotation_inliers": "num_rotation_inliers",
     "final_inliers": "num_final_inliers",
 }
-#: The refinement's keys of the JSON (kissm >= the refinement release): doubles and ints by Result field.
+#: The refinement's keys of the JSON: doubles and ints by Result field.
 REFINE_DOUBLES = ("overlap", "refine_rmse", "refine_condition")
 REFINE_INTS = ("refine_iterations",)
+#: The validity measures, each with the key the JSON prints it right after (numbers; null for NaN and inf).
+MEASURES = {"rotation_uncertainty": "inlier_extent", "inlier_coverage": "refine_condition"}
 
 
 def _parse_int(text: str) -> Any:
@@ -72,12 +74,6 @@ def _doubles(value: Any) -> np.ndarray:
     return np.array(value, dtype=object).astype(float)  # None -> nan
 
 
-def cli_knows_refinement(cli: Path) -> bool:
-    """Whether this kissm CLI has the refinement options (`register --refine`, the `refine` command)."""
-    done = subprocess.run([str(cli), "register", "--help"], capture_output=True, text=True, timeout=60)
-    return done.returncode == 0 and "--refine" in done.stdout
-
-
 def write_transform(path: Path, transform: np.ndarray) -> None:
     """A 4x4 transform as the CLI reads it (`--initial`) and writes it (`--out-transform`): 4 lines of 4
     numbers, here Python's shortest round-trip repr, so the CLI reads back the exact doubles."""
@@ -89,6 +85,14 @@ def write_transform(path: Path, transform: np.ndarray) -> None:
 def _assert_same_bits(name: str, got: Any, expected: Any) -> None:
     expected = _doubles(expected).reshape(np.shape(got))
     assert bits(np.asarray(got, dtype=np.float64)) == bits(expected), f"{name}:\n{got!r}\n!=\n{expected!r}"
+
+
+def _assert_same_number(name: str, got: float, expected: float | None) -> None:
+    """The JSON's number is the Result's to the bit; its null stands for any non-finite value (NaN or inf)."""
+    if expected is None:
+        assert not math.isfinite(got), f"{name}: {got!r} != null"
+    else:
+        assert bits(np.float64(got)) == bits(np.float64(expected)), f"{name}: {got!r} != {expected!r}"
 
 
 def assert_matches_cli(result: kissm.Result, cli: dict[str, Any], refine_mode: str | None = None) -> None:
@@ -103,10 +107,6 @@ def assert_matches_cli(result: kissm.Result, cli: dict[str, Any], refine_mode: s
         assert getattr(result, field) == cli["counts"][key], field
     for name in ("inlier_ratio", "residual_rms", "noise_bound"):
         _assert_same_bits(name, getattr(result, name), cli[name])
-    if "coarse_transform" not in cli:
-        # A CLI from before refinement: it has nothing more to compare, and cannot have refined.
-        assert not result.refined and refine_mode is None, "this kissm CLI prints no refinement fields"
-        return
     if refine_mode is not None:
         assert cli["refine"] == refine_mode.replace("_", "-")  # the CLI spells it point-to-plane
     _assert_same_bits("coarse_transform", result.coarse_transform, cli["coarse_transform"])
@@ -121,3 +121,7 @@ def assert_matches_cli(result: kissm.Result, cli: dict[str, Any], refine_mode: s
     assert result.num_refine_correspondences == cli["counts"]["refine_correspondences"]
     assert list(cli["counts"]).index("refine_correspondences") == list(cli["counts"]).index("final_inliers") + 1
     assert list(cli["time_ms"])[-2:] == ["refine", "total"]
+    keys = list(cli)
+    for name, after in MEASURES.items():
+        _assert_same_number(name, getattr(result, name), cli[name])
+        assert keys.index(name) == keys.index(after) + 1, (name, keys)

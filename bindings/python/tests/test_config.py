@@ -12,9 +12,12 @@ import pytest
 
 import kissm
 from kissm import _ffi
+from kissm._errors import check
 
 C_FIELDS = [name for name, _ in _ffi.ffi.typeof("kissm_config").fields]
 PLUMBING = {"struct_size", "log_fn", "log_user_data", "progress_fn", "progress_user_data"}
+#: Fields the library requires to be 0: no setting, zeroed by the binding.
+RESERVED = {"reserved1"}
 
 
 def c_defaults():
@@ -25,13 +28,13 @@ def c_defaults():
 
 def test_every_c_field_is_a_keyword() -> None:
     python_fields = {f.name for f in dataclasses.fields(kissm.Config)}
-    assert python_fields == set(C_FIELDS) - PLUMBING
+    assert python_fields == set(C_FIELDS) - PLUMBING - RESERVED
 
 
 def test_defaults_come_from_kissm_config_init() -> None:
     c = c_defaults()
     config = kissm.Config()
-    for name in set(C_FIELDS) - PLUMBING:
+    for name in set(C_FIELDS) - PLUMBING - RESERVED:
         value = getattr(config, name)
         if name == "viewpoint":
             assert value == tuple(c.viewpoint)
@@ -72,6 +75,10 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         refine_rotation_epsilon=2e-4,
         refine_translation_epsilon_gain=5e-3,
         min_overlap=0.4,
+        max_rotation_uncertainty=0.05,
+        min_inlier_coverage=0.3,
+        refine_min_inliers=25,
+        min_refine_condition=0.05,
     )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
@@ -83,6 +90,9 @@ def test_fields_round_trip_into_the_c_struct() -> None:
     assert (c.refine_mode, c.refine_max_iterations) == (_ffi.lib.KISSM_REFINE_POINT_TO_PLANE, 12)
     assert (c.refine_max_distance_gain, c.refine_kernel_gain, c.refine_rotation_epsilon) == (2.5, 0.75, 2e-4)
     assert (c.refine_translation_epsilon_gain, c.min_overlap) == (5e-3, 0.4)
+    assert (c.max_rotation_uncertainty, c.min_inlier_coverage, c.refine_min_inliers) == (0.05, 0.3, 25)
+    assert c.min_refine_condition == 0.05
+    assert c.reserved1 == 0
     assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
     # what the matcher got is what was asked for
     with kissm.Matcher(config) as matcher:
@@ -128,6 +138,15 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         ("refine_translation_epsilon_gain", 2.0, "config.refine_translation_epsilon_gain is 2; it must be in [0, 1]"),
         ("min_overlap", 1.01, "config.min_overlap is 1.01; it must be in [0, 1]"),
         ("min_overlap", float("inf"), "config.min_overlap is inf"),
+        ("max_rotation_uncertainty", 0.0, "config.max_rotation_uncertainty is 0; it must be in (0, 3.15]"),
+        ("max_rotation_uncertainty", 3.2, "config.max_rotation_uncertainty is 3.2"),
+        ("max_rotation_uncertainty", float("nan"), "config.max_rotation_uncertainty is nan"),
+        ("min_inlier_coverage", -0.1, "config.min_inlier_coverage is -0.1; it must be in [0, 1]"),
+        ("min_inlier_coverage", 1.5, "config.min_inlier_coverage is 1.5"),
+        ("refine_min_inliers", 2, "config.refine_min_inliers is 2; it must be in [3, 100000]"),
+        ("refine_min_inliers", 100001, "config.refine_min_inliers is 100001"),
+        ("min_refine_condition", -0.1, "config.min_refine_condition is -0.1; it must be in [0, 1]"),
+        ("min_refine_condition", float("nan"), "config.min_refine_condition is nan"),
     ],
 )
 def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:
@@ -161,11 +180,30 @@ def test_out_of_int32_range_is_a_valueerror() -> None:
         ("refine_max_iterations", 10.0),
         ("refine_kernel_gain", "1"),
         ("min_overlap", None),
+        ("max_rotation_uncertainty", "0.1"),
+        ("min_inlier_coverage", True),
+        ("refine_min_inliers", 10.0),
+        ("min_refine_condition", None),
     ],
 )
 def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
     with pytest.raises(TypeError, match=field):
         kissm.Config(**{field: value})
+
+
+def test_reserved_fields_are_zeroed_and_not_settings() -> None:
+    """The library refuses a non-zero reserved field; the binding always hands it 0 and takes no keyword for it."""
+    for name in RESERVED:
+        with pytest.raises(TypeError, match=name):
+            kissm.Config(**{name: 0})
+        with pytest.raises(TypeError, match=name):
+            kissm.Matcher(voxel_size=0.3, **{name: 0})
+        c = kissm.Config(voxel_size=0.3)._to_c()
+        assert getattr(c, name) == 0
+        setattr(c, name, 1)  # what a binding that left it to chance could send
+        with pytest.raises(kissm.InvalidArgumentError, match=f"config.{name} is 1; it must be in \\[0, 0\\]"):
+            check(_ffi.lib.kissm_config_validate(c))
+        assert name not in kissm.Config().to_dict() and name not in repr(kissm.Config(voxel_size=0.3))
 
 
 def test_viewpoint_needs_three_coordinates() -> None:
@@ -236,6 +274,10 @@ def test_pickle_and_copy() -> None:
         refine_max_iterations=7,
         refine_kernel_gain=0.5,
         min_overlap=0.3,
+        max_rotation_uncertainty=0.02,
+        min_inlier_coverage=0.1,
+        refine_min_inliers=12,
+        min_refine_condition=0.02,
     )
     for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
         assert pickle.loads(pickle.dumps(config, protocol)) == config
@@ -250,6 +292,11 @@ def test_repr_is_readable_and_evaluable() -> None:
     refined = kissm.Config(refine_mode="point_to_plane", refine_max_iterations=5, min_overlap=0.25)
     assert repr(refined) == "kissm.Config(refine_mode='point_to_plane', refine_max_iterations=5, min_overlap=0.25)"
     assert eval(repr(refined), {"kissm": kissm}) == refined
+    validity = kissm.Config(max_rotation_uncertainty=0.05, min_inlier_coverage=0.5, refine_min_inliers=20)
+    assert repr(validity) == (
+        "kissm.Config(max_rotation_uncertainty=0.05, min_inlier_coverage=0.5, refine_min_inliers=20)"
+    )
+    assert eval(repr(validity), {"kissm": kissm}) == validity
 
 
 def test_matcher_overrides_and_config() -> None:

@@ -40,7 +40,7 @@ COUNTS = [
     "refine_iterations",
     "refine_converged",
 ]
-DOUBLES = ["residual_rms", "overlap", "refine_rmse", "refine_condition"]
+DOUBLES = ["residual_rms", "overlap", "refine_rmse", "refine_condition", "rotation_uncertainty", "inlier_coverage"]
 ARRAYS = ["transform", "coarse_transform", "information"]
 
 

@@ -53,6 +53,9 @@ def test_real_pair_against_ground_truth(real_pairs: dict[str, RealPair], name: s
     rre = rotation_error_deg(result.rotation, pair.gt[:3, :3]) if result.valid else math.nan
     rte = float(np.linalg.norm(result.translation - pair.gt[:3, 3])) if result.valid else math.nan
     success = result.valid and rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m
+    if result.valid:  # the rule without refinement, on the measure the Result reports
+        assert 0.0 < result.rotation_uncertainty <= kissm.Config().max_rotation_uncertainty, name
+    assert math.isnan(result.inlier_coverage)
     if pair.kind.must_succeed:
         assert success, f"{name}: {result!r}\nRRE {rre:.3f} deg, RTE {rte:.4f} m"
     else:  # object scans: may give up, must not be confidently wrong
@@ -83,6 +86,9 @@ def test_real_lidar_pair_refined_with_gicp(real_pairs: dict[str, RealPair], name
     assert rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m, report
     assert 0.5 < result.overlap <= 1.0 and result.refine_converged, f"{report}\n{result!r}"
     assert np.linalg.eigvalsh(result.information).min() > 0, report
+    # the refined rule's measure; the solver's is reported as without refinement
+    assert result.inlier_coverage >= kissm.Config().min_inlier_coverage, report
+    assert result.rotation_uncertainty == _register(name, pair).rotation_uncertainty, report
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -42,7 +42,10 @@ _FLOAT_FIELDS = (
     "refine_kernel_gain",
     "refine_rotation_epsilon",
     "refine_translation_epsilon_gain",
+    "max_rotation_uncertainty",
     "min_overlap",
+    "min_inlier_coverage",
+    "min_refine_condition",
 )
 _INT_FIELDS = (
     "num_threads",
@@ -51,6 +54,7 @@ _INT_FIELDS = (
     "min_inliers",
     "log_level",
     "refine_max_iterations",
+    "refine_min_inliers",
 )
 
 
@@ -138,7 +142,7 @@ class Config:
     max_correspondences: int = _DEFAULTS["max_correspondences"]
     """Cap on the mutual matches kept, best ratio first; 3..100000."""
     min_inliers: int = _DEFAULTS["min_inliers"]
-    """Final inliers needed for ``Result.valid``; 3..100000."""
+    """Final inliers needed for ``Result.valid`` without refinement (``refine_min_inliers`` with it); 3..100000."""
     nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]
     """'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are skipped and counted)."""
     viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
@@ -163,9 +167,22 @@ class Config:
     ``refine_translation_epsilon_gain * voxel_size``; in [0, 1]."""
     refine_translation_epsilon_gain: float = _DEFAULTS["refine_translation_epsilon_gain"]
     """Convergence threshold on a refinement step's translation = gain * voxel_size; in [0, 1]."""
+    max_rotation_uncertainty: float = _DEFAULTS["max_rotation_uncertainty"]
+    """Without refinement, ``Result.valid`` needs ``Result.rotation_uncertainty`` <= this (radians; else reason "the
+    inliers leave the rotation uncertain": too few inliers, or all on one compact object); in (0, 3.15]."""
     min_overlap: float = _DEFAULTS["min_overlap"]
     """With refinement, ``Result.valid`` needs ``Result.overlap`` >= this (else reason "the refined pose overlaps
     too little"); in [0, 1]."""
+    min_inlier_coverage: float = _DEFAULTS["min_inlier_coverage"]
+    """With refinement, ``Result.valid`` needs ``Result.inlier_coverage`` >= this (else reason "the inliers cover
+    too little of the overlap": one object may match itself in several poses); in [0, 1]."""
+    refine_min_inliers: int = _DEFAULTS["refine_min_inliers"]
+    """With refinement, the final inliers ``Result.valid`` needs (``min_inliers`` applies without refinement);
+    3..100000."""
+    min_refine_condition: float = _DEFAULTS["min_refine_condition"]
+    """With refinement (and :meth:`Matcher.refine`), ``Result.valid`` needs ``Result.refine_condition`` >= this
+    (else reason "the refined pose is not constrained in every direction": a direction carrying less than this
+    share of the strongest one's information slides, as along a corridor); in [0, 1]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object
@@ -199,6 +216,7 @@ class Config:
                 raise ValueError(f"config.{name} is {value}; it does not fit in a 32-bit int") from None
         for i in range(3):
             c.viewpoint[i] = self.viewpoint[i]
+        c.reserved1 = 0  # not a setting: the library refuses anything else (kept for a future field)
         return c
 
     def replace(self, **changes: Any) -> Config:

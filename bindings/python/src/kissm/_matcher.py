@@ -198,7 +198,8 @@ class Matcher:
         Both clouds are voxelised, their normals estimated, and ``initial`` refined with ``config.refine_mode``
         ('gicp' when it is 'none'). The Result's ``coarse_transform`` is ``initial`` (made exactly rigid),
         ``transform`` the refined pose, ``information`` its information matrix; ``valid`` says whether the
-        refined pose overlaps the target enough and is constrained in every direction (else ``reason``).
+        refined pose overlaps the target enough, is constrained in every direction and refinement converged
+        (else ``reason``).
 
         Raises:
             TypeError, ValueError: ``initial`` is not a (4, 4) array of real numbers, or the clouds are not
@@ -214,8 +215,9 @@ class Matcher:
         return self._call_for_result(lib.kissm_refine, src.c, tgt.c, transform_view(initial))
 
     def refine_features(self, source: Features, target: Features, initial: TransformLike) -> Result:
-        """:meth:`refine` on described clouds: the same refined pose as :meth:`refine` on the clouds they were
-        computed from (voxelisation and feature times are reported as 0). Features computed by a matcher with
+        """:meth:`refine` on described clouds: the same refined pose and counts as :meth:`refine` on the clouds they
+        were computed from (no keypoints, as refinement uses no descriptors; voxelisation and feature times are
+        reported as 0). Features computed by a matcher with
         refinement on (``refine_mode`` other than 'none') carry the search index refinement uses, so a map
         described once is not indexed again for every scan.
 

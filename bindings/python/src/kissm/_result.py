@@ -28,7 +28,16 @@ _COUNT_FIELDS = (
     "num_refine_correspondences",
     "refine_iterations",
 )
-_FLOAT_FIELDS = ("inlier_ratio", "residual_rms", "noise_bound", "overlap", "refine_rmse", "refine_condition")
+_FLOAT_FIELDS = (
+    "inlier_ratio",
+    "residual_rms",
+    "noise_bound",
+    "overlap",
+    "refine_rmse",
+    "refine_condition",
+    "rotation_uncertainty",
+    "inlier_coverage",
+)
 _TIME_FIELDS = (
     "time_voxelize_ms",
     "time_features_ms",
@@ -72,6 +81,13 @@ class Result:
     ``transform`` is the refined pose, ``coarse_transform`` the one refinement started from, and
     ``information``, ``overlap``, ``refine_rmse`` and ``refine_condition`` describe the refined pose; without
     it they are NaN (``refined`` is False) and the refinement counts are 0.
+
+    ``valid`` follows one of two rules. Without refinement: at least ``Config.min_inliers`` final inliers, not
+    collinear or planar, and ``rotation_uncertainty`` <= ``Config.max_rotation_uncertainty``. With it: at least
+    ``Config.refine_min_inliers``, not collinear or planar, ``overlap`` >= ``Config.min_overlap``,
+    ``inlier_coverage`` >= ``Config.min_inlier_coverage``, ``refine_condition`` >= ``Config.min_refine_condition``
+    (a pose constrained in every direction) and a refinement that converged (``refine_converged``).
+    :meth:`Matcher.refine` checks only the overlap, the condition and the convergence.
     """
 
     valid: bool
@@ -158,7 +174,22 @@ class Result:
     when refinement did not run or found no correspondence."""
     refine_condition: float
     """Weakest over strongest direction of ``information`` (rotations as displacements at the matched points'
-    radius), in [0, 1]: near 0 the pose slides along some direction. NaN when refinement did not run."""
+    radius), in [0, 1]: near 0 the pose slides along some direction (``Config.min_refine_condition`` is checked
+    against it). NaN when refinement did not run."""
+    rotation_uncertainty: float
+    """How well the solver's inliers pin the rotation down, in radians: its 1-sigma uncertainty about the worst
+    axis if every inlier were off by ``noise_bound``, ``noise_bound / sqrt(N (e1**2 + e2**2))`` with ``N``
+    = ``num_final_inliers`` and ``e1``, ``e2`` the two smaller ``inlier_extent`` values. Large when the
+    inliers are few or all on one compact object. Without refinement ``valid`` needs it <=
+    ``Config.max_rotation_uncertainty`` (else reason "the inliers leave the rotation uncertain"). ``inf`` when
+    the solver found a pose but no inlier spread (e.g. no inliers); NaN when the global solver estimated no pose
+    (and after :meth:`Matcher.refine`, which runs no solver)."""
+    inlier_coverage: float
+    """How much of the aligned overlap the solver's inliers span: the inliers' principal standard deviation
+    (``inlier_extent[0]``) over that of the source voxels the refined pose overlaps; small when the matches
+    cluster on one object, which may match itself in several poses. With refinement ``valid`` needs it >=
+    ``Config.min_inlier_coverage`` (else reason "the inliers cover too little of the overlap"). NaN unless a
+    registration (not :meth:`Matcher.refine`) was refined and had inliers."""
     time_refine_ms: float
     """Milliseconds spent on refinement (0 when it did not run)."""
     num_refine_correspondences: int
@@ -166,7 +197,9 @@ class Result:
     refine_iterations: int
     """Refinement iterations run (0 when it did not run)."""
     refine_converged: bool
-    """Whether refinement stopped on its convergence test rather than its iteration cap."""
+    """Whether refinement stopped on its convergence test rather than its iteration cap; a refined pose that did
+    not is not valid (reason "refinement did not converge": it was still crossing between basins, as from a
+    wrong start)."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
@@ -225,6 +258,11 @@ class Result:
                 f"(inlier_ratio {self.inlier_ratio:.3f}), residual_rms {self.residual_rms:.4g}, "
                 f"{self.time_total_ms:.1f} ms,"
             )
+            if not math.isnan(self.rotation_uncertainty):  # the solver estimated a pose
+                evidence = f"{pad}rotation_uncertainty {math.degrees(self.rotation_uncertainty):.3g} deg"
+                if not math.isnan(self.inlier_coverage):
+                    evidence += f", inlier_coverage {self.inlier_coverage:.3f}"
+                lines.append(f"{evidence} (the inliers' spread),")
         moved = ""
         if self.refined:
             stop = "converged" if self.refine_converged else "iteration cap"
