@@ -497,10 +497,11 @@ typedef struct kissm_result {
     double refine_condition;
     /** 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off by
      * the noise bound: noise_bound / sqrt(N (e1^2 + e2^2)) with e1, e2 the two smaller inlier_extent values.
-     * Infinite without inliers; NaN when no pose was estimated. */
+     * Infinite when e1 = e2 = 0 (no inliers, or all on one point); NaN when no pose was estimated. */
     double rotation_uncertainty;
     /** Principal standard deviation of the inliers over that of the source voxels the refined pose overlaps:
-     * how much of the overlap the solver's matches span. NaN unless a registration was refined. */
+     * how much of the overlap the solver's matches span (above 1 when they reach beyond it). NaN unless a
+     * registration was refined. */
     double inlier_coverage;
     /** Wall-clock ms: refinement (0 if not run). */
     double time_refine_ms;
@@ -703,9 +704,9 @@ KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features);
 KISSM_API int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source,
                                           const kissm_features *target, kissm_result *result);
 /**
- * @brief kissm_refine() on described clouds: the same refined pose as kissm_refine() on the clouds the features
- *        were computed from. Features computed with refinement enabled carry the index refinement searches, so
- *        a map described once is not indexed again.
+ * @brief kissm_refine() on described clouds: the same result as kissm_refine() on the clouds the features were
+ *        computed from (keypoint counts 0 as there), bit for bit but for the times. Features computed with
+ *        refinement enabled carry the index refinement searches, so a map described once is not indexed again.
  *
  * Voxelisation and feature times are reported as 0. The result is always fully overwritten.
  * @param[in,out] matcher The matcher (its settings; one call at a time).

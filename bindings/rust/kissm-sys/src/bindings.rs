@@ -481,10 +481,11 @@ pub struct kissm_result {
     pub refine_condition: f64,
     /** 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off by
  the noise bound: noise_bound / sqrt(N (e1^2 + e2^2)) with e1, e2 the two smaller inlier_extent values.
- Infinite without inliers; NaN when no pose was estimated.*/
+ Infinite when e1 = e2 = 0 (no inliers, or all on one point); NaN when no pose was estimated.*/
     pub rotation_uncertainty: f64,
     /** Principal standard deviation of the inliers over that of the source voxels the refined pose overlaps:
- how much of the overlap the solver's matches span. NaN unless a registration was refined.*/
+ how much of the overlap the solver's matches span (above 1 when they reach beyond it). NaN unless a
+ registration was refined.*/
     pub inlier_coverage: f64,
     /// Wall-clock ms: refinement (0 if not run).
     pub time_refine_ms: f64,
@@ -821,9 +822,9 @@ extern "C" {
     ) -> i32;
 }
 extern "C" {
-    /** @brief kissm_refine() on described clouds: the same refined pose as kissm_refine() on the clouds the features
-        were computed from. Features computed with refinement enabled carry the index refinement searches, so
-        a map described once is not indexed again.
+    /** @brief kissm_refine() on described clouds: the same result as kissm_refine() on the clouds the features were
+        computed from (keypoint counts 0 as there), bit for bit but for the times. Features computed with
+        refinement enabled carry the index refinement searches, so a map described once is not indexed again.
 
  Voxelisation and feature times are reported as 0. The result is always fully overwritten.
  @param[in,out] matcher The matcher (its settings; one call at a time).
