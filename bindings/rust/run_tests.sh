@@ -2,9 +2,10 @@
 # SPDX-License-Identifier: MIT
 # The Rust binding's tests, run by tools/test.sh (and so by CI) after the C build:
 #   1. cargo test --release: the workspace's tests (API, errors, registrations of the shared test scene of
-#      tests/data and of variations of it, refinement, real-data registrations and refinements, feature
-#      reuse, threads, cancellation, bitwise equality with the C tool and with tests/data/golden.json, the
-#      README examples as doc tests and their drift check); KISSM_REQUIRE_TEST_DATA=1 makes a missing tests/data a failure, not a skip;
+#      tests/data and of variations of it, refinement, the validity rules' settings, real-data registrations
+#      and refinements, feature reuse, threads, cancellation, bitwise equality with the C tool and with
+#      tests/data/golden.json, the README examples as doc tests and their drift check);
+#      KISSM_REQUIRE_TEST_DATA=1 makes a missing tests/data a failure, not a skip;
 #   2. the register example against the C tool (register, with and without refinement, and refine from
 #      an initial transform) on the demo clouds, the test scene and a KITTI pair when the data is there:
 #      the same exit status and the same --json output byte for byte, times and thread count aside;

@@ -16,11 +16,11 @@
 //! for the times: the same keys in the same order (`version`, `source`, `target`, `voxel_size`,
 //! `threads`, `valid`, `reason`, `reason_code`, `initial_transform` with `--initial`, `transform`,
 //! `rotation`, `translation`, `coarse_transform`, `refine`, `information`, `overlap`, `refine_rmse`,
-//! `refine_condition`, `refine_iterations`, `refine_converged`, `final_inliers`, `counts`,
-//! `inlier_ratio`, `residual_rms`, `noise_bound`, `inlier_extent`, `time_ms`, `read_ms`), the same layout
-//! and the same number format: the shortest of `%.15g`, `%.16g` and `%.17g` that reads back to the exact
-//! double, `null` for NaN (and for `information` when refinement did not run). Exit status: 0 valid pose,
-//! 1 not valid, 2 usage or input error.
+//! `refine_condition`, `inlier_coverage`, `refine_iterations`, `refine_converged`, `final_inliers`,
+//! `counts`, `inlier_ratio`, `residual_rms`, `noise_bound`, `inlier_extent`, `rotation_uncertainty`,
+//! `time_ms`, `read_ms`), the same layout and the same number format: the shortest of `%.15g`, `%.16g`
+//! and `%.17g` that reads back to the exact double, `null` for NaN and infinities (and for `information`
+//! when refinement did not run). Exit status: 0 valid pose, 1 not valid, 2 usage or input error.
 
 use std::fmt::Write as _;
 use std::process::ExitCode;
@@ -288,6 +288,7 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("overlap", json_number(fine.map_or(nan, |f| f.overlap))),
         ("refine_rmse", json_number(fine.map_or(nan, |f| f.rmse))),
         ("refine_condition", json_number(fine.map_or(nan, |f| f.condition))),
+        ("inlier_coverage", json_number(fine.map_or(nan, |f| f.inlier_coverage))),
         ("refine_iterations", fine.map_or(0, |f| f.iterations).to_string()),
         ("refine_converged", fine.is_some_and(|f| f.converged).to_string()),
         ("final_inliers", reg.final_inliers().to_string()),
@@ -296,6 +297,7 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("residual_rms", json_number(reg.residual_rms)),
         ("noise_bound", json_number(reg.noise_bound)),
         ("inlier_extent", json_row(&reg.inlier_extent)),
+        ("rotation_uncertainty", json_number(reg.rotation_uncertainty)),
         ("time_ms", json_object(&times, 4)),
         ("read_ms", json_number(read_ms)),
     ]);
@@ -336,13 +338,18 @@ fn print_summary(opt: &Options, reg: &Registration, read_ms: f64) {
         "keypoints {} / {}, matches {}, pruned {}, final inliers {}",
         c.source_keypoints, c.target_keypoints, c.initial_correspondences, c.pruned_correspondences, c.final_inliers
     );
+    if opt.initial.is_none() {
+        println!("rotation uncertainty: {:.4} deg", reg.rotation_uncertainty.to_degrees());
+    }
     if let Some(fine) = reg.refinement {
         println!(
-            "refinement: {} iterations, {}; {} correspondences; overlap {:.4}, rmse {:.4}, condition {:.4}",
+            "refinement: {} iterations, {}; {} correspondences; overlap {:.4}, inlier coverage {:.4}, rmse {:.4}, \
+             condition {:.4}",
             fine.iterations,
             if fine.converged { "converged" } else { "stopped at the iteration cap" },
             fine.correspondences,
             fine.overlap,
+            fine.inlier_coverage,
             fine.rmse,
             fine.condition
         );

@@ -81,8 +81,9 @@ impl Default for Viewpoint {
 /// 0.3, normal radius gain 3.5, FPFH radius gain 5.0, maximum linearity 0.99, ratio test 0.9, pruning
 /// and solver noise bound gains 1.0 and 0.75, no noise bound cap, viewpoint at the origin, 3 normal
 /// neighbours, 5000 correspondences, 15 inliers, non-finite points rejected, all hardware threads, no
-/// refinement ([`RefineMode::None`]; the refinement settings as `kissm.h` documents them). Every length
-/// scales with the voxel size, so it is usually the only value to set.
+/// refinement ([`RefineMode::None`]; the refinement settings and the validity rules' thresholds as
+/// `kissm.h` documents them, read from the library). Every length scales with the voxel size, so it is
+/// usually the only value to set.
 ///
 /// ```
 /// let config = kissm::Config::builder().voxel_size(0.5).num_threads(2).build()?;
@@ -206,7 +207,8 @@ impl Config {
     pub fn max_correspondences(&self) -> usize {
         usize::try_from(self.raw.max_correspondences).unwrap_or(0)
     }
-    /// Final inliers needed for a valid pose.
+    /// Final inliers needed for a valid pose without refinement
+    /// ([`refine_min_inliers`](Config::refine_min_inliers) with it).
     pub fn min_inliers(&self) -> usize {
         usize::try_from(self.raw.min_inliers).unwrap_or(0)
     }
@@ -246,9 +248,25 @@ impl Config {
     pub fn refine_translation_epsilon_gain(&self) -> f64 {
         self.raw.refine_translation_epsilon_gain
     }
+    /// Without refinement, a valid pose needs
+    /// [`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this
+    /// (radians).
+    pub fn max_rotation_uncertainty(&self) -> f64 {
+        self.raw.max_rotation_uncertainty
+    }
     /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this.
     pub fn min_overlap(&self) -> f64 {
         self.raw.min_overlap
+    }
+    /// With refinement, a valid registration needs
+    /// [`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage) at least this.
+    pub fn min_inlier_coverage(&self) -> f64 {
+        self.raw.min_inlier_coverage
+    }
+    /// With refinement, final inliers a valid registration needs ([`min_inliers`](Config::min_inliers)
+    /// applies without refinement).
+    pub fn refine_min_inliers(&self) -> usize {
+        usize::try_from(self.raw.refine_min_inliers).unwrap_or(0)
     }
 }
 
@@ -282,7 +300,10 @@ impl fmt::Debug for Config {
             .field("refine_kernel_gain", &self.raw.refine_kernel_gain)
             .field("refine_rotation_epsilon", &self.raw.refine_rotation_epsilon)
             .field("refine_translation_epsilon_gain", &self.raw.refine_translation_epsilon_gain)
+            .field("max_rotation_uncertainty", &self.raw.max_rotation_uncertainty)
             .field("min_overlap", &self.raw.min_overlap)
+            .field("min_inlier_coverage", &self.raw.min_inlier_coverage)
+            .field("refine_min_inliers", &self.raw.refine_min_inliers)
             .finish()
     }
 }
@@ -390,7 +411,8 @@ impl ConfigBuilder {
         self.raw.max_correspondences = to_i32(count);
         self
     }
-    /// Final inliers a valid pose needs, 3..=100000 (default 15).
+    /// Final inliers a valid pose needs without refinement, 3..=100000 (default 15); with refinement
+    /// [`refine_min_inliers`](ConfigBuilder::refine_min_inliers) applies instead.
     pub fn min_inliers(mut self, count: usize) -> Self {
         self.raw.min_inliers = to_i32(count);
         self
@@ -439,6 +461,28 @@ impl ConfigBuilder {
     /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default: the library's).
     pub fn min_overlap(mut self, overlap: f64) -> Self {
         self.raw.min_overlap = overlap;
+        self
+    }
+    /// Without refinement, a valid pose needs inliers that pin its rotation down to this many radians
+    /// ([`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this;
+    /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default:
+    /// the library's, 2 degrees).
+    pub fn max_rotation_uncertainty(mut self, radians: f64) -> Self {
+        self.raw.max_rotation_uncertainty = radians;
+        self
+    }
+    /// With refinement, a valid registration needs solver inliers spread over at least this much of the
+    /// aligned overlap ([`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage); below it:
+    /// [`Reason::ClusteredInliers`](crate::Reason::ClusteredInliers)); in [0, 1] (default: the library's).
+    pub fn min_inlier_coverage(mut self, coverage: f64) -> Self {
+        self.raw.min_inlier_coverage = coverage;
+        self
+    }
+    /// With refinement, final inliers a valid registration needs (fewer:
+    /// [`Reason::TooFewInliers`](crate::Reason::TooFewInliers)), 3..=100000 (default: the library's);
+    /// [`min_inliers`](ConfigBuilder::min_inliers) applies without refinement.
+    pub fn refine_min_inliers(mut self, count: usize) -> Self {
+        self.raw.refine_min_inliers = to_i32(count);
         self
     }
 

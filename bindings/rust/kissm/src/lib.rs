@@ -67,7 +67,8 @@
 //!   files ([`read_points`]), without copies; anything implementing [`AsPoints`].
 //! - **Refinement**: [`Config::refine_mode`] refines the global pose with GICP or point-to-plane ICP in
 //!   the same call, and [`Matcher::refine`] refines a known pose; [`Registration::refinement`] then holds
-//!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose.
+//!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose, and how much of
+//!   the overlap the solver's inliers cover.
 //! - **Results** are bitwise identical to the C library's (and the `kissm` tool's) on the same input,
 //!   whatever the thread count and whether the matcher is fresh or reused.
 //! - **Errors**: every failure is an [`Error`] with the C status code and the library's message naming

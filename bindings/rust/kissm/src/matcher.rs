@@ -164,9 +164,9 @@ impl Matcher {
         Ok(Registration::from_raw(&result))
     }
 
-    /// [`refine`](Matcher::refine) on described clouds: the same refined pose, refinement and validity as on
-    /// the clouds the features were computed from; the keypoint counts are the features' and the
-    /// voxelisation and feature times are 0. Features computed
+    /// [`refine`](Matcher::refine) on described clouds: the same result as on the clouds the features were
+    /// computed from (keypoint counts 0, as refinement uses no descriptor), but for the voxelisation and
+    /// feature times, which are 0. Features computed
     /// by a matcher with refinement enabled carry the index refinement searches, so a map described once is
     /// not indexed again. Fails as [`register_features`](Matcher::register_features) does, and as
     /// [`refine`](Matcher::refine) does for a bad `initial`.

@@ -21,7 +21,8 @@ pub enum Reason {
     TooFewCorrespondences,
     /// The robust solver found no consistent rotation.
     SolverFailed,
-    /// Final inliers below [`Config::min_inliers`](crate::Config::min_inliers).
+    /// Final inliers below [`Config::min_inliers`](crate::Config::min_inliers) (with refinement:
+    /// [`Config::refine_min_inliers`](crate::Config::refine_min_inliers)).
     TooFewInliers,
     /// The inliers are collinear or planar: the pose is ambiguous.
     Degenerate,
@@ -32,6 +33,14 @@ pub enum Reason {
     /// Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
     /// [`Refinement::condition`] and [`Refinement::information`].
     Unconstrained,
+    /// Without refinement: the inliers pin the rotation down no better than
+    /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)
+    /// ([`Registration::rotation_uncertainty`] above it): too few of them, or all on one compact object.
+    UncertainRotation,
+    /// With refinement: the solver's inliers cover less than
+    /// [`Config::min_inlier_coverage`](crate::Config::min_inlier_coverage) of the aligned overlap
+    /// ([`Refinement::inlier_coverage`] below it): one object may match itself in several poses.
+    ClusteredInliers,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -49,6 +58,8 @@ impl Reason {
             sys::KISSM_REASON_DEGENERATE => Reason::Degenerate,
             sys::KISSM_REASON_LOW_OVERLAP => Reason::LowOverlap,
             sys::KISSM_REASON_UNCONSTRAINED => Reason::Unconstrained,
+            sys::KISSM_REASON_UNCERTAIN_ROTATION => Reason::UncertainRotation,
+            sys::KISSM_REASON_CLUSTERED_INLIERS => Reason::ClusteredInliers,
             other => Reason::Other(other),
         }
     }
@@ -65,6 +76,8 @@ impl Reason {
             Reason::Degenerate => sys::KISSM_REASON_DEGENERATE,
             Reason::LowOverlap => sys::KISSM_REASON_LOW_OVERLAP,
             Reason::Unconstrained => sys::KISSM_REASON_UNCONSTRAINED,
+            Reason::UncertainRotation => sys::KISSM_REASON_UNCERTAIN_ROTATION,
+            Reason::ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
             Reason::Other(code) => code,
         }
     }
@@ -161,6 +174,12 @@ pub struct Refinement {
     /// Weakest over strongest direction of the information, with rotations taken as displacements at the
     /// matched points' radius, in [0, 1]: near 0 the pose slides along some direction.
     pub condition: f64,
+    /// Principal standard deviation of the solver's inliers over that of the source voxels the refined
+    /// pose overlaps: how much of the overlap the global matches span (inliers on one compact object span
+    /// little of it, whatever the pose). A valid refined registration needs at least
+    /// [`Config::min_inlier_coverage`](crate::Config::min_inlier_coverage). NaN after
+    /// [`Matcher::refine`](crate::Matcher::refine) (no solver, no inliers) and when there are no inliers.
+    pub inlier_coverage: f64,
     /// Correspondences at the final pose.
     pub correspondences: u64,
     /// Iterations run.
@@ -206,6 +225,14 @@ pub struct Registration {
     /// Square roots of the eigenvalues (descending) of the inliers' source covariance: how well spread
     /// the inliers are.
     pub inlier_extent: [f64; 3],
+    /// 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off
+    /// by [`noise_bound`](Registration::noise_bound): `noise_bound / sqrt(N (e1^2 + e2^2))`, with `N` the
+    /// final inliers and `e1`, `e2` the two smaller [`inlier_extent`](Registration::inlier_extent) values.
+    /// Without refinement a valid pose needs at most
+    /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty). Infinite without
+    /// inliers; NaN when no pose was estimated and after [`Matcher::refine`](crate::Matcher::refine) (no
+    /// solver).
+    pub rotation_uncertainty: f64,
     /// Milliseconds per stage.
     pub timings: Timings,
 }
@@ -247,6 +274,7 @@ impl Registration {
             overlap: r.overlap,
             rmse: r.refine_rmse,
             condition: r.refine_condition,
+            inlier_coverage: r.inlier_coverage,
             correspondences: r.num_refine_correspondences,
             iterations: u32::try_from(r.refine_iterations).unwrap_or(0),
             converged: r.refine_converged != 0,
@@ -278,6 +306,7 @@ impl Registration {
             residual_rms: r.residual_rms,
             noise_bound: r.noise_bound,
             inlier_extent: r.inlier_extent,
+            rotation_uncertainty: r.rotation_uncertainty,
             timings: Timings {
                 voxelize_ms: r.time_voxelize_ms,
                 features_ms: r.time_features_ms,
@@ -326,7 +355,10 @@ impl Registration {
                     && a.iterations == b.iterations
                     && a.converged == b.converged
                     && bits(&a.information, &b.information)
-                    && bits(&[a.overlap, a.rmse, a.condition], &[b.overlap, b.rmse, b.condition])
+                    && bits(
+                        &[a.overlap, a.rmse, a.condition, a.inlier_coverage],
+                        &[b.overlap, b.rmse, b.condition, b.inlier_coverage],
+                    )
             }
             _ => false,
         };
@@ -338,8 +370,8 @@ impl Registration {
             && bits(&self.rotation, &other.rotation)
             && bits(&self.translation, &other.translation)
             && bits(
-                &[self.inlier_ratio, self.residual_rms, self.noise_bound],
-                &[other.inlier_ratio, other.residual_rms, other.noise_bound],
+                &[self.inlier_ratio, self.residual_rms, self.noise_bound, self.rotation_uncertainty],
+                &[other.inlier_ratio, other.residual_rms, other.noise_bound, other.rotation_uncertainty],
             )
             && bits(&self.inlier_extent, &other.inlier_extent)
             && same_refinement

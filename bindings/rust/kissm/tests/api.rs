@@ -97,6 +97,60 @@ fn refine_defaults_are_the_library_ones() {
 }
 
 #[test]
+fn validity_settings_are_the_library_ones() {
+    // The lead may tune these defaults: the crate reads them from kissm_config_init.
+    let lib = library_defaults();
+    for c in [Config::default(), Config::builder().build().unwrap()] {
+        assert_eq!(c.max_rotation_uncertainty().to_bits(), lib.max_rotation_uncertainty.to_bits());
+        assert_eq!(c.min_inlier_coverage().to_bits(), lib.min_inlier_coverage.to_bits());
+        assert_eq!(c.refine_min_inliers(), lib.refine_min_inliers as usize);
+        assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
+        // Inside the documented ranges.
+        assert!(c.max_rotation_uncertainty() > 0.0 && c.max_rotation_uncertainty() <= 3.15);
+        assert!((0.0..=1.0).contains(&c.min_inlier_coverage()));
+        assert!((3..=100_000).contains(&c.refine_min_inliers()));
+        // The reserved field is zero and not a setting.
+        assert_eq!(c.as_raw().reserved1, 0);
+        assert!(!format!("{c:?}").contains("reserved"), "{c:?}");
+    }
+    assert_eq!(lib.reserved1, 0);
+}
+
+#[test]
+fn builder_sets_every_validity_field() {
+    let c = Config::builder().max_rotation_uncertainty(0.01).min_inlier_coverage(0.6).refine_min_inliers(25).build();
+    let c = c.unwrap();
+    assert_eq!(c.max_rotation_uncertainty(), 0.01);
+    assert_eq!(c.min_inlier_coverage(), 0.6);
+    assert_eq!(c.refine_min_inliers(), 25);
+    // Under their C names in the raw struct, next to a zero reserved field; the Debug output names them.
+    let raw = c.as_raw();
+    assert_eq!((raw.max_rotation_uncertainty, raw.min_inlier_coverage), (0.01, 0.6));
+    assert_eq!((raw.refine_min_inliers, raw.reserved1), (25, 0));
+    let debug = format!("{c:?}");
+    for field in ["max_rotation_uncertainty: 0.01", "min_inlier_coverage: 0.6", "refine_min_inliers: 25"] {
+        assert!(debug.contains(field), "{debug}");
+    }
+    // Every other field keeps the library's default.
+    let back = c
+        .to_builder()
+        .max_rotation_uncertainty(Config::default().max_rotation_uncertainty())
+        .min_inlier_coverage(Config::default().min_inlier_coverage())
+        .refine_min_inliers(Config::default().refine_min_inliers())
+        .build()
+        .unwrap();
+    assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
+    // A matcher keeps them.
+    assert_eq!(format!("{:?}", Matcher::new(&c).unwrap().config()), debug);
+    // The range ends are accepted.
+    let ends = Config::builder().max_rotation_uncertainty(3.15).min_inlier_coverage(0.0).refine_min_inliers(3);
+    let ends = ends.build().unwrap();
+    assert_eq!((ends.max_rotation_uncertainty(), ends.refine_min_inliers()), (3.15, 3));
+    let ends = ends.to_builder().max_rotation_uncertainty(1e-300).min_inlier_coverage(1.0).refine_min_inliers(100_000);
+    assert_eq!(ends.build().unwrap().refine_min_inliers(), 100_000);
+}
+
+#[test]
 fn refine_modes_map_their_codes() {
     for (mode, code) in [
         (RefineMode::None, sys::KISSM_REFINE_NONE),
@@ -241,6 +295,23 @@ fn invalid_config_values_are_errors_not_panics() {
     invalid(b().min_overlap(-0.01), "min_overlap");
     invalid(b().min_overlap(1.01), "min_overlap");
     invalid(b().min_overlap(f64::NAN), "min_overlap");
+    invalid(b().max_rotation_uncertainty(0.0), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(-0.1), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(3.16), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(f64::NAN), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(f64::INFINITY), "config.max_rotation_uncertainty");
+    invalid(b().min_inlier_coverage(-0.01), "config.min_inlier_coverage");
+    invalid(b().min_inlier_coverage(1.01), "config.min_inlier_coverage");
+    invalid(b().min_inlier_coverage(f64::NAN), "config.min_inlier_coverage");
+    invalid(b().refine_min_inliers(2), "config.refine_min_inliers");
+    invalid(b().refine_min_inliers(100_001), "config.refine_min_inliers");
+    invalid(b().refine_min_inliers(usize::MAX), "config.refine_min_inliers");
+    // The reserved field is no setting; a raw config holding anything but 0 there is rejected.
+    let mut raw = *Config::default().as_raw();
+    raw.reserved1 = 1;
+    let err = Matcher::new(&Config::from_raw(raw)).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::InvalidArgument);
+    assert!(err.message().contains("reserved1"), "{err}");
     // refine_mode cannot be out of range through the enum; a raw config can hold any code.
     for code in [3, -1] {
         let mut raw = *Config::default().as_raw();
@@ -293,7 +364,7 @@ fn error_kinds_map_every_code() {
 #[test]
 fn reasons_round_trip() {
     let mut descriptions = std::collections::HashSet::new();
-    for code in 0..=8 {
+    for code in 0..=10 {
         let reason = Reason::from_code(code);
         assert_eq!(reason.code(), code);
         assert!(!matches!(reason, Reason::Other(_)));
@@ -305,7 +376,11 @@ fn reasons_round_trip() {
     assert_eq!(Reason::from_code(sys::KISSM_REASON_UNCONSTRAINED), Reason::Unconstrained);
     assert_eq!(Reason::LowOverlap.code(), 7);
     assert_eq!(Reason::Unconstrained.code(), 8);
-    assert_eq!(Reason::from_code(9), Reason::Other(9));
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_UNCERTAIN_ROTATION), Reason::UncertainRotation);
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_CLUSTERED_INLIERS), Reason::ClusteredInliers);
+    assert_eq!(Reason::UncertainRotation.code(), 9);
+    assert_eq!(Reason::ClusteredInliers.code(), 10);
+    assert_eq!(Reason::from_code(11), Reason::Other(11));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);

@@ -83,6 +83,8 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
         ("overlap", fine.map_or(nan, |f| f.overlap)),
         ("refine_rmse", fine.map_or(nan, |f| f.rmse)),
         ("refine_condition", fine.map_or(nan, |f| f.condition)),
+        ("rotation_uncertainty", reg.rotation_uncertainty),
+        ("inlier_coverage", fine.map_or(nan, |f| f.inlier_coverage)),
     ];
     for (key, got) in doubles {
         same(key.into(), case.get(key).num(), got);

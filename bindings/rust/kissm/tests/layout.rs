@@ -23,7 +23,8 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             noise_bound_max, viewpoint, min_normal_neighbors, max_correspondences, min_inliers, nonfinite_policy,
             viewpoint_mode, log_level, log_fn, log_user_data, progress_fn, progress_user_data, refine_mode,
             refine_max_iterations, refine_max_distance_gain, refine_kernel_gain, refine_rotation_epsilon,
-            refine_translation_epsilon_gain, min_overlap),
+            refine_translation_epsilon_gain, max_rotation_uncertainty, min_overlap, min_inlier_coverage,
+            refine_min_inliers, reserved1),
         "kissm_points" => fields!(sys::kissm_points; data, count, stride_bytes, scalar_type, reserved),
         "kissm_result" => fields!(sys::kissm_result; struct_size, valid, reason, reserved0, transform, rotation,
             translation, num_source_points, num_target_points, num_source_nonfinite, num_target_nonfinite,
@@ -31,8 +32,8 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             num_initial_correspondences, num_pruned_correspondences, num_rotation_inliers, num_final_inliers,
             max_core_number, inlier_ratio, residual_rms, noise_bound, inlier_extent, time_voxelize_ms,
             time_features_ms, time_matching_ms, time_pruning_ms, time_solver_ms, time_total_ms, coarse_transform,
-            information, overlap, refine_rmse, refine_condition, time_refine_ms, num_refine_correspondences,
-            refine_iterations, refine_converged),
+            information, overlap, refine_rmse, refine_condition, rotation_uncertainty, inlier_coverage,
+            time_refine_ms, num_refine_correspondences, refine_iterations, refine_converged),
         _ => None,
     }
 }

@@ -158,12 +158,10 @@ fn refine_features_equals_refine_bitwise() {
         let direct = m.refine(&pair.source, &pair.target, &start).unwrap();
         let source = m.compute_features(&pair.source).unwrap();
         let target = m.compute_features(&pair.target).unwrap();
-        let mut described = m.refine_features(&source, &target, &start).unwrap();
-        // The counts of the described clouds are the features' (refine itself computes no descriptors).
-        assert_eq!(described.counts.source_keypoints, source.num_keypoints());
-        assert_eq!(described.counts.target_keypoints, target.num_keypoints());
+        let described = m.refine_features(&source, &target, &start).unwrap();
+        // Refinement uses no descriptor: no keypoints in either result, though the features have them.
+        assert!(source.num_keypoints() > 0 && target.num_keypoints() > 0);
         assert_eq!((direct.counts.source_keypoints, direct.counts.target_keypoints), (0, 0));
-        (described.counts.source_keypoints, described.counts.target_keypoints) = (0, 0);
         assert!(described.same_result(&direct), "{mode:?}: {described:?}\nvs\n{direct:?}");
         assert_eq!((described.timings.voxelize_ms, described.timings.features_ms), (0.0, 0.0));
         // The same features serve the global registration with refinement too.
@@ -172,8 +170,7 @@ fn refine_features_equals_refine_bitwise() {
         // Features of a matcher without refinement work for a refining matcher (the index is built then).
         let mut plain = Matcher::new(&config(RefineMode::None, 1)).unwrap();
         let (ps, pt) = (plain.compute_features(&pair.source).unwrap(), plain.compute_features(&pair.target).unwrap());
-        let mut from_plain = m.refine_features(&ps, &pt, &start).unwrap();
-        (from_plain.counts.source_keypoints, from_plain.counts.target_keypoints) = (0, 0);
+        let from_plain = m.refine_features(&ps, &pt, &start).unwrap();
         assert!(from_plain.same_result(&direct), "{mode:?}");
     }
 }

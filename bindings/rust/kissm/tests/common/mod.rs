@@ -463,8 +463,8 @@ impl Parser<'_> {
 // ------------------------------------------------------------------------------------------------
 
 fn same_bits(what: &str, c: f64, rust: f64, failures: &mut Vec<String>) {
-    // The tool writes NaN as null; any NaN matches it.
-    let equal = if c.is_nan() { rust.is_nan() } else { c.to_bits() == rust.to_bits() };
+    // The tool writes NaN and infinities as null (read as NaN here); any of them matches it.
+    let equal = if c.is_nan() { !rust.is_finite() } else { c.to_bits() == rust.to_bits() };
     if !equal {
         failures.push(format!("{what}: C {c:?} vs Rust {rust:?}"));
     }
@@ -490,8 +490,8 @@ fn same_matrix<const C: usize>(what: &str, json: &Json, rows: &[[f64; C]], failu
 }
 
 /// The refinement keys of the tool's `--json` output against `reg`: `coarse_transform`, `information`
-/// (`null` exactly when refinement did not run), `overlap`, `refine_rmse`, `refine_condition` bit for bit
-/// (null == NaN), `refine_iterations`, `refine_converged` and `counts.refine_correspondences` exactly.
+/// (`null` exactly when refinement did not run), `overlap`, `refine_rmse`, `refine_condition`,
+/// `inlier_coverage` bit for bit (null == NaN), `refine_iterations`, `refine_converged` and `counts.refine_correspondences` exactly.
 fn compare_refinement_with_cli_json(json: &Json, reg: &kissm::Registration, failures: &mut Vec<String>) {
     same_matrix("coarse_transform", json.get("coarse_transform"), &reg.coarse_transform, failures);
     let fine = reg.refinement;
@@ -504,6 +504,7 @@ fn compare_refinement_with_cli_json(json: &Json, reg: &kissm::Registration, fail
     same_bits("overlap", json.get("overlap").num(), fine.map_or(nan, |f| f.overlap), failures);
     same_bits("refine_rmse", json.get("refine_rmse").num(), fine.map_or(nan, |f| f.rmse), failures);
     same_bits("refine_condition", json.get("refine_condition").num(), fine.map_or(nan, |f| f.condition), failures);
+    same_bits("inlier_coverage", json.get("inlier_coverage").num(), fine.map_or(nan, |f| f.inlier_coverage), failures);
     let iterations = fine.map_or(0, |f| u64::from(f.iterations));
     if json.get("refine_iterations").u64() != iterations {
         failures.push(format!("refine_iterations: C {} vs Rust {iterations}", json.get("refine_iterations").u64()));
@@ -522,7 +523,8 @@ fn compare_refinement_with_cli_json(json: &Json, reg: &kissm::Registration, fail
 }
 
 /// Every field of `reg` against the tool's `--json` output (all but the timings): the transform,
-/// rotation, translation, inlier ratio, residual, noise bound and inlier extent bit for bit, the counts,
+/// rotation, translation, inlier ratio, residual, noise bound, inlier extent and rotation uncertainty bit for
+/// bit (null == NaN or infinite), the counts,
 /// validity and reason exactly, and the refinement keys (`compare_refinement_with_cli_json`). Returns the
 /// differences.
 pub fn compare_with_cli_json(json: &Json, reg: &kissm::Registration) -> Vec<String> {
@@ -547,6 +549,7 @@ pub fn compare_with_cli_json(json: &Json, reg: &kissm::Registration) -> Vec<Stri
     for (i, v) in json.get("inlier_extent").nums().into_iter().enumerate() {
         same_bits(&format!("inlier_extent[{i}]"), v, reg.inlier_extent[i], &mut failures);
     }
+    same_bits("rotation_uncertainty", json.get("rotation_uncertainty").num(), reg.rotation_uncertainty, &mut failures);
     let c = &reg.counts;
     let counts = json.get("counts");
     let pairs = [
