@@ -481,7 +481,8 @@ pub struct kissm_result {
     pub refine_condition: f64,
     /** 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off by
  the noise bound: noise_bound / sqrt(N (e1^2 + e2^2)) with e1, e2 the two smaller inlier_extent values.
- Infinite when e1 = e2 = 0 (no inliers, or all on one point); NaN when no pose was estimated.*/
+ Infinite when e1 = e2 = 0 (no inliers, or all on one point); NaN when no pose was estimated and after
+ kissm_refine() / kissm_refine_features() (no solver ran).*/
     pub rotation_uncertainty: f64,
     /** Principal standard deviation of the inliers over that of the source voxels the refined pose overlaps:
  how much of the overlap the solver's matches span (above 1 when they reach beyond it). NaN unless a
