@@ -53,16 +53,33 @@ def axis_angle(axis: np.ndarray, deg: float) -> np.ndarray:
     return np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * k @ k
 
 
+# The fields the rules read, with the mode whose rule reads them.
+RULE_FIELDS = (
+    ("rotation uncertainty (deg)", "none", lambda r: math.degrees(r.rotation_uncertainty)),
+    ("inlier coverage", "gicp", lambda r: r.inlier_coverage),
+    ("overlap", "gicp", lambda r: r.overlap),
+    ("refine condition", "gicp", lambda r: r.refine_condition),
+)
+
+
 class Tally:
     def __init__(self) -> None:
         self.counts: dict[tuple[str, str], collections.Counter[str]] = collections.defaultdict(collections.Counter)
         self.wrong_valid: list[str] = []
+        # (field, family kind, right?) -> values, for the separation table
+        self.values: dict[tuple[str, str, bool], list[float]] = collections.defaultdict(list)
 
-    def add(self, family: str, mode: str, valid: bool, right: bool, line: str) -> None:
+    def add(self, family: str, mode: str, valid: bool, right: bool, line: str, r: kissm.Result | None = None) -> None:
         key = "right, valid" if valid and right else "WRONG, VALID" if valid else "right, invalid" if right else "wrong, invalid"
         self.counts[(family, mode)][key] += 1
         if valid and not right:
             self.wrong_valid.append(line)
+        if r is None or not np.isfinite(np.asarray(r.transform)).all():
+            return
+        kind = family if family in ("unrelated scans", "synthetic pair") else "real pairs"
+        for name, rule_mode, get in RULE_FIELDS:
+            if mode == rule_mode and r.num_final_inliers >= 10 and math.isfinite(get(r)):
+                self.values[(name, kind, right)].append(get(r))
 
     def print(self) -> None:
         print("\nfamily                              mode            right,valid  WRONG,VALID  right,invalid  wrong,invalid")
@@ -74,6 +91,16 @@ class Tally:
         print(f"\nwrong poses reported valid: {len(self.wrong_valid)}")
         for line in self.wrong_valid:
             print("  " + line)
+        print("\nwhat the rules read, runs with at least 10 inliers: range over right poses | over wrong poses")
+        for name, _, _ in RULE_FIELDS:
+            for kind in ("real pairs", "synthetic pair", "unrelated scans"):
+                right = self.values.get((name, kind, True), [])
+                wrong = self.values.get((name, kind, False), [])
+                print(f"  {name:28s} {kind:16s} {span(right)} | {span(wrong)}")
+
+
+def span(values: list[float]) -> str:
+    return f"{min(values):8.4f} .. {max(values):8.4f} ({len(values)})" if values else f"{'-':>24s}"
 
 
 def evaluate(r: kissm.Result, gt: np.ndarray, max_rot: float, max_trans: float, at: np.ndarray | None):
@@ -103,7 +130,7 @@ def run(tally, family, name, source, target, gt, voxel, max_rot, max_trans, args
             f"{name:48s} {mode:14s} valid={int(r.valid)} error {e_rot:7.2f} deg {e_trans:8.4f} m "
             f"{'right' if right else 'wrong'}  {fields(r, voxel)}"
         )
-        tally.add(family, mode, r.valid, right, line)
+        tally.add(family, mode, r.valid, right, line, r)
         if args.rows:
             print(line, flush=True)
 
