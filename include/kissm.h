@@ -330,6 +330,10 @@ typedef struct kissm_config {
     /** With refinement, valid needs kissm_result.refine_condition >= this (a direction carrying less than this
      * share of the strongest one's information slides); in [0, 1]. Default 0.01. */
     double min_refine_condition;
+    /** Refinement aligns planes fitted to the neighbours within gain * voxel_size (at least 5 of them; at most
+     * normal_radius_gain: a larger value acts as normal_radius_gain); in (0, 50]. Computed with the features,
+     * so features of another value do not match (#KISSM_ERR_FEATURES_MISMATCH). Default 2.0. */
+    double refine_normal_radius_gain;
     /* New fields are only ever appended here. */
 } kissm_config;
 

@@ -39,7 +39,8 @@ namespace {
   X(max_rotation_uncertainty)                                                                                          \
   X(min_inlier_coverage)                                                                                               \
   X(refine_min_inliers)                                                                                                \
-  X(min_refine_condition)
+  X(min_refine_condition)                                                                                              \
+  X(refine_normal_radius_gain)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -171,6 +172,7 @@ kissm_config validated_config(const kissm_config *given) {
     require_int(c.refine_min_inliers, 3, kMaxCorrespondences, "refine_min_inliers");
     require_int(c.reserved1, 0, 0, "reserved1");
     require_range(c.min_refine_condition, 0.0, 1.0, false, "min_refine_condition");
+    require_range(c.refine_normal_radius_gain, 0.0, 50.0, true, "refine_normal_radius_gain");
     return c;
 }
 

@@ -2,6 +2,8 @@
 #include "normals.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
 
 KISSM_DETAIL_BEGIN
 
@@ -13,33 +15,86 @@ void symmetric_eigen3(const Eigen::Matrix3d &cov, Eigen::Vector3d &eigenvalues_d
     smallest_vec = es.eigenvectors().col(0);
 }
 
+namespace {
+
+// The smallest-eigenvalue direction of a covariance, if the points it sums are not on a line (linearity at most
+// max_linearity): the unit normal, else nothing.
+bool plane_normal(const Eigen::Matrix3d &cov, double max_linearity, Eigen::Vector3d &normal) {
+    Eigen::Vector3d lambda;
+    symmetric_eigen3(cov, lambda, normal);
+    if (!(lambda[0] > 0.0)) return false;
+    const double linearity = (lambda[0] - lambda[1]) / lambda[0];
+    if (linearity > max_linearity) return false;
+    const double len = normal.norm();
+    if (!(len > 0.0) || !std::isfinite(len)) return false;
+    normal /= len;
+    return true;
+}
+
+} // namespace
+
 Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
                          RunContext &ctx) {
+    return estimate_normal_sets(points, nb, params, 0.0f, ctx).normals;
+}
+
+NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                                float plane_radius, RunContext &ctx) {
     const std::size_t n = points.size();
-    Normals out;
+    NormalSets sets;
+    Normals &out = sets.normals;
     out.normal.assign(n, Vec3f::Zero());
     out.valid.assign(n, 0);
-    const float rn2 = params.normal_radius * params.normal_radius;
+    const bool planes = plane_radius > 0.0f;
+    if (planes) sets.planes = out;
+    const float rn2 = params.normal_radius * params.normal_radius, rp2 = plane_radius * plane_radius;
     const std::uint64_t tau = static_cast<std::uint64_t>(params.min_neighbors);
+    const std::uint64_t plane_tau = std::max<std::uint64_t>(kPlaneMinNeighbors, tau);
 
     ctx.parallel_for(n, 2048, [&](std::size_t b, std::size_t e) {
         std::vector<std::uint32_t> near; // neighbours within the normal radius, reused across points
+        std::vector<float> near_d2;      // their squared distances
         for (std::size_t i = b; i < e; ++i) {
             const std::size_t size = nb.count(i);
             if (size < tau) continue;
             // Covariance about the mean, in double: centred sums avoid cancellation.
             near.clear();
+            near_d2.clear();
             Eigen::Vector3d mean = Eigen::Vector3d::Zero();
             const std::uint32_t *row = nb.row(i);
             for (std::size_t t = 0; t < size; ++t) {
                 const std::uint32_t j = row[t];
-                if ((points[j] - points[i]).squaredNorm() < rn2) {
+                const float d2 = (points[j] - points[i]).squaredNorm();
+                if (d2 < rn2) {
                     near.push_back(j);
+                    near_d2.push_back(d2);
                     mean += points[j].cast<double>();
                 }
             }
             const std::uint64_t count = near.size();
             if (count < tau) continue;
+            if (planes) {
+                // The smaller neighbourhood, summed about the point itself (a few voxels wide: no cancellation).
+                const Eigen::Vector3d p = points[i].cast<double>();
+                Eigen::Vector3d s = Eigen::Vector3d::Zero();
+                Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+                std::uint64_t m = 0;
+                for (std::size_t t = 0; t < near.size(); ++t) {
+                    if (!(near_d2[t] < rp2)) continue;
+                    const Eigen::Vector3d d = points[near[t]].cast<double>() - p;
+                    s += d;
+                    ss.noalias() += d * d.transpose();
+                    ++m;
+                }
+                Eigen::Vector3d normal;
+                if (m >= plane_tau) {
+                    const double inv = 1.0 / static_cast<double>(m);
+                    if (plane_normal(ss * inv - (s * inv) * (s * inv).transpose(), params.max_linearity, normal)) {
+                        sets.planes.normal[i] = normal.cast<float>();
+                        sets.planes.valid[i] = 1;
+                    }
+                }
+            }
             mean /= static_cast<double>(count);
             Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
             for (const std::uint32_t j : near) {
@@ -47,21 +102,15 @@ Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &
                 cov.noalias() += d * d.transpose();
             }
             cov /= static_cast<double>(count);
-            Eigen::Vector3d lambda, normal;
-            symmetric_eigen3(cov, lambda, normal);
-            if (!(lambda[0] > 0.0)) continue;
-            const double linearity = (lambda[0] - lambda[1]) / lambda[0];
-            if (linearity > params.max_linearity) continue;
-            const double len = normal.norm();
-            if (!(len > 0.0) || !std::isfinite(len)) continue;
-            normal /= len;
+            Eigen::Vector3d normal;
+            if (!plane_normal(cov, params.max_linearity, normal)) continue;
             const Eigen::Vector3d to_view = params.viewpoint.cast<double>() - points[i].cast<double>();
             if (normal.dot(to_view) < 0.0) normal = -normal;
             out.normal[i] = normal.cast<float>();
             out.valid[i] = 1;
         }
     });
-    return out;
+    return sets;
 }
 
 std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Normals &normals, int min_neighbors) {

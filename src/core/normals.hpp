@@ -28,6 +28,18 @@ struct NormalParams {
 Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
                          RunContext &ctx);
 
+// The normals of estimate_normals and, in the same pass over the neighbours, the normals refinement aligns
+// planes with (stage 6): from the neighbours within plane_radius (<= the normal radius, so a subset of the
+// same neighbours), at least max(kPlaneMinNeighbors, tau_num) of them, linearity at most tau_lin; unoriented
+// (refinement reads n n^T only). The first are bitwise those of estimate_normals.
+constexpr int kPlaneMinNeighbors = 5;
+struct NormalSets {
+    Normals normals;
+    Normals planes;
+};
+NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                                float plane_radius, RunContext &ctx);
+
 // Keypoints: points with a normal and at least tau_num neighbours (itself included) that have a normal.
 // Ascending indices.
 std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Normals &normals, int min_neighbors);

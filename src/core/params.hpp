@@ -5,6 +5,7 @@
 // there); docs/parameters.md has the evidence for every default.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -38,8 +39,9 @@ struct Params {
     int refine_max_iterations = 30;
     double refine_max_distance_gain = 3.0;
     double refine_kernel_gain = 1.0;
-    double refine_rotation_epsilon = 5e-4;                 // radians
-    double refine_translation_epsilon_gain = 5e-3;         // times voxel_size
+    double refine_normal_radius_gain = 2.0;        // the planes refinement aligns, from neighbours within gain * v
+    double refine_rotation_epsilon = 5e-4;         // radians
+    double refine_translation_epsilon_gain = 5e-3; // times voxel_size
     double max_rotation_uncertainty = 0.03490658503988659; // radians (2 degrees): validity without refinement
     int refine_min_inliers = 10;                           // validity with refinement
     double min_overlap = 0.2;                              // validity with refinement
@@ -51,6 +53,8 @@ struct Params {
     double prune_noise_bound() const { return capped(prune_noise_bound_gain * voxel_size); }
     double solver_noise_bound() const { return capped(solver_noise_bound_gain * voxel_size); }
     double refine_max_distance() const { return refine_max_distance_gain * voxel_size; }
+    // Within the descriptors' normal radius: the planes are fitted to a subset of the same neighbours.
+    double refine_normal_radius() const { return std::min(refine_normal_radius_gain, normal_radius_gain) * voxel_size; }
 
 private:
     double capped(double b) const { return (noise_bound_max > 0.0 && b > noise_bound_max) ? noise_bound_max : b; }

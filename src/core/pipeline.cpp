@@ -45,7 +45,7 @@ bool same_descriptor_settings(const Params &a, const Params &b) {
     return a.voxel_size == b.voxel_size && a.normal_radius_gain == b.normal_radius_gain &&
            a.fpfh_radius_gain == b.fpfh_radius_gain && a.max_linearity == b.max_linearity &&
            a.min_normal_neighbors == b.min_normal_neighbors && a.nonfinite == b.nonfinite &&
-           a.viewpoint_mode == b.viewpoint_mode &&
+           a.viewpoint_mode == b.viewpoint_mode && a.refine_normal_radius_gain == b.refine_normal_radius_gain &&
            (a.viewpoint_mode == ViewpointMode::CloudCenter || a.viewpoint == b.viewpoint);
 }
 
@@ -88,7 +88,9 @@ void describe_voxels(const Params &params, const std::string &name, double progr
                 ? Vec3d(Vec3d::Zero()) // the local origin is the bounding-box centre
                 : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
         np.viewpoint = vp.cast<float>();
-        f.normals = estimate_normals(pts, nb, np, ctx);
+        NormalSets sets = estimate_normal_sets(pts, nb, np, static_cast<float>(params.refine_normal_radius()), ctx);
+        f.normals = std::move(sets.normals);
+        f.plane_normals = std::move(sets.planes);
         progress(0.6);
         if (with_descriptors) {
             std::vector<std::uint32_t> keypoints = select_keypoints(nb, f.normals, params.min_normal_neighbors);
@@ -98,6 +100,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
     } else {
         f.normals.normal.assign(pts.size(), Vec3f::Zero());
         f.normals.valid.assign(pts.size(), 0);
+        f.plane_normals = f.normals;
     }
     // The index refinement searches, kept with the features so that a map is indexed once.
     if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts, params.voxel_size);
@@ -181,8 +184,8 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
         built = PointIndex(target.voxels.points, params.voxel_size);
         index = &built;
     }
-    const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.normals},
-                                       RefineCloud{&target.voxels.points, &target.normals}, *index, R, t_local,
+    const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.plane_normals},
+                                       RefineCloud{&target.voxels.points, &target.plane_normals}, *index, R, t_local,
                                        refine_params(params), ctx);
     r.refined = true;
     r.rotation = o.rotation;

@@ -24,7 +24,8 @@ struct CloudFeatures {
     std::uint64_t num_points = 0;
     std::uint64_t num_nonfinite = 0;
     VoxelCloud voxels;
-    Normals normals; // per voxel; empty when the cloud had too few voxels for any
+    Normals normals;       // per voxel (the descriptors'); all invalid when the cloud had too few voxels
+    Normals plane_normals; // per voxel, within refine_normal_radius: the planes refinement aligns
     Descriptors descriptors;
     PointIndex index; // empty unless params.refine_mode != None
     double time_voxelize_ms = 0.0;

@@ -16,7 +16,7 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 232)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 240)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
   X(kissm_result, KISSM_STRUCT_RESULT, 920)
 
@@ -53,7 +53,8 @@
   X(kissm_config, min_inlier_coverage, double, 208, 8)                                                                 \
   X(kissm_config, refine_min_inliers, int32_t, 216, 4)                                                                 \
   X(kissm_config, reserved1, int32_t, 220, 4)                                                                          \
-  X(kissm_config, min_refine_condition, double, 224, 8)
+  X(kissm_config, min_refine_condition, double, 224, 8)                                                                \
+  X(kissm_config, refine_normal_radius_gain, double, 232, 8)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \

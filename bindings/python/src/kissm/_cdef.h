@@ -156,6 +156,8 @@ typedef struct kissm_config {
     int32_t reserved1;
 
     double min_refine_condition;
+
+    double refine_normal_radius_gain;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);

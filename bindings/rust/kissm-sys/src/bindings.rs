@@ -206,10 +206,14 @@ pub struct kissm_config {
     /** With refinement, valid needs kissm_result.refine_condition >= this (a direction carrying less than this
  share of the strongest one's information slides); in [0, 1]. Default 0.01.*/
     pub min_refine_condition: f64,
+    /** Refinement aligns planes fitted to the neighbours within gain * voxel_size (at least 5 of them; at most
+ normal_radius_gain: a larger value acts as normal_radius_gain); in (0, 50]. Computed with the features,
+ so features of another value do not match (#KISSM_ERR_FEATURES_MISMATCH). Default 2.0.*/
+    pub refine_normal_radius_gain: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 232usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 240usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -310,6 +314,9 @@ const _: () = {
     [
         "Offset of field: kissm_config::min_refine_condition",
     ][::core::mem::offset_of!(kissm_config, min_refine_condition) - 224usize];
+    [
+        "Offset of field: kissm_config::refine_normal_radius_gain",
+    ][::core::mem::offset_of!(kissm_config, refine_normal_radius_gain) - 232usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
