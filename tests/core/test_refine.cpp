@@ -14,6 +14,7 @@
 
 #include "core/point_index.hpp"
 #include "core/refine.hpp"
+#include "core/validity.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 
@@ -508,6 +509,33 @@ static void test_iteration_cap() {
     CHECK(capped.iterations == 7 || capped.converged);
 }
 
+// The refined validity rule (validity.cpp): the coarse reason first, then at least 6 correspondences and the
+// overlap (LOW_OVERLAP), then the condition (UNCONSTRAINED); the bounds themselves pass.
+static void test_refined_validity_rule() {
+    const RefinedRule rule{0.4, 1e-3};
+    RefinedEvidence good;
+    good.num_final_inliers = 50;
+    good.num_correspondences = 6;
+    good.overlap = 0.4;
+    good.condition = 1e-3;
+    good.rmse = 0.01;
+    good.converged = true;
+    CHECK(check_refined_validity(Reason::None, good, rule) == Reason::None);
+    for (const Reason coarse : {Reason::TooFewVoxels, Reason::SolverFailed, Reason::TooFewInliers, Reason::Degenerate})
+        CHECK(check_refined_validity(coarse, good, rule) == coarse);
+    RefinedEvidence e = good;
+    e.num_correspondences = 5;
+    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::LowOverlap);
+    e = good;
+    e.overlap = std::nextafter(0.4, 0.0);
+    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::LowOverlap);
+    e.condition = 0.0; // both fail: the overlap is reported
+    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::LowOverlap);
+    e = good;
+    e.condition = std::nextafter(1e-3, 0.0);
+    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::Unconstrained);
+}
+
 int main() {
     RUN_TEST(test_converges_to_truth_same_sampling);
     RUN_TEST(test_converges_with_other_sampling_and_noise);
@@ -517,5 +545,6 @@ int main() {
     RUN_TEST(test_overlap_against_brute_force);
     RUN_TEST(test_nothing_to_match);
     RUN_TEST(test_iteration_cap);
+    RUN_TEST(test_refined_validity_rule);
     return TEST_SUMMARY();
 }
