@@ -158,6 +158,15 @@ KISSM_API const char *kissm_last_error_message(void);
 /** Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
  * kissm_result.refine_condition and kissm_result.information. */
 #define KISSM_REASON_UNCONSTRAINED 8
+/** Without refinement: the inliers pin the rotation down no better than kissm_config.max_rotation_uncertainty
+ * (kissm_result.rotation_uncertainty): too few of them, or all on one compact object. */
+#define KISSM_REASON_UNCERTAIN_ROTATION 9
+/** With refinement: the inliers cover less than kissm_config.min_inlier_coverage of the aligned overlap
+ * (kissm_result.inlier_coverage): one object may match itself in several poses. */
+#define KISSM_REASON_CLUSTERED_INLIERS 10
+/** Refinement was still moving the pose at kissm_config.refine_max_iterations (kissm_result.refine_converged
+ * = 0): it was crossing from one basin to another, as refinements from a wrong start do. */
+#define KISSM_REASON_NOT_CONVERGED 11
 
 /**
  * @brief Describes a reason code.
@@ -302,12 +311,25 @@ typedef struct kissm_config {
     /** Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]. Default 1.0. */
     double refine_kernel_gain;
     /** Refinement has converged when a step turns the pose by less than this (radians) ...; in [0, 1].
-     * Default 1e-4. */
+     * Default 5e-4. */
     double refine_rotation_epsilon;
-    /** ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3. */
+    /** ... and moves it by less than gain * voxel_size; in [0, 1]. Default 5e-3. */
     double refine_translation_epsilon_gain;
-    /** With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0. */
+    /** Without refinement, valid needs kissm_result.rotation_uncertainty <= this (radians); in (0, 3.15].
+     * Default 0.0349 (2 degrees). */
+    double max_rotation_uncertainty;
+    /** With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0.2. */
     double min_overlap;
+    /** With refinement, valid needs kissm_result.inlier_coverage >= this; in [0, 1]. Default 0.25. */
+    double min_inlier_coverage;
+    /** With refinement, valid needs at least this many final inliers (min_inliers applies without
+     * refinement); 3..100000. Default 10. */
+    int32_t refine_min_inliers;
+    /** Must be 0. */
+    int32_t reserved1;
+    /** With refinement, valid needs kissm_result.refine_condition >= this (a direction carrying less than this
+     * share of the strongest one's information slides); in [0, 1]. Default 0.01. */
+    double min_refine_condition;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -453,24 +475,35 @@ typedef struct kissm_result {
      * identical calls. */
     double time_total_ms;
 
-    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform. transform is the
-     * refined pose when refinement ran and this one otherwise. NaN when no pose was estimated. */
+    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform with its rotation
+     * block made exactly rigid (the nearest rotation). transform is the refined pose when refinement ran and this
+     * one otherwise. NaN when no pose was estimated. */
     double coarse_transform[16];
     /** 6x6 information matrix of the refined pose, row-major, symmetric: the inverse covariance of the error
      * xi in T_true = T exp(xi), xi = (rotation [rad], translation [m]) in the source's frame (the perturbation
-     * GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the refinement's
-     * cost scaled by its residual variance: correspondences count as independent, so it is optimistic;
-     * a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run. */
+     * GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the point-to-plane
+     * distances of the final correspondences (in both modes: GICP's along-plane weights are a regularisation,
+     * not a measurement), divided by their residual variance. Correspondences count as independent, so it is
+     * optimistic; a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run. */
     double information[36];
     /** Share of the source's voxels that the refined pose lays within the refinement's correspondence distance
      * of a target voxel, in [0, 1]. NaN when refinement did not run. */
     double overlap;
-    /** Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, metres). NaN
-     * when refinement did not run or found no correspondence. */
+    /** Weighted (Cauchy) RMS distance of the final correspondences to the target's planes, metres. NaN when
+     * refinement did not run or found no correspondence. */
     double refine_rmse;
     /** Weakest over strongest direction of the information, with rotations as displacements at the matched
      * points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run. */
     double refine_condition;
+    /** 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off by
+     * the noise bound: noise_bound / sqrt(N (e1^2 + e2^2)) with e1, e2 the two smaller inlier_extent values.
+     * Infinite when e1 = e2 = 0 (no inliers, or all on one point); NaN when no pose was estimated and after
+     * kissm_refine() / kissm_refine_features() (no solver ran). */
+    double rotation_uncertainty;
+    /** Principal standard deviation of the inliers over that of the source voxels the refined pose overlaps:
+     * how much of the overlap the solver's matches span (above 1 when they reach beyond it). NaN unless a
+     * registration was refined. */
+    double inlier_coverage;
     /** Wall-clock ms: refinement (0 if not run). */
     double time_refine_ms;
     /** Correspondences of the refinement at its final pose (0 if not run). */
@@ -577,8 +610,9 @@ KISSM_API void kissm_cancel(kissm_matcher *matcher);
  *        is #KISSM_REFINE_NONE). No descriptors, no global search.
  *
  * result->coarse_transform is the initial transform; result->transform the refined pose; valid = 1 when the
- * refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. The result is
- * always fully overwritten.
+ * refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. Keypoint counts
+ * are 0 (no descriptors are computed) and time_features_ms is the time of the normals. The result is always
+ * fully overwritten.
  * @param[in,out] matcher The matcher (its settings; one call at a time).
  * @param[in] source The cloud to move; read during the call only.
  * @param[in] target The cloud it is registered against; read during the call only.
@@ -671,9 +705,9 @@ KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features);
 KISSM_API int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source,
                                           const kissm_features *target, kissm_result *result);
 /**
- * @brief kissm_refine() on described clouds: the same refined pose as kissm_refine() on the clouds the features
- *        were computed from. Features computed with refinement enabled carry the index refinement searches, so
- *        a map described once is not indexed again.
+ * @brief kissm_refine() on described clouds: the same result as kissm_refine() on the clouds the features were
+ *        computed from (keypoint counts 0 as there), bit for bit but for the times. Features computed with
+ *        refinement enabled carry the index refinement searches, so a map described once is not indexed again.
  *
  * Voxelisation and feature times are reported as 0. The result is always fully overwritten.
  * @param[in,out] matcher The matcher (its settings; one call at a time).

@@ -137,7 +137,8 @@ if ! grep -qs "CMAKE_HOME_DIRECTORY:INTERNAL=$work/crates/$sys_name/vendor/kissm
   exit 1
 fi
 for test in scene_registers_accurately registration_errors_carry_code_and_message \
-            golden_file_matches_bit_for_bit layout_matches_c_abi crate_readme_example_is_the_doc_test; do
+            refine_from_a_perturbed_ground_truth_converges golden_file_matches_bit_for_bit layout_matches_c_abi \
+            crate_readme_example_is_the_doc_test; do
   if ! grep -q "^test $test \.\.\. ok$" "$log"; then
     echo "rust package: FAIL: $test did not run and pass from the archive" >&2
     exit 1

@@ -35,7 +35,11 @@ namespace {
   X(refine_kernel_gain)                                                                                                \
   X(refine_rotation_epsilon)                                                                                           \
   X(refine_translation_epsilon_gain)                                                                                   \
-  X(min_overlap)
+  X(min_overlap)                                                                                                       \
+  X(max_rotation_uncertainty)                                                                                          \
+  X(min_inlier_coverage)                                                                                               \
+  X(refine_min_inliers)                                                                                                \
+  X(min_refine_condition)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -162,6 +166,11 @@ kissm_config validated_config(const kissm_config *given) {
     require_range(c.refine_rotation_epsilon, 0.0, 1.0, false, "refine_rotation_epsilon");
     require_range(c.refine_translation_epsilon_gain, 0.0, 1.0, false, "refine_translation_epsilon_gain");
     require_range(c.min_overlap, 0.0, 1.0, false, "min_overlap");
+    require_range(c.max_rotation_uncertainty, 0.0, 3.15, true, "max_rotation_uncertainty");
+    require_range(c.min_inlier_coverage, 0.0, 1.0, false, "min_inlier_coverage");
+    require_int(c.refine_min_inliers, 3, kMaxCorrespondences, "refine_min_inliers");
+    require_int(c.reserved1, 0, 0, "reserved1");
+    require_range(c.min_refine_condition, 0.0, 1.0, false, "min_refine_condition");
     return c;
 }
 

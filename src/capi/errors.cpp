@@ -130,6 +130,9 @@ const char *kissm_reason_string(int32_t reason) {
     case KISSM_REASON_DEGENERATE: return "inliers are collinear or planar";
     case KISSM_REASON_LOW_OVERLAP: return "the refined pose overlaps too little";
     case KISSM_REASON_UNCONSTRAINED: return "the refined pose is not constrained in every direction";
+    case KISSM_REASON_UNCERTAIN_ROTATION: return "the inliers leave the rotation uncertain";
+    case KISSM_REASON_CLUSTERED_INLIERS: return "the inliers cover too little of the overlap";
+    case KISSM_REASON_NOT_CONVERGED: return "refinement did not converge";
     default: return "unknown reason";
     }
 }

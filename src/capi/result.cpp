@@ -25,11 +25,14 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::Degenerate: return KISSM_REASON_DEGENERATE;
     case Reason::LowOverlap: return KISSM_REASON_LOW_OVERLAP;
     case Reason::Unconstrained: return KISSM_REASON_UNCONSTRAINED;
+    case Reason::UncertainRotation: return KISSM_REASON_UNCERTAIN_ROTATION;
+    case Reason::ClusteredInliers: return KISSM_REASON_CLUSTERED_INLIERS;
+    case Reason::NotConverged: return KISSM_REASON_NOT_CONVERGED;
     }
     return KISSM_REASON_NONE;
 }
 static_assert(reason_code(Reason::None) == 0 && reason_code(Reason::Degenerate) == 6 &&
-                  reason_code(Reason::Unconstrained) == 8,
+                  reason_code(Reason::NotConverged) == 11,
               "reason codes are pinned");
 
 // 4x4 row-major from R and t.
@@ -65,6 +68,8 @@ void reset_full(kissm_result *r) noexcept {
     r->overlap = nan;
     r->refine_rmse = nan;
     r->refine_condition = nan;
+    r->rotation_uncertainty = nan;
+    r->inlier_coverage = nan;
 }
 
 } // namespace
@@ -88,6 +93,8 @@ void fill_result(const Registration &g, kissm_result *caller) {
         }
         write_transform(g.rotation, g.translation, r->transform);
         write_transform(g.coarse_rotation, g.coarse_translation, r->coarse_transform);
+        r->rotation_uncertainty = g.rotation_uncertainty;
+        r->inlier_coverage = g.inlier_coverage;
     }
     if (g.refined) {
         for (int i = 0; i < 6; ++i)

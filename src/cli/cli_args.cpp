@@ -51,6 +51,13 @@ void ArgCursor::expect_no_value() const {
     if (has_inline_value_) throw UsageError(name_ + " takes no value");
 }
 
+bool ArgCursor::take_flag(const char *name, bool *flag, const char *alias) const {
+    if (!is_option_ || (name_ != name && (alias == nullptr || name_ != alias))) return false;
+    expect_no_value();
+    *flag = true;
+    return true;
+}
+
 void ArgCursor::unknown() const {
     throw UsageError("unknown option '" + name_ + "' for 'kissm " + command_ + "' (see 'kissm " + command_ +
                      " --help')");
@@ -124,6 +131,22 @@ int32_t parse_format(const std::string &option, const std::string &text) {
 }
 
 const char *format_names() { return "auto, ply, pcd, kitti_bin, bin_xyz, npy or xyz"; }
+
+int32_t parse_refine_mode(const std::string &option, const std::string &text) {
+    if (text == "none") return KISSM_REFINE_NONE;
+    if (text == "gicp") return KISSM_REFINE_GICP;
+    if (text == "point-to-plane" || text == "point_to_plane") return KISSM_REFINE_POINT_TO_PLANE;
+    throw UsageError(option + ": unknown refinement '" + one_line(text) + "' (expected gicp, point-to-plane or none)");
+}
+
+const char *refine_mode_name(int32_t mode) {
+    switch (mode) {
+    case KISSM_REFINE_NONE: return "none";
+    case KISSM_REFINE_GICP: return "gicp";
+    case KISSM_REFINE_POINT_TO_PLANE: return "point-to-plane";
+    default: return "unknown";
+    }
+}
 
 std::string one_line(const std::string &text) {
     std::string out = text;

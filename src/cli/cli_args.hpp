@@ -35,6 +35,9 @@ public:
     std::string value();
     // For flags: rejects "--flag=value".
     void expect_no_value() const;
+    // When the current option is the flag `name` (or its short form `alias`): rejects a value, sets *flag
+    // and returns true.
+    bool take_flag(const char *name, bool *flag, const char *alias = nullptr) const;
     [[noreturn]] void unknown() const;
 
 private:
@@ -56,6 +59,10 @@ uint64_t parse_uint64(const std::string &option, const std::string &text);
 // data's pair.txt files) to its KISSM_FORMAT_* value.
 int32_t parse_format(const std::string &option, const std::string &text);
 const char *format_names();
+// A refinement mode name (none, gicp, point-to-plane; point_to_plane as golden.json spells it) to its
+// KISSM_REFINE_* value, and back (the names the JSON prints; "unknown" for other values).
+int32_t parse_refine_mode(const std::string &option, const std::string &text);
+const char *refine_mode_name(int32_t mode);
 
 // The text with line breaks replaced by spaces, so that an error message stays on one line.
 std::string one_line(const std::string &text);

@@ -23,9 +23,11 @@ using MatcherPtr = std::unique_ptr<kissm_matcher, MatcherDeleter>;
 
 // Each returns the process exit status (see cli_args.hpp) or throws UsageError.
 int run_register(const std::vector<std::string> &args);
+int run_refine(const std::vector<std::string> &args);
 int run_demo(const std::vector<std::string> &args);
 
 void print_register_help(std::FILE *out);
+void print_refine_help(std::FILE *out);
 void print_demo_help(std::FILE *out);
 
 // A log callback printing the library's messages to stderr (for --verbose).

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
-// kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--json]
+// kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--refine MODE] [--json]
 //
-// Simulates two LiDAR scans of a synthetic street (demo_scene.hpp), registers them through the public C
-// API exactly as an application would, compares the pose with the ground truth and writes the clouds and a
-// before/after top view.
+// Simulates two LiDAR scans of a synthetic street (demo_scene.hpp), registers and refines them through the
+// public C API exactly as an application would, compares the coarse and the refined pose with the ground
+// truth and writes the clouds and a before/after top view with a detail of the coarse and refined alignment.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -14,6 +14,7 @@
 
 #include <kissm.h>
 
+#include "alignment_figure.hpp"
 #include "cli_args.hpp"
 #include "commands.hpp"
 #include "demo_scene.hpp"
@@ -35,6 +36,7 @@ struct DemoCommandOptions {
     int32_t threads = 0;
     uint64_t seed = 1;
     double voxel = 0.3;
+    int32_t refine_mode = KISSM_REFINE_GICP;
     bool json = false;
     bool verbose = false;
 };
@@ -67,31 +69,37 @@ std::string join_path(const std::string &dir, const char *name) { return (std::f
 
 void print_demo_help(std::FILE *out) {
     std::fprintf(out,
-                 "usage: kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--json]\n"
+                 "usage: kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--refine MODE] [--json]\n"
                  "\n"
                  "Builds a synthetic outdoor scene (an asymmetric street closed at one end, a cross street,\n"
                  "buildings with balconies and columns, walls, hedges, street lights, trees, parked cars, a lorry,\n"
                  "clutter, vehicles and pedestrians that move between the scans, kerbs, rough undulating ground),\n"
                  "simulates two scans by a 64-beam spinning LiDAR (60 m range, 1.5 cm range noise, real\n"
                  "occlusion) from two poses 10-15 m apart with a 120-165 degree relative yaw and a few degrees of\n"
-                 "roll and pitch, and registers the scans (each in its own sensor frame) with kissm. Prints the\n"
-                 "true and recovered poses, their rotation and translation errors, the counts and the per-stage\n"
-                 "times, and writes into DIR:\n"
+                 "roll and pitch, and registers the scans (each in its own sensor frame) with kissm, refining\n"
+                 "the global pose by GICP. Prints the true and recovered poses, the rotation and translation\n"
+                 "errors of the coarse (solver) and the refined pose, the counts and the per-stage times, and\n"
+                 "writes into DIR:\n"
                  "  source.ply, target.ply   the scans (binary little-endian PLY, float64 x y z, sensor frames)\n"
                  "  aligned_source.ply       the source moved into the target frame by the recovered pose\n"
-                 "  demo_topview.png         top view before / after registration (source orange, target blue)\n"
+                 "  demo_topview.png         top view before / after registration (source orange, target blue),\n"
+                 "                           and a detail of the coarse and the refined alignment\n"
                  "\n"
                  "  --out DIR     output folder, created if needed (default kissm_demo_out)\n"
                  "  --threads N   worker threads, 0 = all hardware threads (default 0)\n"
                  "  --seed S      scene and sensor-noise seed (default 1); the same seed gives the same scans\n"
                  "  --voxel V     voxel size in metres (default 0.3)\n"
+                 "  --refine MODE gicp, point-to-plane or none (default gicp)\n"
                  "  --json        print one JSON object (the register fields plus ground_truth,\n"
-                 "                rotation_error_deg, translation_error_m, success) instead of the report\n"
+                 "                rotation_error_deg, translation_error_m (the final pose's),\n"
+                 "                coarse_rotation_error_deg, coarse_translation_error_m, success) instead of\n"
+                 "                the report\n"
                  "  -v, --verbose print the library's log messages on stderr\n"
                  "  -h, --help    this text\n"
                  "\n"
-                 "`kissm register DIR/source.ply DIR/target.ply --voxel 0.3` reproduces the demo's pose exactly.\n"
-                 "Exit status: 0 when the pose is valid and within %g deg / %g m of the truth, 1 otherwise,\n"
+                 "`kissm register DIR/source.ply DIR/target.ply --voxel 0.3 --refine gicp` reproduces the demo's\n"
+                 "pose exactly.\n"
+                 "Exit status: 0 when the final pose is valid and within %g deg / %g m of the truth, 1 otherwise,\n"
                  "2 on usage or output errors.\n",
                  kMaxRotationErrorDeg, kMaxTranslationErrorM);
 }
@@ -115,13 +123,9 @@ int run_demo(const std::vector<std::string> &args) {
             opt.seed = parse_uint64(name, cur.value());
         } else if (name == "--voxel") {
             opt.voxel = parse_positive(name, cur.value());
-        } else if (name == "--json") {
-            cur.expect_no_value();
-            opt.json = true;
-        } else if (name == "-v" || name == "--verbose") {
-            cur.expect_no_value();
-            opt.verbose = true;
-        } else {
+        } else if (name == "--refine") {
+            opt.refine_mode = parse_refine_mode(name, cur.value());
+        } else if (!cur.take_flag("--json", &opt.json) && !cur.take_flag("--verbose", &opt.verbose, "-v")) {
             cur.unknown();
         }
     }
@@ -140,6 +144,7 @@ int run_demo(const std::vector<std::string> &args) {
     if (status != KISSM_OK) throw UsageError("cannot initialise the configuration: " + library_error(status));
     config.voxel_size = opt.voxel;
     config.num_threads = opt.threads;
+    config.refine_mode = opt.refine_mode;
     if (opt.verbose) {
         config.log_fn = log_to_stderr;
         config.log_level = KISSM_LOG_INFO;
@@ -156,8 +161,11 @@ int run_demo(const std::vector<std::string> &args) {
     if (status != KISSM_OK) throw UsageError("registration failed: " + library_error(status));
 
     const bool have_pose = matrix_is_finite(result.transform);
+    const bool refined = have_pose && refinement_ran(result);
     const double rot_err = have_pose ? rotation_error_deg(result.transform, gt) : std::nan("");
     const double trans_err = have_pose ? translation_error(result.transform, gt) : std::nan("");
+    const double coarse_rot_err = have_pose ? rotation_error_deg(result.coarse_transform, gt) : std::nan("");
+    const double coarse_trans_err = have_pose ? translation_error(result.coarse_transform, gt) : std::nan("");
     const bool success = result.valid && rot_err < kMaxRotationErrorDeg && trans_err < kMaxTranslationErrorM;
 
     // 3. Files.
@@ -188,34 +196,44 @@ int run_demo(const std::vector<std::string> &args) {
         std::filesystem::remove(aligned_path, ignored); // never leave a stale file from an earlier run
     }
 
-    const Rgb orange{255, 127, 14}, blue{31, 119, 180};
-    const CloudLayer target_layer{demo.target.xyz.data(), nt, nullptr, blue};
-    const CloudLayer source_layer{demo.source.xyz.data(), ns, nullptr, orange};
-    const CloudLayer aligned_layer{demo.source.xyz.data(), ns, have_pose ? result.transform : nullptr, orange};
-    TopViewFigure figure;
-    figure.panels.push_back({"BEFORE: EACH SCAN IN ITS OWN SENSOR FRAME",
-                             {target_layer, source_layer},
-                             {{0.0, 0.0, blue}, {0.0, 0.0, orange}}});
-    TopViewPanel after{"AFTER: SOURCE MOVED BY THE POSE FROM KISSM", {target_layer}, {{0.0, 0.0, blue}}};
-    if (have_pose) {
-        after.layers.push_back(aligned_layer);
-        after.markers.push_back({result.transform[3], result.transform[7], orange});
-    } else {
-        after.title = "AFTER: NO POSE ESTIMATED";
-    }
-    figure.panels.push_back(after);
-    figure.legend = {{"SOURCE SCAN", orange}, {"TARGET SCAN", blue}, {"+ SENSORS", {90, 90, 90}}};
+    AlignmentInput in;
+    in.source_xyz = demo.source.xyz.data();
+    in.source_count = ns;
+    in.target_xyz = demo.target.xyz.data();
+    in.target_count = nt;
+    in.pose = have_pose ? result.transform : nullptr;
+    in.coarse = refined ? result.coarse_transform : nullptr;
+    in.voxel = opt.voxel;
+    in.before_title = "BEFORE: EACH SCAN IN ITS OWN SENSOR FRAME";
+    in.after_title = !have_pose ? "AFTER: NO POSE ESTIMATED"
+                     : refined  ? "AFTER: SOURCE MOVED BY THE REFINED POSE"
+                                : "AFTER: SOURCE MOVED BY THE POSE FROM KISSM";
+    in.coarse_title = "DETAIL: COARSE POSE (SOLVER)";
+    in.refined_title = std::string("DETAIL: REFINED POSE (") + refine_mode_name(opt.refine_mode) + ")";
+    AlignmentFigure alignment(in);
+    TopViewFigure &figure = alignment.picture().figure;
+    figure.legend = {{"SOURCE SCAN", kSourceColor}, {"TARGET SCAN", kTargetColor}, {"+ SENSORS", {90, 90, 90}}};
+    figure.panels[0].markers = {{0.0, 0.0, kTargetColor}, {0.0, 0.0, kSourceColor}};
+    figure.panels[1].markers = {{0.0, 0.0, kTargetColor}};
+    if (have_pose) figure.panels[1].markers.push_back({result.transform[3], result.transform[7], kSourceColor});
     char line[200];
     std::snprintf(line, sizeof line, "SEED %llu: TRUE MOTION %.1f M, %.1f DEG.  KISSM: %s, %llu FINAL INLIERS",
                   static_cast<unsigned long long>(opt.seed), translation_norm(gt), rotation_angle_deg(gt),
                   result.valid ? "VALID" : "NOT VALID", static_cast<unsigned long long>(result.num_final_inliers));
     figure.notes.push_back(line);
-    if (have_pose) {
+    if (refined) {
+        std::snprintf(line, sizeof line, "COARSE ERROR: ROTATION %.3f DEG, TRANSLATION %.3f M", coarse_rot_err,
+                      coarse_trans_err);
+        figure.notes.push_back(line);
+        std::snprintf(line, sizeof line, "REFINED ERROR: ROTATION %.3f DEG, TRANSLATION %.3f M (OVERLAP %.3f).  %s",
+                      rot_err, trans_err, result.overlap, success ? "SUCCESS" : "FAILURE");
+        figure.notes.push_back(line);
+    } else if (have_pose) {
         std::snprintf(line, sizeof line, "ERROR: ROTATION %.3f DEG, TRANSLATION %.3f M.  %s", rot_err, trans_err,
                       success ? "SUCCESS" : "FAILURE");
         figure.notes.push_back(line);
     }
-    const Image image = render_top_view(figure, fit_view({target_layer, have_pose ? aligned_layer : source_layer}));
+    const Image image = render_top_view(figure, alignment.picture().view);
     if (!write_png_rgb(png_path, image.width(), image.height(), image.data(), &error)) throw UsageError(error);
     const double write_ms = elapsed_ms(write_start);
 
@@ -230,8 +248,10 @@ int run_demo(const std::vector<std::string> &args) {
         json.field("success", success);
         json.field("rotation_error_deg", rot_err);
         json.field("translation_error_m", trans_err);
+        json.field("coarse_rotation_error_deg", coarse_rot_err);
+        json.field("coarse_translation_error_m", coarse_trans_err);
         json.field_matrix("ground_truth", gt, 4, 4);
-        add_result_json(json, result);
+        add_result_json(json, result, opt.refine_mode);
         json.key("scene");
         json.begin_object();
         json.field("primitives", static_cast<uint64_t>(demo.stats.primitives));
@@ -267,15 +287,22 @@ int run_demo(const std::vector<std::string> &args) {
                     generate_ms);
         std::printf("  true motion: %.2f m, %.2f deg (yaw %.1f, pitch %.1f, roll %.1f deg)\n", translation_norm(gt),
                     rotation_angle_deg(gt), yaw, pitch, roll);
-        std::printf("\nregistration: voxel %g m, threads %d%s\n", opt.voxel, opt.threads,
-                    opt.threads == 0 ? " (all)" : "");
+        std::printf("\nregistration: voxel %g m, threads %d%s, refinement %s\n", opt.voxel, opt.threads,
+                    opt.threads == 0 ? " (all)" : "", refine_mode_name(opt.refine_mode));
         print_two_matrices(gt, result.transform);
-        if (have_pose) {
+        if (refined) {
+            std::printf("error against the ground truth:\n");
+            std::printf("  coarse pose (solver): rotation error %.4f deg, translation error %.4f m\n", coarse_rot_err,
+                        coarse_trans_err);
+            const std::string label = std::string("refined pose (") + refine_mode_name(opt.refine_mode) + "):";
+            std::printf("  %-21s rotation error %.4f deg, translation error %.4f m\n", label.c_str(), rot_err,
+                        trans_err);
+        } else if (have_pose) {
             std::printf("rotation error: %.4f deg\ntranslation error: %.4f m\n", rot_err, trans_err);
         } else {
             std::printf("rotation error: -\ntranslation error: - (no pose estimated)\n");
         }
-        print_result_summary(stdout, result);
+        print_result_summary(stdout, result, ResultKind::Global);
         std::printf("\nwrote (%.0f ms): %s, %s, %s%s%s\n", write_ms, source_path.c_str(), target_path.c_str(),
                     have_pose ? aligned_path.c_str() : "", have_pose ? ", " : "", png_path.c_str());
         std::printf("result: %s (needs a valid pose within %g deg and %g m of the truth)\n",

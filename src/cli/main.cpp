@@ -2,6 +2,7 @@
 // kissm: the command-line front end of the kissm library.
 //
 //   kissm register SOURCE TARGET --voxel V [options]   global registration of two point files
+//   kissm refine SOURCE TARGET --initial T.txt --voxel V [options]   fine registration from a known pose
 //   kissm demo [--out DIR] [--threads N] [--seed S]     synthetic LiDAR scene, registered end to end
 //
 // Exit status: 0 success, 1 the registration ran but gave no trustworthy pose, 2 usage or input error
@@ -28,6 +29,10 @@ void print_usage(std::FILE *out) {
                  "  kissm register SOURCE TARGET --voxel V [options]\n"
                  "      Find the rigid transform that maps SOURCE into TARGET's frame, with no initial guess.\n"
                  "      Reads PLY, PCD, KITTI .bin, raw float32 xyz .bin, .npy and xyz text files.\n"
+                 "      --refine gicp|point-to-plane refines the global pose on the voxelised clouds.\n"
+                 "  kissm refine SOURCE TARGET --initial T.txt --voxel V [options]\n"
+                 "      Refine a known pose (4 rows of 4 numbers, as register --out-transform writes) by\n"
+                 "      GICP or point-to-plane ICP, without the global search.\n"
                  "  kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--json]\n"
                  "      Simulate two LiDAR scans of a synthetic street, register them, report the error against\n"
                  "      the ground truth and write PLY files and a top-view picture into DIR.\n"
@@ -49,6 +54,8 @@ int run(const std::vector<std::string> &args) {
         }
         if (rest[0] == "register") {
             print_register_help(stdout);
+        } else if (rest[0] == "refine") {
+            print_refine_help(stdout);
         } else if (rest[0] == "demo") {
             print_demo_help(stdout);
         } else {
@@ -61,6 +68,7 @@ int run(const std::vector<std::string> &args) {
         return kExitOk;
     }
     if (command == "register") return run_register(rest);
+    if (command == "refine") return run_refine(rest);
     if (command == "demo") return run_demo(rest);
     if (!command.empty() && command[0] == '-') {
         throw UsageError("unknown option '" + one_line(command) + "' (try 'kissm --help')");

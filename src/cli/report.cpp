@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "cli_args.hpp"
+#include "pose_math.hpp"
 
 namespace kissm_cli {
 
@@ -29,7 +30,50 @@ void row1(std::FILE *out, const char *label, uint64_t a) { std::fprintf(out, "  
 
 } // namespace
 
-void print_result_summary(std::FILE *out, const kissm_result &r) {
+bool refinement_ran(const kissm_result &r) {
+    for (double v : r.information) {
+        if (!std::isnan(v)) return true;
+    }
+    return false;
+}
+
+namespace {
+
+// A number for the summary, "-" when it is NaN (not measured) and "unbounded" when infinite.
+struct NumberText {
+    char text[40];
+};
+NumberText number_text(double v, const char *format) {
+    NumberText t{};
+    if (std::isnan(v)) {
+        std::snprintf(t.text, sizeof t.text, "-");
+    } else if (std::isinf(v)) {
+        std::snprintf(t.text, sizeof t.text, "unbounded");
+    } else {
+        std::snprintf(t.text, sizeof t.text, format, v);
+    }
+    return t;
+}
+
+void print_refinement(std::FILE *out, const kissm_result &r, ResultKind kind) {
+    std::fprintf(out, "refinement: %d iterations, %s; %" PRIu64 " correspondences\n", r.refine_iterations,
+                 r.refine_converged ? "converged" : "stopped at the iteration cap", r.num_refine_correspondences);
+    // rmse is NaN when no correspondence was left; the inlier coverage needs the solver's inliers.
+    std::fprintf(out, "  overlap %.4f, ", r.overlap);
+    if (kind == ResultKind::Global)
+        std::fprintf(out, "inlier coverage %s, ", number_text(r.inlier_coverage, "%.4f").text);
+    std::fprintf(out, "rmse %s, condition %.4g\n", number_text(r.refine_rmse, "%.4g").text, r.refine_condition);
+    if (matrix_is_finite(r.coarse_transform) && matrix_is_finite(r.transform)) {
+        std::fprintf(out, "  moved the %s pose by %.4f deg, %.4g\n", kind == ResultKind::Global ? "coarse" : "initial",
+                     rotation_error_deg(r.coarse_transform, r.transform),
+                     translation_error(r.coarse_transform, r.transform));
+    }
+}
+
+} // namespace
+
+void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind) {
+    const bool global = kind == ResultKind::Global;
     std::fprintf(out, "valid: %s", r.valid ? "yes" : "no");
     if (!r.valid) std::fprintf(out, " (reason: %s)", kissm_reason_string(r.reason));
     std::fprintf(out, "\n");
@@ -39,31 +83,59 @@ void print_result_summary(std::FILE *out, const kissm_result &r) {
         row2(out, "non-finite (dropped)", r.num_source_nonfinite, r.num_target_nonfinite);
     }
     row2(out, "voxels", r.num_source_voxels, r.num_target_voxels);
-    row2(out, "keypoints", r.num_source_keypoints, r.num_target_keypoints);
-    row1(out, "initial matches", r.num_initial_correspondences);
-    char label[64];
-    std::snprintf(label, sizeof label, "pruned (max %" PRIu64 "-core)", r.max_core_number);
-    row1(out, label, r.num_pruned_correspondences);
-    row1(out, "rotation inliers", r.num_rotation_inliers);
-    row1(out, "final inliers", r.num_final_inliers);
-    std::fprintf(out, "inlier ratio: %.4f\n", r.inlier_ratio);
-    if (std::isfinite(r.residual_rms)) {
-        std::fprintf(out, "residual rms: %.4g (noise bound %.4g)\n", r.residual_rms, r.noise_bound);
-    } else {
-        std::fprintf(out, "residual rms: - (noise bound %.4g)\n", r.noise_bound);
+    if (global) {
+        row2(out, "keypoints", r.num_source_keypoints, r.num_target_keypoints);
+        row1(out, "initial matches", r.num_initial_correspondences);
+        char label[64];
+        std::snprintf(label, sizeof label, "pruned (max %" PRIu64 "-core)", r.max_core_number);
+        row1(out, label, r.num_pruned_correspondences);
+        row1(out, "rotation inliers", r.num_rotation_inliers);
+        row1(out, "final inliers", r.num_final_inliers);
+        std::fprintf(out, "inlier ratio: %.4f\n", r.inlier_ratio);
+        if (std::isfinite(r.residual_rms)) {
+            std::fprintf(out, "residual rms: %.4g (noise bound %.4g)\n", r.residual_rms, r.noise_bound);
+        } else {
+            std::fprintf(out, "residual rms: - (noise bound %.4g)\n", r.noise_bound);
+        }
+        // How well the inliers pin the solver's rotation down (radians in the JSON, degrees for people).
+        std::fprintf(out, "rotation uncertainty: %s\n",
+                     number_text(rad_to_deg(r.rotation_uncertainty), "%.4g deg").text);
     }
-    std::fprintf(out, "time (ms): voxelize %.1f, features %.1f, matching %.1f, pruning %.1f, solver %.1f, total %.1f\n",
-                 r.time_voxelize_ms, r.time_features_ms, r.time_matching_ms, r.time_pruning_ms, r.time_solver_ms,
-                 r.time_total_ms);
+    if (refinement_ran(r)) print_refinement(out, r, kind);
+    if (global) {
+        std::fprintf(out,
+                     "time (ms): voxelize %.1f, features %.1f, matching %.1f, pruning %.1f, solver %.1f, refine %.1f, "
+                     "total %.1f\n",
+                     r.time_voxelize_ms, r.time_features_ms, r.time_matching_ms, r.time_pruning_ms, r.time_solver_ms,
+                     r.time_refine_ms, r.time_total_ms);
+    } else {
+        std::fprintf(out, "time (ms): voxelize %.1f, normals %.1f, refine %.1f, total %.1f\n", r.time_voxelize_ms,
+                     r.time_features_ms, r.time_refine_ms, r.time_total_ms);
+    }
 }
 
-void add_result_json(JsonWriter &json, const kissm_result &r) {
+void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mode, const double *initial_transform) {
     json.field("valid", r.valid != 0);
     json.field("reason", kissm_reason_string(r.reason));
     json.field("reason_code", r.reason);
+    if (initial_transform) json.field_matrix("initial_transform", initial_transform, 4, 4);
     json.field_matrix("transform", r.transform, 4, 4);
     json.field_matrix("rotation", r.rotation, 3, 3);
     json.field_vector("translation", r.translation, 3);
+    json.field_matrix("coarse_transform", r.coarse_transform, 4, 4);
+    json.field("refine", refine_mode_name(refine_mode));
+    if (refinement_ran(r)) {
+        json.field_matrix("information", r.information, 6, 6);
+    } else {
+        json.key("information");
+        json.null();
+    }
+    json.field("overlap", r.overlap);
+    json.field("refine_rmse", r.refine_rmse);
+    json.field("refine_condition", r.refine_condition);
+    json.field("inlier_coverage", r.inlier_coverage);
+    json.field("refine_iterations", r.refine_iterations);
+    json.field("refine_converged", r.refine_converged != 0);
     json.field("final_inliers", r.num_final_inliers);
     json.key("counts");
     json.begin_object();
@@ -80,11 +152,13 @@ void add_result_json(JsonWriter &json, const kissm_result &r) {
     json.field("max_core_number", r.max_core_number);
     json.field("rotation_inliers", r.num_rotation_inliers);
     json.field("final_inliers", r.num_final_inliers);
+    json.field("refine_correspondences", r.num_refine_correspondences);
     json.end_object();
     json.field("inlier_ratio", r.inlier_ratio);
     json.field("residual_rms", r.residual_rms);
     json.field("noise_bound", r.noise_bound);
     json.field_vector("inlier_extent", r.inlier_extent, 3);
+    json.field("rotation_uncertainty", r.rotation_uncertainty);
     json.key("time_ms");
     json.begin_object();
     json.field("voxelize", r.time_voxelize_ms);
@@ -92,26 +166,9 @@ void add_result_json(JsonWriter &json, const kissm_result &r) {
     json.field("matching", r.time_matching_ms);
     json.field("pruning", r.time_pruning_ms);
     json.field("solver", r.time_solver_ms);
+    json.field("refine", r.time_refine_ms);
     json.field("total", r.time_total_ms);
     json.end_object();
-}
-
-bool write_transform_file(const std::string &path, const double T[16], std::string *error) {
-    std::FILE *f = std::fopen(path.c_str(), "w");
-    if (!f) {
-        *error = "cannot create '" + path + "': " + std::strerror(errno);
-        return false;
-    }
-    bool ok = true;
-    for (int r = 0; r < 4 && ok; ++r) {
-        ok = std::fprintf(f, "%.17g %.17g %.17g %.17g\n", T[4 * r], T[4 * r + 1], T[4 * r + 2], T[4 * r + 3]) > 0;
-    }
-    const int saved_errno = errno;
-    if (std::fclose(f) != 0 || !ok) {
-        *error = "cannot write '" + path + "': " + std::strerror(ok ? errno : saved_errno);
-        return false;
-    }
-    return true;
 }
 
 std::string library_error(int32_t status, const std::string &path) {

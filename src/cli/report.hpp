@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Presenting a kissm_result: the human summary, the JSON fields, and the transform file.
+// Presenting a kissm_result: the human summary and the JSON fields.
 #pragma once
 
 #include <cstdio>
@@ -11,16 +11,27 @@
 
 namespace kissm_cli {
 
+// Which call made the result: a global registration (kissm_register) or a refinement from a given pose
+// (kissm_refine), whose coarse_transform is that pose and whose descriptor and solver fields are empty.
+enum class ResultKind { Global, Refine };
+
 // "  [ a b c d ]" rows with fixed precision, for people.
 void print_matrix(std::FILE *out, const double T[16], const char *indent);
-// Valid, reason, counts per stage, inlier ratio, residual, per-stage times.
-void print_result_summary(std::FILE *out, const kissm_result &result);
-// Adds the result's fields to the open JSON object: valid, reason, reason_code, transform, rotation,
-// translation, final_inliers, counts, inlier_ratio, residual_rms, noise_bound, inlier_extent, time_ms.
-void add_result_json(JsonWriter &json, const kissm_result &result);
-
-// Four lines of four "%.17g" numbers. Returns false and sets *error on failure.
-bool write_transform_file(const std::string &path, const double T[16], std::string *error);
+// True when refinement ran, i.e. the library filled kissm_result.information (it leaves all of it NaN
+// otherwise). The JSON writes "information": null exactly when this is false.
+bool refinement_ran(const kissm_result &result);
+// Valid, reason, counts per stage, inlier ratio, residual, rotation uncertainty (degrees), the refinement's
+// numbers when it ran (how far it moved the coarse or initial pose, overlap, inlier coverage, rmse,
+// condition, iterations), per-stage times.
+void print_result_summary(std::FILE *out, const kissm_result &result, ResultKind kind);
+// Adds the result's fields to the open JSON object, in the order of the CLI JSON contract (src/cli/README.md):
+// valid, reason, reason_code, [initial_transform,] transform, rotation, translation, coarse_transform,
+// refine, information, overlap, refine_rmse, refine_condition, inlier_coverage, refine_iterations,
+// refine_converged, final_inliers, counts, inlier_ratio, residual_rms, noise_bound, inlier_extent,
+// rotation_uncertainty, time_ms.
+// refine_mode: the config's KISSM_REFINE_* (the mode used). initial_transform: kissm_refine's, or null.
+void add_result_json(JsonWriter &json, const kissm_result &result, int32_t refine_mode,
+                     const double *initial_transform = nullptr);
 
 // The library's message for the last failure on this thread (or the status string when it is empty),
 // without a leading "kissm_function: " or "path: ", which the caller's own message already gives.

@@ -17,18 +17,6 @@ constexpr int kMargin = 20;
 constexpr int kGap = 24;
 constexpr int kTextScale = 2;
 
-void project(const CloudLayer &layer, size_t i, double *x, double *y) {
-    const double *p = layer.xyz + 3 * i;
-    if (layer.transform) {
-        const double *T = layer.transform;
-        *x = T[0] * p[0] + T[1] * p[1] + T[2] * p[2] + T[3];
-        *y = T[4] * p[0] + T[5] * p[1] + T[6] * p[2] + T[7];
-    } else {
-        *x = p[0];
-        *y = p[1];
-    }
-}
-
 // Grid spacing of 1, 2 or 5 times a power of ten giving 4 to 10 lines across the panel.
 double grid_spacing(double extent) {
     double step = std::pow(10.0, std::floor(std::log10(extent / 4.0)));
@@ -71,18 +59,24 @@ void draw_panel(Image &img, int x0, int y0, int size, const TopViewPanel &panel,
 
     // Points: per-pixel hit counts per layer, blended so that single hits are light and dense
     // structures (walls, poles) saturate.
+    const int dot = std::max(1, panel.dot);
     const size_t npix = static_cast<size_t>(size) * static_cast<size_t>(size);
     std::vector<uint16_t> counts(npix);
     for (const CloudLayer &layer : panel.layers) {
         std::fill(counts.begin(), counts.end(), uint16_t{0});
         for (size_t i = 0; i < layer.count; ++i) {
             double x = 0, y = 0;
-            project(layer, i, &x, &y);
-            if (!std::isfinite(x) || !std::isfinite(y)) continue;
+            if (!project_point(layer, i, &x, &y)) continue;
             const double fx = (x - left) * scale, fy = (top - y) * scale;
             if (fx < 0.0 || fy < 0.0 || fx >= size || fy >= size) continue;
-            uint16_t &c = counts[static_cast<size_t>(fy) * static_cast<size_t>(size) + static_cast<size_t>(fx)];
-            if (c < UINT16_MAX) ++c;
+            const int px = static_cast<int>(fx), py = static_cast<int>(fy);
+            for (int dy = 0; dy < dot && py + dy < size; ++dy) {
+                for (int dx = 0; dx < dot && px + dx < size; ++dx) {
+                    uint16_t &c =
+                        counts[static_cast<size_t>(py + dy) * static_cast<size_t>(size) + static_cast<size_t>(px + dx)];
+                    if (c < UINT16_MAX) ++c;
+                }
+            }
         }
         for (int py = 0; py < size; ++py) {
             for (int px = 0; px < size; ++px) {
@@ -114,6 +108,20 @@ void draw_panel(Image &img, int x0, int y0, int size, const TopViewPanel &panel,
         }
     }
 
+    // Outlined regions, 2 pixels wide, clipped to the panel.
+    for (const auto &outline : panel.outlines) {
+        const ViewBox &b = outline.first;
+        const int l = std::max(to_px(b.cx - b.half), 0), r = std::min(to_px(b.cx + b.half), size - 1);
+        const int t = std::max(to_py(b.cy + b.half), 0), d = std::min(to_py(b.cy - b.half), size - 1);
+        if (l > r || t > d) continue;
+        for (int w = 0; w < 2; ++w) {
+            img.hline(x0 + l, x0 + r, y0 + std::min(t + w, d), outline.second);
+            img.hline(x0 + l, x0 + r, y0 + std::max(d - w, t), outline.second);
+            img.vline(x0 + std::min(l + w, r), y0 + t, y0 + d, outline.second);
+            img.vline(x0 + std::max(r - w, l), y0 + t, y0 + d, outline.second);
+        }
+    }
+
     // Scale bar (one grid spacing) in the bottom-left corner.
     const int bar = static_cast<int>(std::lround(spacing * scale));
     const int bx = x0 + 14, by = y0 + size - 16;
@@ -130,6 +138,29 @@ void draw_panel(Image &img, int x0, int y0, int size, const TopViewPanel &panel,
 
 } // namespace
 
+bool HeightFloor::above(double x, double y, double z) const {
+    const double fx = (x - x0) / cell, fy = (y - y0) / cell;
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < cells && fy < cells)) return false;
+    const size_t k = static_cast<size_t>(fy) * static_cast<size_t>(cells) + static_cast<size_t>(fx);
+    return z >= min_z[k] + clearance;
+}
+
+bool project_point(const CloudLayer &layer, size_t i, double *x, double *y) {
+    const double *p = layer.xyz + 3 * i;
+    double z = p[2];
+    if (layer.transform) {
+        const double *T = layer.transform;
+        *x = T[0] * p[0] + T[1] * p[1] + T[2] * p[2] + T[3];
+        *y = T[4] * p[0] + T[5] * p[1] + T[6] * p[2] + T[7];
+        if (layer.floor) z = T[8] * p[0] + T[9] * p[1] + T[10] * p[2] + T[11];
+    } else {
+        *x = p[0];
+        *y = p[1];
+    }
+    if (!std::isfinite(*x) || !std::isfinite(*y)) return false;
+    return !layer.floor || layer.floor->above(*x, *y, z);
+}
+
 ViewBox fit_view(const std::vector<CloudLayer> &layers) {
     size_t total = 0;
     for (const CloudLayer &layer : layers) total += layer.count;
@@ -138,8 +169,7 @@ ViewBox fit_view(const std::vector<CloudLayer> &layers) {
     for (const CloudLayer &layer : layers) {
         for (size_t i = 0; i < layer.count; i += stride) {
             double x = 0, y = 0;
-            project(layer, i, &x, &y);
-            if (!std::isfinite(x) || !std::isfinite(y)) continue;
+            if (!project_point(layer, i, &x, &y)) continue;
             xs.push_back(x);
             ys.push_back(y);
         }
@@ -161,16 +191,22 @@ ViewBox fit_view(const std::vector<CloudLayer> &layers) {
 
 Image render_top_view(const TopViewFigure &figure, const ViewBox &view) {
     const int n = std::max<int>(1, static_cast<int>(figure.panels.size()));
+    const int columns = figure.columns > 0 ? std::min(figure.columns, n) : n;
+    const int rows = (n + columns - 1) / columns;
     const int size = std::max(figure.panel_size, 64);
     const int line = Image::text_height(kTextScale) + 10;
+    const int row_height = size + kGap + line + 4; // a row of panels, then the next row's titles
     const int panels_top = kMargin + line + 4;
-    const int legend_top = panels_top + size + 16;
-    const int width = 2 * kMargin + n * size + (n - 1) * kGap;
+    const int legend_top = panels_top + (rows - 1) * row_height + size + 16;
+    const int width = 2 * kMargin + columns * size + (columns - 1) * kGap;
     const int height = legend_top + line + static_cast<int>(figure.notes.size()) * line + kMargin;
     Image img(width, height, kWhite);
 
     for (size_t i = 0; i < figure.panels.size(); ++i) {
-        draw_panel(img, kMargin + static_cast<int>(i) * (size + kGap), panels_top, size, figure.panels[i], view);
+        const int column = static_cast<int>(i) % columns, row = static_cast<int>(i) / columns;
+        const TopViewPanel &panel = figure.panels[i];
+        draw_panel(img, kMargin + column * (size + kGap), panels_top + row * row_height, size, panel,
+                   panel.has_view ? panel.view : view);
     }
     int x = kMargin;
     for (const auto &entry : figure.legend) {

@@ -38,9 +38,13 @@ struct Params {
     int refine_max_iterations = 30;
     double refine_max_distance_gain = 3.0;
     double refine_kernel_gain = 1.0;
-    double refine_rotation_epsilon = 1e-4;         // radians
-    double refine_translation_epsilon_gain = 1e-3; // times voxel_size
-    double min_overlap = 0.0;                      // validity with refinement
+    double refine_rotation_epsilon = 5e-4;                 // radians
+    double refine_translation_epsilon_gain = 5e-3;         // times voxel_size
+    double max_rotation_uncertainty = 0.03490658503988659; // radians (2 degrees): validity without refinement
+    int refine_min_inliers = 10;                           // validity with refinement
+    double min_overlap = 0.2;                              // validity with refinement
+    double min_inlier_coverage = 0.25;                     // validity with refinement
+    double min_refine_condition = 0.01;                    // validity with refinement
 
     double normal_radius() const { return normal_radius_gain * voxel_size; }
     double fpfh_radius() const { return fpfh_radius_gain * voxel_size; }

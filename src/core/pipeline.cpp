@@ -23,10 +23,6 @@ namespace {
 // reported no wrong pose as valid (docs/parameters.md, "FPFH weighting").
 constexpr int kFpfhWeightPower = 2;
 
-// A refined pose is not trusted when its weakest direction carries less than this share of the information of
-// its strongest (RefineOutput::condition; docs/accuracy.md has the measurements).
-constexpr double kMinCondition = 1e-3;
-
 class Stopwatch {
 public:
     Stopwatch() : last_(std::chrono::steady_clock::now()) {}
@@ -104,7 +100,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         f.normals.valid.assign(pts.size(), 0);
     }
     // The index refinement searches, kept with the features so that a map is indexed once.
-    if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts);
+    if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts, params.voxel_size);
     f.time_features_ms = clock.lap();
     if (ctx.logs(LogLevel::Info)) {
         std::ostringstream msg;
@@ -147,16 +143,18 @@ void require_same_settings(const CloudFeatures &source, const CloudFeatures &tar
 
 RefinedEvidence refined_evidence(const Registration &r) {
     RefinedEvidence e;
-    e.num_final_inliers = r.num_final_inliers;
     e.num_correspondences = r.num_refine_correspondences;
     e.overlap = r.overlap;
-    e.rmse = r.refine_rmse;
     e.condition = r.refine_condition;
+    e.inlier_coverage = r.inlier_coverage;
     e.converged = r.refine_converged;
     return e;
 }
 
-RefinedRule refined_rule(const Params &params) { return RefinedRule{params.min_overlap, kMinCondition}; }
+RefinedRule refined_rule(const Params &params) {
+    return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers), params.min_overlap,
+                       params.min_refine_condition, params.min_inlier_coverage};
+}
 
 RefineParams refine_params(const Params &params) {
     RefineParams rp;
@@ -180,7 +178,7 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
     PointIndex built;
     const PointIndex *index = &target.index;
     if (index->empty()) {
-        built = PointIndex(target.voxels.points);
+        built = PointIndex(target.voxels.points, params.voxel_size);
         index = &built;
     }
     const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.normals},
@@ -196,6 +194,9 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
     r.refine_converged = o.converged;
     r.num_refine_correspondences = o.num_correspondences;
     r.refine_condition = o.condition;
+    r.overlap_spread = o.overlap_spread;
+    // The solver's inliers against the aligned overlap (principal standard deviations, both in the source frame).
+    if (r.num_final_inliers > 0 && o.overlap_spread > 0.0) r.inlier_coverage = r.inlier_extent[0] / o.overlap_spread;
     r.time_refine_ms = clock.lap();
     ctx.checkpoint(Stage::Refine, 1.0);
 }
@@ -294,10 +295,14 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         sq += (sol.rotation * all_a[k] + sol.translation - all_b[k]).squaredNorm();
     }
     if (!inlier_points.empty()) r.residual_rms = std::sqrt(sq / static_cast<double>(inlier_points.size()));
-    const Validity v = check_validity(inlier_points, static_cast<std::size_t>(params.min_inliers), r.noise_bound,
-                                      r.rotation, r.translation);
-    r.reason = v.reason;
-    r.inlier_extent = v.extent;
+    const InlierEvidence inliers = inlier_evidence(inlier_points, r.noise_bound);
+    r.inlier_extent = inliers.extent;
+    r.rotation_uncertainty = inliers.rotation_uncertainty;
+    r.reason = r.rotation.allFinite() && r.translation.allFinite()
+                   ? coarse_validity(
+                         r.num_final_inliers, inliers,
+                         CoarseRule{static_cast<std::uint64_t>(params.min_inliers), params.max_rotation_uncertainty})
+                   : Reason::SolverFailed;
     r.coarse_rotation = r.rotation;
     r.coarse_translation = r.translation;
     r.time_solver_ms = clock.lap();
@@ -309,9 +314,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         ctx.log(LogLevel::Info, msg.str());
     }
     ctx.checkpoint(Stage::Solver, 1.0);
-    if (params.refine_mode != RefineMode::None && r.rotation.allFinite() && r.translation.allFinite()) {
+    if (params.refine_mode != RefineMode::None && r.reason != Reason::SolverFailed) {
         refine_registration(source, target, r.coarse_rotation, r.coarse_translation, params, r, ctx);
-        r.reason = check_refined_validity(r.reason, refined_evidence(r), refined_rule(params));
+        r.reason = refined_validity(r.num_final_inliers, inliers, refined_evidence(r), refined_rule(params));
     }
     return r;
 }
@@ -340,16 +345,14 @@ Registration refine_described(const CloudFeatures &source, const CloudFeatures &
     r.num_source_points = source.num_points, r.num_target_points = target.num_points;
     r.num_source_nonfinite = source.num_nonfinite, r.num_target_nonfinite = target.num_nonfinite;
     r.num_source_voxels = source.voxels.points.size(), r.num_target_voxels = target.voxels.points.size();
-    r.num_source_keypoints = source.descriptors.keypoint.size();
-    r.num_target_keypoints = target.descriptors.keypoint.size();
-    r.noise_bound = params.solver_noise_bound();
+    r.noise_bound = params.solver_noise_bound(); // keypoints stay 0: refinement uses no descriptor
     r.coarse_rotation = R;
     r.coarse_translation = t;
     r.solved = true;
     Params p = params;
     if (p.refine_mode == RefineMode::None) p.refine_mode = RefineMode::Gicp;
     refine_registration(source, target, R, t, p, r, ctx);
-    r.reason = check_refined_validity(Reason::None, refined_evidence(r), refined_rule(p));
+    r.reason = prior_validity(refined_evidence(r), refined_rule(p));
     return r;
 }
 

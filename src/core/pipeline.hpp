@@ -57,7 +57,10 @@ struct Registration {
     int refine_iterations = 0;
     bool refine_converged = false;
     std::uint64_t num_refine_correspondences = 0;
-    double refine_condition = std::numeric_limits<double>::quiet_NaN(); // see validity.hpp
+    double refine_condition = std::numeric_limits<double>::quiet_NaN();     // see refine.hpp
+    double rotation_uncertainty = std::numeric_limits<double>::quiet_NaN(); // radians, see validity.hpp
+    double inlier_coverage = std::numeric_limits<double>::quiet_NaN();      // see validity.hpp
+    double overlap_spread = std::numeric_limits<double>::quiet_NaN();       // metres, of the refined overlap
     double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0,
            time_refine_ms = 0;
 };

@@ -85,37 +85,54 @@ public:
         // Source voxels that can take part: those with a normal (GICP needs both normals; point-to-plane only
         // the target's, but a voxel without a normal is an edge or a stray, whose nearest target voxel is no
         // plane of its surface either).
-        for (std::size_t i = 0; i < src_.size(); ++i)
+        for (std::size_t i = 0; i < src_.size(); ++i) {
+            all_.push_back(static_cast<std::uint32_t>(i));
             if (src_n_.valid[i]) candidates_.push_back(static_cast<std::uint32_t>(i));
+        }
+        hint_.assign(src_.size(), PointIndex::kNone);
     }
 
-    // Nearest target voxels with a normal, within max_distance, of the source candidates moved by (R, t), in
-    // source order.
-    std::vector<Pair> correspondences(const Eigen::Matrix3d &R, const Eigen::Vector3d &t) {
+    struct Matches {
+        std::vector<Pair> pairs; // both voxels with a normal, in source order
+        std::uint64_t hits = 0;  // source voxels with a target voxel within max_distance
+    };
+
+    // The nearest target voxel within max_distance of each source voxel in `which` moved by (R, t). Each answer
+    // is the next search's hint for that voxel: the pose moves little between iterations, so the previous
+    // nearest voxel bounds the search from the start (the answer is the same, found faster).
+    Matches match(const std::vector<std::uint32_t> &which, const Eigen::Matrix3d &R, const Eigen::Vector3d &t) {
         const float max_d2 = static_cast<float>(params_.max_distance * params_.max_distance);
-        const auto parts = ctx_.map_chunks(candidates_.size(), kChunk, [&](std::size_t begin, std::size_t end) {
-            std::vector<Pair> out;
-            out.reserve(end - begin);
+        auto parts = ctx_.map_chunks(which.size(), kChunk, [&](std::size_t begin, std::size_t end) {
+            Matches out;
+            out.pairs.reserve(end - begin);
             for (std::size_t k = begin; k < end; ++k) {
-                const std::uint32_t i = candidates_[k];
+                const std::uint32_t i = which[k];
                 const Vec3f q = (R * src_[i].cast<double>() + t).cast<float>();
                 float d2;
-                const std::uint32_t j = index_.nearest(q, max_d2, &d2);
-                if (j != PointIndex::kNone && tgt_n_.valid[j]) out.push_back(Pair{i, j});
+                const std::uint32_t j = index_.nearest(q, max_d2, &d2, hint_[i]);
+                hint_[i] = j;
+                if (j == PointIndex::kNone) continue;
+                ++out.hits;
+                if (src_n_.valid[i] && tgt_n_.valid[j]) out.pairs.push_back(Pair{i, j});
             }
             return out;
         });
-        std::vector<Pair> all;
+        Matches all;
         std::size_t total = 0;
-        for (const auto &p : parts) total += p.size();
-        all.reserve(total);
-        for (const auto &p : parts) all.insert(all.end(), p.begin(), p.end());
+        for (const auto &p : parts) total += p.pairs.size();
+        all.pairs.reserve(total);
+        for (const auto &p : parts) {
+            all.pairs.insert(all.pairs.end(), p.pairs.begin(), p.pairs.end());
+            all.hits += p.hits;
+        }
         return all;
     }
 
-    // Terms of the correspondences at (R, t): weight matrices and Cauchy weights.
-    std::vector<Term> terms(const std::vector<Pair> &pairs, const Eigen::Matrix3d &R, const Eigen::Vector3d &t) {
-        std::vector<Term> out(pairs.size());
+    // Terms of the correspondences at (R, t) under the cost of `mode`: weight matrices and Cauchy weights.
+    UninitVector<Term> terms(const std::vector<Pair> &pairs, const Eigen::Matrix3d &R, const Eigen::Vector3d &t,
+                             RefineMode mode) {
+        UninitVector<Term> out;
+        out.resize(pairs.size()); // every term is written below
         const double k2 = params_.kernel_scale * params_.kernel_scale;
         ctx_.parallel_for(pairs.size(), kChunk, [&](std::size_t begin, std::size_t end) {
             for (std::size_t k = begin; k < end; ++k) {
@@ -123,7 +140,7 @@ public:
                 term.a = src_[pairs[k].source].cast<double>();
                 term.b = tgt_[pairs[k].target].cast<double>();
                 const Eigen::Matrix3d M =
-                    weight_matrix(params_.mode, src_n_.normal[pairs[k].source], tgt_n_.normal[pairs[k].target], R);
+                    weight_matrix(mode, src_n_.normal[pairs[k].source], tgt_n_.normal[pairs[k].target], R);
                 term.m[0] = M(0, 0), term.m[1] = M(0, 1), term.m[2] = M(0, 2);
                 term.m[3] = M(1, 1), term.m[4] = M(1, 2), term.m[5] = M(2, 2);
                 const Eigen::Vector3d e = term.b - (R * term.a + t);
@@ -136,7 +153,7 @@ public:
 
     // Weighted cost of the terms at (R, t), and (with `system`) the Gauss-Newton system of the left
     // perturbation (R, t) <- (Exp(w) R, Exp(w) t + v): J = de/d(w, v) = [[q]x, -I], q = R a + t.
-    Sums sums(const std::vector<Term> &terms, const Eigen::Matrix3d &R, const Eigen::Vector3d &t, bool system) {
+    Sums sums(const UninitVector<Term> &terms, const Eigen::Matrix3d &R, const Eigen::Vector3d &t, bool system) {
         return ctx_.map_fold(
             terms.size(), kChunk, Sums{},
             [&](std::size_t begin, std::size_t end) {
@@ -179,9 +196,9 @@ public:
         double damping = kInitialDamping;
         for (int it = 0; it < params_.max_iterations; ++it) {
             ctx_.checkpoint(Stage::Refine, static_cast<double>(it) / static_cast<double>(params_.max_iterations));
-            const std::vector<Pair> pairs = correspondences(R, t);
+            const std::vector<Pair> pairs = match(candidates_, R, t).pairs;
             if (pairs.size() < 6) break; // fewer than the pose's degrees of freedom
-            const std::vector<Term> ts = terms(pairs, R, t);
+            const UninitVector<Term> ts = terms(pairs, R, t, params_.mode);
             const Sums s = sums(ts, R, t, true);
             const Matrix6d H = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(s.H);
             const Vector6d g = Eigen::Map<const Vector6d>(s.g);
@@ -233,10 +250,15 @@ private:
     void finish(RefineOutput &out) {
         const Eigen::Matrix3d &R = out.rotation;
         const Eigen::Vector3d &t = out.translation;
-        const std::vector<Pair> pairs = correspondences(R, t);
+        const Matches final_matches = match(all_, R, t);
+        const std::vector<Pair> &pairs = final_matches.pairs;
+        if (!src_.empty()) out.overlap = static_cast<double>(final_matches.hits) / static_cast<double>(src_.size());
         out.num_correspondences = pairs.size();
         if (pairs.empty()) return;
-        const std::vector<Term> ts = terms(pairs, R, t);
+        // The pose's numbers come from the point-to-plane term in both modes: GICP's plane regularisation gives
+        // every correspondence 1/eps less weight along its plane, which is a model, not a measurement; counted
+        // as information it would make a lone plane look constrained along itself.
+        const UninitVector<Term> ts = terms(pairs, R, t, RefineMode::PointToPlane);
         const Sums s = sums(ts, R, t, true);
         out.weight_sum = s.wsum;
         out.rmse = s.wsum > 0.0 ? std::sqrt(s.cost / s.wsum) : 0.0;
@@ -247,19 +269,25 @@ private:
         Ad.bottomRightCorner<3, 3>() = R;
         out.hessian = Ad.transpose() * H * Ad;
         out.hessian = 0.5 * (out.hessian + out.hessian.transpose()).eval();
-        out.condition = condition(pairs, out.hessian);
+        // Centroid and covariance of the matched source voxels: the aligned overlap's extent.
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();
+        for (const Pair &p : pairs) c += src_[p.source].cast<double>();
+        c /= static_cast<double>(pairs.size());
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (const Pair &p : pairs) {
+            const Eigen::Vector3d d = src_[p.source].cast<double>() - c;
+            cov.noalias() += d * d.transpose();
+        }
+        cov /= static_cast<double>(pairs.size());
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov, Eigen::EigenvaluesOnly);
+        out.overlap_spread = std::sqrt(std::max(0.0, es.eigenvalues()[2]));
+        out.condition = condition(c, std::sqrt(std::max(0.0, cov.trace())), out.hessian);
     }
 
     // Moves the information's rotation centre to the matched source points' centroid c (xi_local =
     // [[I, 0], [[c]x, I]] xi_c) and scales rotations by their RMS radius L, so that all six directions are
     // displacements in metres; then the ratio of the extreme eigenvalues.
-    double condition(const std::vector<Pair> &pairs, const Matrix6d &H) const {
-        Eigen::Vector3d c = Eigen::Vector3d::Zero();
-        for (const Pair &p : pairs) c += src_[p.source].cast<double>();
-        c /= static_cast<double>(pairs.size());
-        double sq = 0.0;
-        for (const Pair &p : pairs) sq += (src_[p.source].cast<double>() - c).squaredNorm();
-        const double L = std::sqrt(sq / static_cast<double>(pairs.size()));
+    static double condition(const Eigen::Vector3d &c, double L, const Matrix6d &H) {
         if (!(L > 0.0)) return 0.0;
         Matrix6d Ad = Matrix6d::Identity();
         Ad.bottomLeftCorner<3, 3>() = skew(c);
@@ -278,7 +306,9 @@ private:
     const PointIndex &index_;
     const RefineParams &params_;
     RunContext &ctx_;
-    std::vector<std::uint32_t> candidates_;
+    std::vector<std::uint32_t> all_;        // every source voxel (the overlap counts them all)
+    std::vector<std::uint32_t> candidates_; // those with a normal
+    std::vector<std::uint32_t> hint_;       // per source voxel: its last nearest target voxel
 };
 
 } // namespace
@@ -287,10 +317,7 @@ RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, c
                          const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0, const RefineParams &params,
                          RunContext &ctx) {
     Refiner refiner(source, target, target_index, params, ctx);
-    RefineOutput out = refiner.run(R0, t0);
-    out.overlap =
-        aligned_overlap(*source.points, target_index, out.rotation, out.translation, params.max_distance, ctx);
-    return out;
+    return refiner.run(R0, t0);
 }
 
 Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
@@ -303,25 +330,6 @@ Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vecto
     variance = std::max(variance, 1e-6 * floor_length * floor_length);
     Matrix6d info = Ad.transpose() * out.hessian * Ad / variance;
     return 0.5 * (info + info.transpose());
-}
-
-double aligned_overlap(const std::vector<Vec3f> &source, const PointIndex &target_index, const Eigen::Matrix3d &R,
-                       const Eigen::Vector3d &t, double max_distance, RunContext &ctx) {
-    if (source.empty()) return 0.0;
-    const float max_d2 = static_cast<float>(max_distance * max_distance);
-    const std::uint64_t hits = ctx.map_fold(
-        source.size(), 4096, std::uint64_t{0},
-        [&](std::size_t begin, std::size_t end) {
-            std::uint64_t h = 0;
-            for (std::size_t i = begin; i < end; ++i) {
-                float d2;
-                h += target_index.nearest((R * source[i].cast<double>() + t).cast<float>(), max_d2, &d2) !=
-                     PointIndex::kNone;
-            }
-            return h;
-        },
-        [](std::uint64_t &acc, std::uint64_t h) { acc += h; });
-    return static_cast<double>(hits) / static_cast<double>(source.size());
 }
 
 KISSM_DETAIL_END

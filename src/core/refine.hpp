@@ -55,14 +55,19 @@ struct RefineOutput {
     int iterations = 0;
     bool converged = false;
     std::size_t num_correspondences = 0; // at the final pose
-    double weight_sum = 0.0;             // sum of the Cauchy weights at the final pose
-    double rmse = 0.0;                   // sqrt(sum w r^2 / sum w) at the final pose, metres
-    double overlap = 0.0;                // share of source voxels with a target voxel within max_distance
+    // The numbers below are those of the point-to-plane term at the final pose, whichever cost was minimised
+    // (GICP's along-plane weights are its regularisation, not information).
+    double weight_sum = 0.0; // sum of the Cauchy weights
+    double rmse = 0.0;       // sqrt(sum w r^2 / sum w): the weighted RMS distance to the target's planes, metres
+    double overlap = 0.0;    // share of source voxels with a target voxel within max_distance
     // How well the correspondences pin the pose down in its weakest direction: the smallest over the largest
     // eigenvalue of the information with rotations turned into displacements at the matched points' RMS
     // radius about their centroid (1 = every direction alike, 0 = a direction the data leaves free).
     double condition = 0.0;
-    // Gauss-Newton information sum w J^T M J at the final pose, for the right perturbation
+    // Standard deviation of the matched source voxels along their principal axis (metres): how far the aligned
+    // overlap extends, against which the solver's inliers are measured (validity.hpp, inlier coverage).
+    double overlap_spread = 0.0;
+    // Gauss-Newton information sum w J^T n n^T J at the final pose, for the right perturbation
     // T exp(xi), xi = (rotation, translation), in the source's local frame; not yet scaled by the residual
     // variance (information_in_caller_frame does that).
     Matrix6d hessian = Matrix6d::Zero();
@@ -80,9 +85,5 @@ RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, c
 // frame) and divided by the residual variance sum w r^2 / (sum w - 6), floored at (1e-3 * floor_length)^2.
 Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
                                      double floor_length);
-
-// Aligned overlap alone: the share of source points that (R, t) lays within max_distance of a target point.
-double aligned_overlap(const std::vector<Vec3f> &source, const PointIndex &target_index, const Eigen::Matrix3d &R,
-                       const Eigen::Vector3d &t, double max_distance, RunContext &ctx);
 
 KISSM_DETAIL_END

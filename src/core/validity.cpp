@@ -2,41 +2,57 @@
 #include "validity.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "normals.hpp"
 
 KISSM_DETAIL_BEGIN
 
-Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::size_t min_inliers, double noise_bound,
-                        const Eigen::Matrix3d &rotation, const Eigen::Vector3d &translation) {
-    Validity v;
-    if (!rotation.allFinite() || !translation.allFinite()) {
-        v.reason = Reason::SolverFailed;
+InlierEvidence inlier_evidence(const std::vector<Eigen::Vector3d> &inlier_points, double noise_bound) {
+    InlierEvidence v;
+    v.rotation_uncertainty = std::numeric_limits<double>::infinity();
+    if (inlier_points.empty()) {
+        v.shape = Reason::Degenerate;
         return v;
     }
-    if (!inlier_points.empty()) {
-        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        for (const auto &p : inlier_points) mean += p;
-        mean /= static_cast<double>(inlier_points.size());
-        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-        for (const auto &p : inlier_points) cov.noalias() += (p - mean) * (p - mean).transpose();
-        cov /= static_cast<double>(inlier_points.size());
-        Eigen::Vector3d lambda, unused;
-        symmetric_eigen3(cov, lambda, unused);
-        for (int i = 0; i < 3; ++i) v.extent[i] = std::sqrt(std::max(0.0, lambda[i]));
-    }
-    if (inlier_points.size() < min_inliers)
-        v.reason = Reason::TooFewInliers;
-    else if (v.extent[1] < noise_bound || v.extent[2] < 0.5 * noise_bound)
-        v.reason = Reason::Degenerate;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto &p : inlier_points) mean += p;
+    mean /= static_cast<double>(inlier_points.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto &p : inlier_points) cov.noalias() += (p - mean) * (p - mean).transpose();
+    cov /= static_cast<double>(inlier_points.size());
+    Eigen::Vector3d lambda, unused;
+    symmetric_eigen3(cov, lambda, unused);
+    for (int i = 0; i < 3; ++i) v.extent[i] = std::sqrt(std::max(0.0, lambda[i]));
+    const double weakest =
+        static_cast<double>(inlier_points.size()) * (v.extent[1] * v.extent[1] + v.extent[2] * v.extent[2]);
+    if (weakest > 0.0) v.rotation_uncertainty = noise_bound / std::sqrt(weakest);
+    if (v.extent[1] < noise_bound || v.extent[2] < 0.5 * noise_bound) v.shape = Reason::Degenerate;
     return v;
 }
 
-Reason check_refined_validity(Reason coarse, const RefinedEvidence &e, const RefinedRule &rule) {
-    if (coarse != Reason::None) return coarse;
-    if (e.num_correspondences < 6 || e.overlap < rule.min_overlap) return Reason::LowOverlap;
-    if (e.condition < rule.min_condition) return Reason::Unconstrained;
+Reason coarse_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const CoarseRule &rule) {
+    if (num_inliers < rule.min_inliers) return Reason::TooFewInliers;
+    if (inliers.shape != Reason::None) return inliers.shape;
+    if (!(inliers.rotation_uncertainty <= rule.max_rotation_uncertainty)) return Reason::UncertainRotation;
     return Reason::None;
+}
+
+Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule) {
+    if (refined.num_correspondences < 6 || !(refined.overlap >= rule.min_overlap)) return Reason::LowOverlap;
+    if (!(refined.condition >= rule.min_condition)) return Reason::Unconstrained;
+    if (!refined.converged) return Reason::NotConverged;
+    return Reason::None;
+}
+
+Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const RefinedEvidence &refined,
+                        const RefinedRule &rule) {
+    if (num_inliers < rule.min_inliers) return Reason::TooFewInliers;
+    if (inliers.shape != Reason::None) return inliers.shape;
+    const Reason dense = prior_validity(refined, rule);
+    if (dense == Reason::LowOverlap) return dense;
+    if (!(refined.inlier_coverage >= rule.min_inlier_coverage)) return Reason::ClusteredInliers;
+    return dense;
 }
 
 KISSM_DETAIL_END

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
-// Stage 5b: whether a solved pose can be trusted.
+// Stage 5b and 6b: whether a pose can be trusted.
 // Paper: Sec. III-E (\label{subsec:nonminimal_solver}): valid when the final inlier set I_final is large
-// enough (no numbered equation). The test that the inliers span a volume is an addition of this library.
+// enough (no numbered equation). Everything else here is an addition of this library, each rule measured on
+// every real pair raw, rotated and with its frame moved, and on the synthetic pair at 24 yaws
+// (docs/accuracy.md, "The validity rules").
 #pragma once
 
 #include <Eigen/Core>
@@ -22,36 +24,62 @@ enum class Reason {
     Degenerate,
     LowOverlap,
     Unconstrained,
+    UncertainRotation,
+    ClusteredInliers,
+    NotConverged,
 };
 
-struct Validity {
-    Reason reason = Reason::None;
+// What the solver's inliers say about its pose.
+struct InlierEvidence {
+    Reason shape = Reason::None;                      // Degenerate when collinear or planar, else None
     Eigen::Vector3d extent = Eigen::Vector3d::Zero(); // sqrt of the inliers' covariance eigenvalues, descending
+    // The rotation's 1-sigma uncertainty (radians) about its worst axis if every inlier were off by the noise
+    // bound b: the point-to-point information about the inliers' centroid is N / b^2 (tr(C) I - C), whose
+    // smallest eigenvalue is N (l2 + l3) / b^2, so sigma = b / sqrt(N (l2 + l3)). Infinite for no inliers.
+    double rotation_uncertainty = 0.0;
 };
 
-// Valid when there are at least min_inliers inliers and they span a volume: a collinear or planar inlier set
-// (second or third extent below the noise bound) pins the pose down only up to a rotation or reflection
-// that the data cannot see.
-Validity check_validity(const std::vector<Eigen::Vector3d> &inlier_points, std::size_t min_inliers, double noise_bound,
-                        const Eigen::Matrix3d &rotation, const Eigen::Vector3d &translation);
+// The inliers' extents and rotation uncertainty; collinear or planar (second or third extent below the noise
+// bound) is Degenerate: such a set pins the pose down only up to a rotation or reflection the data cannot see.
+InlierEvidence inlier_evidence(const std::vector<Eigen::Vector3d> &inlier_points, double noise_bound);
+
+// The rule without refinement: at least min_inliers inliers, not degenerate, and the rotation known to within
+// max_rotation_uncertainty (2 degrees by default, so that the 5 degree error of a wrong pose is 2.5 sigma
+// away). The uncertainty rejects what the inlier count cannot see: inliers on one compact object (a sphere
+// matches itself under any rotation) and few inliers along one line.
+struct CoarseRule {
+    std::uint64_t min_inliers;
+    double max_rotation_uncertainty;
+};
+Reason coarse_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const CoarseRule &rule);
 
 // What refinement (stage 6) found, as the refined rule reads it.
 struct RefinedEvidence {
-    std::uint64_t num_final_inliers = 0;   // the solver's (0 for a refinement from the caller's pose)
-    std::uint64_t num_correspondences = 0; // refinement's, at the final pose
+    std::uint64_t num_correspondences = 0; // at the final pose
     double overlap = 0.0;                  // share of source voxels with a target voxel within the distance
-    double rmse = 0.0;                     // metres
     double condition = 0.0;                // see RefineOutput::condition
-    bool converged = false;
+    double inlier_coverage = 0.0;          // solver inliers' spread over the aligned overlap's (NaN: no solver)
+    bool converged = false;                // stopped on its convergence test, not its iteration cap
 };
 
 struct RefinedRule {
+    std::uint64_t min_inliers; // refine_min_inliers
     double min_overlap;
     double min_condition;
+    double min_inlier_coverage;
 };
 
-// The rule with refinement: the coarse reason (None for a refinement from the caller's pose) unless the
-// refined evidence overrules it, then the overlap and the conditioning of the refined pose.
-Reason check_refined_validity(Reason coarse, const RefinedEvidence &e, const RefinedRule &rule);
+// The rule with refinement, for a registration: the dense alignment decides the accuracy, so the inliers
+// only need to show that the refinement started in the right basin: at least refine_min_inliers, not
+// degenerate, and spread over at least min_inlier_coverage of the aligned overlap (inliers on one compact
+// object cover a small part of it, whatever the pose). Then the refined pose must overlap (min_overlap), be
+// constrained in every direction (min_condition) and have converged: a refinement still moving at its
+// iteration cap is crossing from one basin to another (most wrong local optima measured did).
+Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const RefinedEvidence &refined,
+                        const RefinedRule &rule);
+
+// The rule for a refinement from the caller's pose (kissm_refine): overlap, conditioning, convergence. It
+// cannot tell every prior outside the convergence basin that ends in a wrong local optimum (docs/accuracy.md).
+Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule);
 
 KISSM_DETAIL_END

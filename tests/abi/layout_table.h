@@ -16,9 +16,9 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 200)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 232)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 904)
+  X(kissm_result, KISSM_STRUCT_RESULT, 920)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -48,7 +48,12 @@
   X(kissm_config, refine_kernel_gain, double, 168, 8)                                                                  \
   X(kissm_config, refine_rotation_epsilon, double, 176, 8)                                                             \
   X(kissm_config, refine_translation_epsilon_gain, double, 184, 8)                                                     \
-  X(kissm_config, min_overlap, double, 192, 8)
+  X(kissm_config, max_rotation_uncertainty, double, 192, 8)                                                            \
+  X(kissm_config, min_overlap, double, 200, 8)                                                                         \
+  X(kissm_config, min_inlier_coverage, double, 208, 8)                                                                 \
+  X(kissm_config, refine_min_inliers, int32_t, 216, 4)                                                                 \
+  X(kissm_config, reserved1, int32_t, 220, 4)                                                                          \
+  X(kissm_config, min_refine_condition, double, 224, 8)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \
@@ -93,10 +98,12 @@
   X(kissm_result, overlap, double, 856, 8)                                                                             \
   X(kissm_result, refine_rmse, double, 864, 8)                                                                         \
   X(kissm_result, refine_condition, double, 872, 8)                                                                    \
-  X(kissm_result, time_refine_ms, double, 880, 8)                                                                      \
-  X(kissm_result, num_refine_correspondences, uint64_t, 888, 8)                                                        \
-  X(kissm_result, refine_iterations, int32_t, 896, 4)                                                                  \
-  X(kissm_result, refine_converged, int32_t, 900, 4)
+  X(kissm_result, rotation_uncertainty, double, 880, 8)                                                                \
+  X(kissm_result, inlier_coverage, double, 888, 8)                                                                     \
+  X(kissm_result, time_refine_ms, double, 896, 8)                                                                      \
+  X(kissm_result, num_refine_correspondences, uint64_t, 904, 8)                                                        \
+  X(kissm_result, refine_iterations, int32_t, 912, 4)                                                                  \
+  X(kissm_result, refine_converged, int32_t, 916, 4)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

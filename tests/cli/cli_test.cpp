@@ -4,8 +4,10 @@
 //
 //   cli_test KISSM_BINARY WORK_DIR CASE
 //
-// CASE: usage | errors | malformed | demo | json | threads | realdata. Cases that need ../shared/data
-// (KISSM_DATA_DIR) return 77 (skipped) when it is absent.
+// CASE: usage | errors | malformed | demo | json | threads | realdata | refine_options | refine_register |
+// refine_command | refine_initial | refine_roundtrip | validity_options. Cases that need ../shared/data
+// (KISSM_DATA_DIR) return 77 (skipped) when it is absent; the refine and validity cases use the committed
+// pair of tests/data (KISSM_TEST_DATA).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -21,9 +23,12 @@
 
 #include <kissm.h>
 
+#include "cli_result_check.hpp"
 #include "cli_test_util.hpp"
 #include "harness.h"
 #include "ply_writer.hpp"
+#include "pose_math.hpp"
+#include "transform_file.hpp"
 
 namespace fs = std::filesystem;
 using namespace cli_test;
@@ -146,6 +151,52 @@ std::vector<double> read_back(const std::string &path) {
 // Runs the demo into a folder of this case and returns its run.
 Run run_demo(const std::string &dir, const std::string &extra) { return run("demo --out " + quote(dir) + " " + extra); }
 
+// The committed pair (tests/data/roundtrip_*) and its ground truth, at golden.json's voxel sizes.
+struct CommittedPair {
+    std::string source, target, truth_path;
+    double truth[16];
+};
+
+bool load_committed_pair(CommittedPair *pair) {
+    const char *dir = std::getenv("KISSM_TEST_DATA");
+    if (!dir || !*dir) return false;
+    pair->source = (fs::path(dir) / "roundtrip_source.ply").string();
+    pair->target = (fs::path(dir) / "roundtrip_target.ply").string();
+    pair->truth_path = (fs::path(dir) / "roundtrip_ground_truth.txt").string();
+    std::string error;
+    if (!kissm_cli::read_transform_file(pair->truth_path, pair->truth, &error)) {
+        std::fprintf(stderr, "%s\n", error.c_str());
+        return false;
+    }
+    return true;
+}
+
+std::string pair_args(const CommittedPair &p) { return quote(p.source) + " " + quote(p.target); }
+
+struct PoseError {
+    double deg, m;
+};
+
+PoseError error_of(const std::vector<double> &T, const double truth[16]) {
+    if (T.size() != 16) return {std::nan(""), std::nan("")};
+    return {kissm_cli::rotation_error_deg(T.data(), truth), kissm_cli::translation_error(T.data(), truth)};
+}
+
+// A run's stdout as JSON, checked against the contract.
+Json contract_json(const Run &r, bool refine_command, const char *what) {
+    std::string error;
+    const Json j = json_parse(r.out, &error);
+    CHECK_MSG(error.empty(), "%s: invalid JSON (%s):\n%s", what, error.c_str(), r.out.c_str());
+    check_contract(j, refine_command, what);
+    return j;
+}
+
+std::string help_line(const std::string &help, const std::string &option) {
+    const size_t at = help.find("\n  " + option + " ");
+    if (at == std::string::npos) return std::string();
+    return help.substr(at + 1, help.find('\n', at + 1) - at - 1);
+}
+
 // ---------------------------------------------------------------------------------------------------
 
 void test_usage() {
@@ -177,6 +228,46 @@ void test_usage() {
     r = run("help register");
     CHECK_EQ_INT(r.code, 0);
     CHECK(contains(r.out, "usage: kissm register"));
+
+    // The refinement options, with the defaults kissm_config_init gives.
+    kissm_config defaults{};
+    REQUIRE(kissm_config_init(&defaults, sizeof defaults) == KISSM_OK);
+    char expected[3][64];
+    std::snprintf(expected[0], sizeof expected[0], "(default %d)", defaults.refine_max_iterations);
+    std::snprintf(expected[1], sizeof expected[1], "(default %g)", defaults.refine_max_distance_gain);
+    std::snprintf(expected[2], sizeof expected[2], "(default %g)", defaults.min_overlap);
+    const char *options[3] = {"--refine-iterations", "--refine-distance", "--min-overlap"};
+    for (const char *command : {"register --help", "refine --help", "help refine"}) {
+        r = run(command);
+        CHECK_EQ_INT(r.code, 0);
+        CHECK(r.err.empty());
+        CHECK(contains(r.out, "--refine MODE"));
+        for (int i = 0; i < 3; ++i) {
+            const std::string line = help_line(r.out, options[i]);
+            CHECK_MSG(contains(line, expected[i]), "'kissm %s': [%s] lacks %s", command, line.c_str(), expected[i]);
+        }
+    }
+    CHECK(contains(help_line(run("register --help").out, "--refine"), "(default none)"));
+    // The validity rules' options, register only, with the library's defaults.
+    char validity[3][64];
+    std::snprintf(validity[0], sizeof validity[0], "(default %g, i.e. %.3g deg)", defaults.max_rotation_uncertainty,
+                  kissm_cli::rad_to_deg(defaults.max_rotation_uncertainty));
+    std::snprintf(validity[1], sizeof validity[1], "(default %d)", defaults.refine_min_inliers);
+    std::snprintf(validity[2], sizeof validity[2], "(default %g)", defaults.min_inlier_coverage);
+    const char *validity_options[3] = {"--max-rotation-uncertainty", "--refine-min-inliers", "--min-inlier-coverage"};
+    const std::string register_help = run("register --help").out, refine_help = run("refine --help").out;
+    for (int i = 0; i < 3; ++i) {
+        const std::string line = help_line(register_help, validity_options[i]);
+        CHECK_MSG(contains(line, validity[i]), "'kissm register --help': [%s] lacks %s", line.c_str(), validity[i]);
+        CHECK_MSG(!contains(refine_help, validity_options[i]), "'kissm refine --help' offers %s", validity_options[i]);
+    }
+    r = run("refine --help");
+    CHECK(contains(r.out, "usage: kissm refine"));
+    CHECK(contains(help_line(r.out, "--refine"), "(default gicp)"));
+    CHECK(contains(r.out, "--initial FILE"));
+    CHECK(contains(r.out, "--out-transform"));
+    CHECK(!contains(r.out, "--min-inliers"));
+    CHECK(contains(run("--help").out, "kissm refine"));
 
     r = run("demo --help");
     CHECK_EQ_INT(r.code, 0);
@@ -326,11 +417,44 @@ void test_demo() {
     CHECK_MSG(r.code == 0, "kissm demo exited with %d\nstdout:\n%s\nstderr:\n%s", r.code, r.out.c_str(), r.err.c_str());
     CHECK(contains(r.out, "rotation error"));
     CHECK(contains(r.out, "translation error"));
+    CHECK(contains(r.out, "coarse pose (solver): rotation error"));
+    CHECK(contains(r.out, "refined pose (gicp):  rotation error"));
+    CHECK(contains(r.out, "refinement:"));
     CHECK(contains(r.out, "valid: yes"));
     CHECK(contains(r.out, "SUCCESS"));
     CHECK(r.err.empty());
     check_demo_files(dir);
     std::printf("%s", r.out.c_str());
+
+    // The same seed gives the same files, byte for byte (the picture included), whatever the thread count.
+    const std::string again = work("demo_again");
+    const Run r2 = run_demo(again, "--threads 1");
+    CHECK_EQ_INT(r2.code, 0);
+    for (const char *name : {"source.ply", "target.ply", "aligned_source.ply", "demo_topview.png"}) {
+        const std::string a = read_file((fs::path(dir) / name).string());
+        CHECK_MSG(!a.empty() && a == read_file((fs::path(again) / name).string()), "%s differs between two runs", name);
+    }
+    // The picture has the coarse and refined details: two rows of two panels.
+    try {
+        const PngImage png = decode_png(read_file((fs::path(dir) / "demo_topview.png").string()));
+        CHECK_MSG(png.width > 1000 && png.height > 1000, "demo_topview.png is %ux%u", png.width, png.height);
+    } catch (const std::exception &e) {
+        CHECK_MSG(false, "demo_topview.png: %s", e.what());
+    }
+
+    // Without refinement the demo still works, with the before/after picture only.
+    const Run plain = run_demo(work("demo_plain"), "--refine none --json");
+    CHECK_MSG(plain.code == 0, "demo --refine none: exit %d (%s)", plain.code, plain.err.c_str());
+    const Json p = json_parse(plain.out);
+    CHECK(p.at("refine").text == "none" && p.at("information").is(Json::Type::Null));
+    CHECK(p.at("rotation_error_deg").text == p.at("coarse_rotation_error_deg").text);
+    try {
+        const PngImage png = decode_png(read_file((fs::path(work("demo_plain")) / "demo_topview.png").string()));
+        CHECK_MSG(png.width > png.height, "demo --refine none picture is %ux%u", png.width, png.height);
+    } catch (const std::exception &e) {
+        CHECK_MSG(false, "demo --refine none picture: %s", e.what());
+    }
+    expect_usage_error("demo --refine bogus", "--refine");
 }
 
 void check_result_json(const std::string &json, const char *what) {
@@ -342,8 +466,11 @@ void check_result_json(const std::string &json, const char *what) {
                             "\"features\"", "\"matching\"", "\"pruning\"", "\"solver\"", "\"total\""}) {
         CHECK_MSG(contains(json, key), "%s: %s is missing", what, key);
     }
-    CHECK_MSG(!contains(json, "nan") && !contains(json, "NaN") && !contains(json, "inf"), "%s: non-finite literal",
-              what);
+    std::string values = json; // the literals nan/inf, not the key "information"
+    for (size_t at = values.find("\"information\""); at != std::string::npos; at = values.find("\"information\""))
+        values.erase(at, 13);
+    CHECK_MSG(!contains(values, "nan") && !contains(values, "NaN") && !contains(values, "inf"),
+              "%s: non-finite literal", what);
     CHECK_EQ_INT(numbers_in(json_line_value(json, "transform")).size(), 16);
 }
 
@@ -355,19 +482,37 @@ void test_json() {
     CHECK(contains(demo.out, "\"success\": true"));
     CHECK(contains(demo.out, "\"ground_truth\""));
     CHECK(contains(demo.out, "\"rotation_error_deg\""));
+    // The refined pose is closer to the truth than the solver's.
+    const Json d = json_parse(demo.out);
+    CHECK(d.at("refine").text == "gicp" && d.at("information").is_matrix(6, 6, false));
+    const double rot = d.at("rotation_error_deg").as_double(),
+                 coarse_rot = d.at("coarse_rotation_error_deg").as_double();
+    const double tra = d.at("translation_error_m").as_double(),
+                 coarse_tra = d.at("coarse_translation_error_m").as_double();
+    std::printf("demo: coarse error %.4f deg %.4f m, refined %.4f deg %.4f m\n", coarse_rot, coarse_tra, rot, tra);
+    CHECK_MSG(rot < coarse_rot && tra < coarse_tra, "demo: refined %g deg %g m, coarse %g deg %g m", rot, tra,
+              coarse_rot, coarse_tra);
 
     const std::string source = (fs::path(dir) / "source.ply").string();
     const std::string target = (fs::path(dir) / "target.ply").string();
     const std::string transform_path = work("T.txt"), aligned_path = work("aligned.ply");
-    const Run r = run("register " + quote(source) + " " + quote(target) + " --voxel 0.3 --json --out-transform " +
-                      quote(transform_path) + " --out-aligned " + quote(aligned_path));
+    const Run r =
+        run("register " + quote(source) + " " + quote(target) + " --voxel 0.3 --refine gicp --json --out-transform " +
+            quote(transform_path) + " --out-aligned " + quote(aligned_path));
     CHECK_MSG(r.code == 0, "register --json exited with %d: %s", r.code, r.err.c_str());
     check_result_json(r.out, "register --json");
     CHECK(contains(r.out, "\"valid\": true"));
-    // The demo's PLY files hold float64 coordinates, so registering them reproduces the demo's pose exactly.
-    CHECK_MSG(json_line_value(r.out, "transform") == json_line_value(demo.out, "transform"),
-              "register on the demo files: %s\ndemo: %s", json_line_value(r.out, "transform").c_str(),
-              json_line_value(demo.out, "transform").c_str());
+    // The demo's PLY files hold float64 coordinates, so registering them reproduces the demo's refined pose
+    // exactly, and its coarse pose without refinement.
+    for (const char *key : {"transform", "coarse_transform", "information", "overlap"}) {
+        CHECK_MSG(json_line_value(r.out, key) == json_line_value(demo.out, key),
+                  "register on the demo files: %s %s\ndemo: %s", key, json_line_value(r.out, key).c_str(),
+                  json_line_value(demo.out, key).c_str());
+    }
+    const Run coarse = run("register " + quote(source) + " " + quote(target) + " --voxel 0.3 --json");
+    CHECK_EQ_INT(coarse.code, 0);
+    CHECK(json_line_value(coarse.out, "transform") == json_line_value(demo.out, "coarse_transform"));
+    CHECK(json_line_value(coarse.out, "information") == "null");
 
     // --out-transform: 4 lines of 4 numbers, the same doubles as the JSON.
     const std::string text = read_file(transform_path);
@@ -443,7 +588,7 @@ void test_threads() {
     const std::string files =
         quote((fs::path(dir) / "source.ply").string()) + " " + quote((fs::path(dir) / "target.ply").string());
     for (const char *threads : {"1", "2", "4"}) {
-        const Run r = run("register " + files + " --voxel 0.3 --json --threads " + threads);
+        const Run r = run("register " + files + " --voxel 0.3 --refine gicp --json --threads " + threads);
         CHECK_MSG(r.code == 0, "register --threads %s exited with %d: %s", threads, r.code, r.err.c_str());
         const std::string t = json_line_value(r.out, "transform");
         CHECK_MSG(t == first, "register --threads %s: %s\nvs %s", threads, t.c_str(), first.c_str());
@@ -493,15 +638,441 @@ int test_realdata() {
                   trans_err);
     }
 
+    // Refinement brings the pose closer to the ground truth.
+    const Run refined =
+        run("register " + real_pair_args(pair) + " --voxel " + std::to_string(kRealVoxel) + " --refine gicp --json");
+    CHECK_MSG(refined.code == 0, "real pair --refine gicp: exit %d\n%s", refined.code, refined.err.c_str());
+    const Json j = contract_json(refined, false, "real pair --refine gicp");
+    const PoseError coarse = error_of(j.at("coarse_transform").flat(), pair.gt);
+    const PoseError fine = error_of(j.at("transform").flat(), pair.gt);
+    std::printf("KITTI 07 keyframes with GICP: coarse %.4f deg %.4f m, refined %.4f deg %.4f m\n", coarse.deg, coarse.m,
+                fine.deg, fine.m);
+    CHECK_MSG(fine.deg < coarse.deg && fine.m < coarse.m, "refined %g deg %g m, coarse %g deg %g m", fine.deg, fine.m,
+              coarse.deg, coarse.m);
+
     // The human summary names every stage.
     const Run human = run("register " + real_pair_args(pair) + " --voxel " + std::to_string(kRealVoxel));
     CHECK_EQ_INT(human.code, r.code);
     for (const char *word : {"valid: yes", "voxels", "keypoints", "final inliers", "inlier ratio", "residual rms",
-                             "voxelize", "features", "matching", "pruning", "solver", "total"}) {
+                             "voxelize", "features", "matching", "pruning", "solver", "refine", "total"}) {
         CHECK_MSG(contains(human.out, word), "summary lacks '%s':\n%s", word, human.out.c_str());
     }
     std::printf("%s", human.out.c_str());
     return TEST_SUMMARY();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Refinement: register --refine, refine --initial.
+// ---------------------------------------------------------------------------------------------------
+
+void test_refine_options() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string reg = "register " + pair_args(pair) + " --voxel 0.25 --refine gicp ";
+    const std::string ref = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path) + " ";
+
+    // Not numbers, or not a mode: the tool's own message naming the option.
+    for (const char *bad : {"bogus", "GICP", "icp", "''"}) expect_usage_error(reg + "--refine " + bad, "--refine");
+    for (const char *bad : {"abc", "1.5", "99999999999", "''"}) {
+        expect_usage_error(reg + "--refine-iterations " + bad, "--refine-iterations");
+    }
+    for (const char *bad : {"abc", "nan", "inf", "1e999"}) {
+        expect_usage_error(reg + "--refine-distance " + bad, "--refine-distance");
+        expect_usage_error(ref + "--min-overlap " + bad, "--min-overlap");
+    }
+    // Numbers out of range: the library's validation message (it names the config field), after the option.
+    for (const char *bad : {"0", "-3", "1001"}) {
+        expect_usage_error(reg + "--refine-iterations " + bad, "--refine-iterations: config.refine_max_iterations");
+        expect_usage_error(ref + "--refine-iterations " + bad, "config.refine_max_iterations");
+    }
+    for (const char *bad : {"0", "-1", "100.5"}) {
+        expect_usage_error(reg + "--refine-distance " + bad, "--refine-distance: config.refine_max_distance_gain");
+    }
+    for (const char *bad : {"-0.1", "1.5"}) {
+        expect_usage_error(reg + "--min-overlap " + bad, "--min-overlap: config.min_overlap");
+        expect_usage_error(ref + "--min-overlap " + bad, "config.min_overlap");
+    }
+    // The refine command's own rules.
+    expect_usage_error("refine " + pair_args(pair) + " --voxel 0.25", "--initial");
+    expect_usage_error("refine " + pair_args(pair) + " --voxel 0.25 --initial", "--initial");
+    expect_usage_error("refine " + quote(pair.source) + " --voxel 0.25 --initial " + quote(pair.truth_path), "2 files");
+    expect_usage_error("refine " + pair_args(pair) + " --initial " + quote(pair.truth_path), "--voxel");
+    expect_usage_error(ref + "--refine none", "none");
+    expect_usage_error(ref + "--min-inliers 5", "--min-inliers");
+    expect_usage_error(ref + "--max-correspondences 50", "--max-correspondences");
+    expect_usage_error(reg + "--initial " + quote(pair.truth_path), "--initial");
+
+    // The settings reach the library: each changes the outcome as it should.
+    const Run strict = run(reg + "--min-overlap 0.999 --json");
+    CHECK_MSG(strict.code == 1, "--min-overlap 0.999: exit %d (%s)", strict.code, strict.err.c_str());
+    const Json s = contract_json(strict, false, "--min-overlap 0.999");
+    CHECK(!s.at("valid").boolean);
+    CHECK_EQ_INT(static_cast<int>(s.at("reason_code").number), KISSM_REASON_LOW_OVERLAP);
+    CHECK(s.at("overlap").as_double() < 0.999);
+    const Run lenient = run(reg + "--min-overlap 0.5 --json");
+    CHECK_MSG(lenient.code == 0, "--min-overlap 0.5: exit %d (%s)", lenient.code, lenient.err.c_str());
+
+    const Run one = run(reg + "--refine-iterations 1 --json");
+    CHECK_MSG(one.code == 0 || one.code == 1, "--refine-iterations 1: exit %d (%s)", one.code, one.err.c_str());
+    CHECK_EQ_INT(static_cast<int>(contract_json(one, false, "--refine-iterations 1").at("refine_iterations").number),
+                 1);
+
+    const Json near_ = contract_json(run(reg + "--refine-distance 0.5 --json"), false, "--refine-distance 0.5");
+    const Json far_ = contract_json(run(reg + "--refine-distance 6 --json"), false, "--refine-distance 6");
+    CHECK_MSG(near_.at("overlap").as_double() < far_.at("overlap").as_double(),
+              "overlap within 0.5 voxel %g, within 6 voxels %g", near_.at("overlap").as_double(),
+              far_.at("overlap").as_double());
+}
+
+void check_refined_beats_coarse(const Json &j, const double truth[16], const char *what) {
+    const PoseError coarse = error_of(j.at("coarse_transform").flat(), truth);
+    const PoseError refined = error_of(j.at("transform").flat(), truth);
+    std::printf("%s: coarse error %.4f deg %.4f m, refined %.4f deg %.4f m\n", what, coarse.deg, coarse.m, refined.deg,
+                refined.m);
+    CHECK_MSG(refined.deg < coarse.deg && refined.m < coarse.m, "%s: refined %g deg %g m, coarse %g deg %g m", what,
+              refined.deg, refined.m, coarse.deg, coarse.m);
+    CHECK_MSG(refined.deg < 0.1 && refined.m < 0.02, "%s: refined %g deg %g m", what, refined.deg, refined.m);
+}
+
+void test_refine_register() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const struct {
+        const char *mode;
+        int32_t code;
+        double voxel;
+    } modes[] = {{"gicp", KISSM_REFINE_GICP, 0.25}, {"point-to-plane", KISSM_REFINE_POINT_TO_PLANE, 0.3}};
+    for (const auto &m : modes) {
+        char voxel[32];
+        std::snprintf(voxel, sizeof voxel, "%g", m.voxel);
+        const std::string what = std::string("register --refine ") + m.mode;
+        const Run r = run("register " + pair_args(pair) + " --voxel " + voxel + " --refine " + m.mode + " --json");
+        CHECK_MSG(r.code == 0, "%s: exit %d (%s)", what.c_str(), r.code, r.err.c_str());
+        const Json j = contract_json(r, false, what.c_str());
+        CHECK(j.at("valid").boolean);
+        CHECK(j.at("refine").text == m.mode);
+        CHECK(j.at("information").is_matrix(6, 6, false));
+        CHECK(j.at("refine_iterations").number >= 1 && j.at("counts").at("refine_correspondences").number > 0);
+        CHECK(j.at("overlap").number > 0.5 && j.at("overlap").number <= 1.0);
+        CHECK(j.at("time_ms").at("refine").number > 0.0);
+        check_refined_beats_coarse(j, pair.truth, what.c_str());
+        kissm_result lib{};
+        REQUIRE(library_result(pair.source, pair.target, m.voxel, m.code, nullptr, &lib));
+        check_matches_library(j, lib, what.c_str());
+    }
+
+    // Without refinement: the solver's pose, and the refinement's fields empty.
+    const Run plain = run("register " + pair_args(pair) + " --voxel 0.25 --json");
+    CHECK_MSG(plain.code == 0, "register: exit %d (%s)", plain.code, plain.err.c_str());
+    const Json p = contract_json(plain, false, "register");
+    CHECK(p.at("refine").text == "none");
+    CHECK(p.at("information").is(Json::Type::Null));
+    CHECK(p.at("overlap").is(Json::Type::Null) && p.at("refine_rmse").is(Json::Type::Null) &&
+          p.at("refine_condition").is(Json::Type::Null));
+    CHECK(p.at("refine_iterations").text == "0" && !p.at("refine_converged").boolean);
+    CHECK(p.at("counts").at("refine_correspondences").text == "0" && p.at("time_ms").at("refine").number == 0.0);
+    CHECK(json_line_value(plain.out, "coarse_transform") == json_line_value(plain.out, "transform"));
+    kissm_result lib{};
+    REQUIRE(library_result(pair.source, pair.target, 0.25, KISSM_REFINE_NONE, nullptr, &lib));
+    check_matches_library(p, lib, "register");
+
+    // The summary shows the refinement.
+    const Run human = run("register " + pair_args(pair) + " --voxel 0.25 --refine gicp");
+    CHECK_EQ_INT(human.code, 0);
+    for (const char *word :
+         {"refinement gicp", "refined transform", "coarse transform", "refinement:", "converged", "overlap",
+          "inlier coverage", "rmse", "condition", "moved the coarse pose", "refine ", "rotation uncertainty:"}) {
+        CHECK_MSG(contains(human.out, word), "summary lacks '%s':\n%s", word, human.out.c_str());
+    }
+    const Run human_plain = run("register " + pair_args(pair) + " --voxel 0.25");
+    CHECK(!contains(human_plain.out, "refinement:") && !contains(human_plain.out, "coarse transform"));
+}
+
+// %.17g: the double itself on the command line.
+std::string exact(double v) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.17g", v);
+    return text;
+}
+
+// A run's reason code, checked against its exit status and reason text.
+int reason_of(const Run &r, const char *what) {
+    const Json j = contract_json(r, false, what);
+    const int code = static_cast<int>(j.at("reason_code").number);
+    CHECK_MSG(r.code == (code == KISSM_REASON_NONE ? 0 : 1), "%s: exit %d with reason %d (%s)", what, r.code, code,
+              r.err.c_str());
+    CHECK_MSG(j.at("reason").text == kissm_reason_string(code), "%s: reason '%s' for code %d", what,
+              j.at("reason").text.c_str(), code);
+    return code;
+}
+
+// --max-rotation-uncertainty, --refine-min-inliers and --min-inlier-coverage: the tool's and the library's
+// range checks, refused by `refine`, and each moves the decision exactly at the value the JSON reports.
+void test_validity_options() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string plain = "register " + pair_args(pair) + " --voxel 0.25 ";
+    const std::string reg = plain + "--refine gicp ";
+    const std::string ref = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path) + " ";
+
+    for (const char *bad : {"abc", "nan", "inf", "''"}) {
+        expect_usage_error(plain + "--max-rotation-uncertainty " + bad, "--max-rotation-uncertainty");
+        expect_usage_error(reg + "--min-inlier-coverage " + bad, "--min-inlier-coverage");
+    }
+    for (const char *bad : {"abc", "1.5", "99999999999"}) {
+        expect_usage_error(reg + "--refine-min-inliers " + bad, "--refine-min-inliers");
+    }
+    for (const char *bad : {"0", "-0.01", "3.2"}) {
+        expect_usage_error(plain + "--max-rotation-uncertainty " + bad,
+                           "--max-rotation-uncertainty: config.max_rotation_uncertainty");
+    }
+    for (const char *bad : {"-0.1", "1.01"}) {
+        expect_usage_error(reg + "--min-inlier-coverage " + bad, "--min-inlier-coverage: config.min_inlier_coverage");
+    }
+    for (const char *bad : {"2", "-5", "100001"}) {
+        expect_usage_error(reg + "--refine-min-inliers " + bad, "--refine-min-inliers: config.refine_min_inliers");
+    }
+    // kissm_refine has no solver inliers to judge.
+    for (const char *option : {"--max-rotation-uncertainty", "--min-inlier-coverage", "--refine-min-inliers"}) {
+        expect_usage_error(ref + option + " 0.5", option);
+    }
+
+    // Without refinement: the rule's boundary is the rotation uncertainty the JSON reports.
+    const Run base = run(plain + "--json");
+    CHECK_MSG(base.code == 0, "register: exit %d (%s)", base.code, base.err.c_str());
+    const Json b = contract_json(base, false, "register");
+    const double u = b.at("rotation_uncertainty").as_double();
+    const uint64_t inliers = static_cast<uint64_t>(b.at("final_inliers").number);
+    CHECK_MSG(std::isfinite(u) && u > 0.0, "rotation_uncertainty %s", b.at("rotation_uncertainty").text.c_str());
+    CHECK(b.at("inlier_coverage").is(Json::Type::Null));
+    CHECK_EQ_INT(reason_of(run(plain + "--max-rotation-uncertainty " + exact(u) + " --json"), "at u"),
+                 KISSM_REASON_NONE);
+    const Run below = run(plain + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json");
+    CHECK_EQ_INT(reason_of(below, "just below u"), KISSM_REASON_UNCERTAIN_ROTATION);
+    // Only the decision moves, not the pose.
+    CHECK(json_line_value(below.out, "transform") == json_line_value(base.out, "transform"));
+    CHECK(json_line_value(below.out, "rotation_uncertainty") == json_line_value(base.out, "rotation_uncertainty"));
+    // Each rule ignores the other's settings.
+    CHECK_EQ_INT(reason_of(run(reg + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json"),
+                           "refined, strict rotation"),
+                 KISSM_REASON_NONE);
+    CHECK_EQ_INT(reason_of(run(plain + "--refine-min-inliers " + std::to_string(inliers + 1) +
+                               " --min-inlier-coverage 1 --json"),
+                           "unrefined, strict refined rule"),
+                 KISSM_REASON_NONE);
+
+    // The summary shows the same uncertainty in degrees (4 significant digits).
+    const Run human = run(plain);
+    const size_t at = human.out.find("\nrotation uncertainty: ");
+    REQUIRE(at != std::string::npos);
+    const double deg = std::atof(human.out.c_str() + at + 23);
+    CHECK_MSG(std::fabs(deg - kissm_cli::rad_to_deg(u)) <= 5e-4 * kissm_cli::rad_to_deg(u),
+              "summary says %g deg, the JSON %.17g rad", deg, u);
+
+    // With refinement: at least refine_min_inliers final inliers, covering at least min_inlier_coverage.
+    const Run fine = run(reg + "--json");
+    CHECK_MSG(fine.code == 0, "register --refine gicp: exit %d (%s)", fine.code, fine.err.c_str());
+    const Json f = contract_json(fine, false, "register --refine gicp");
+    const double coverage = f.at("inlier_coverage").as_double();
+    const uint64_t fine_inliers = static_cast<uint64_t>(f.at("final_inliers").number);
+    CHECK_MSG(coverage > 0.0 && coverage < 1.0, "inlier_coverage %s", f.at("inlier_coverage").text.c_str());
+    CHECK_EQ_INT(reason_of(run(reg + "--min-inlier-coverage " + exact(coverage) + " --json"), "at the coverage"),
+                 KISSM_REASON_NONE);
+    const Run clustered = run(reg + "--min-inlier-coverage " + exact(std::nextafter(coverage, 2.0)) + " --json");
+    CHECK_EQ_INT(reason_of(clustered, "just above the coverage"), KISSM_REASON_CLUSTERED_INLIERS);
+    CHECK(json_line_value(clustered.out, "transform") == json_line_value(fine.out, "transform"));
+    CHECK_EQ_INT(
+        reason_of(run(reg + "--refine-min-inliers " + std::to_string(fine_inliers) + " --json"), "at the inliers"),
+        KISSM_REASON_NONE);
+    CHECK_EQ_INT(reason_of(run(reg + "--refine-min-inliers " + std::to_string(fine_inliers + 1) + " --json"),
+                           "one inlier short"),
+                 KISSM_REASON_TOO_FEW_INLIERS);
+}
+
+// The ground truth moved by 2 degrees about a skew axis and by (0.15, -0.1, 0.08) m: exactly rigid.
+void perturbed(const double truth[16], double out[16]) {
+    const double axis[3] = {1.0 / std::sqrt(14.0), 2.0 / std::sqrt(14.0), 3.0 / std::sqrt(14.0)};
+    const double a = kissm_cli::deg_to_rad(2.0), c = std::cos(a), s = std::sin(a);
+    double D[9];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) D[3 * i + j] = (i == j ? c : 0.0) + (1.0 - c) * axis[i] * axis[j];
+    }
+    D[1] -= s * axis[2];
+    D[2] += s * axis[1];
+    D[3] += s * axis[2];
+    D[5] -= s * axis[0];
+    D[6] -= s * axis[1];
+    D[7] += s * axis[0];
+    const double shift[3] = {0.15, -0.1, 0.08};
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            out[4 * i + j] = D[3 * i] * truth[j] + D[3 * i + 1] * truth[4 + j] + D[3 * i + 2] * truth[8 + j];
+        }
+        out[4 * i + 3] = truth[4 * i + 3] + shift[i];
+    }
+    out[12] = out[13] = out[14] = 0.0;
+    out[15] = 1.0;
+}
+
+void test_refine_command() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    double initial[16];
+    perturbed(pair.truth, initial);
+    const std::string initial_path = work("perturbed.txt");
+    std::string error;
+    REQUIRE(kissm_cli::write_transform_file(initial_path, initial, &error));
+    const PoseError start = error_of(std::vector<double>(initial, initial + 16), pair.truth);
+    CHECK(start.deg > 1.9 && start.m > 0.15);
+
+    const struct {
+        const char *mode;
+        int32_t code;
+        const char *flag;
+    } modes[] = {{"gicp", KISSM_REFINE_GICP, ""},
+                 {"point-to-plane", KISSM_REFINE_POINT_TO_PLANE, " --refine point-to-plane"}};
+    for (const auto &m : modes) {
+        const std::string what = std::string("refine (") + m.mode + ")";
+        const Run r =
+            run("refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(initial_path) + " --json" + m.flag);
+        CHECK_MSG(r.code == 0, "%s: exit %d (%s)", what.c_str(), r.code, r.err.c_str());
+        const Json j = contract_json(r, true, what.c_str());
+        CHECK(j.at("valid").boolean && j.at("refine").text == m.mode);
+        check_doubles(j.at("initial_transform").flat(), initial, 16, what.c_str(), "initial_transform");
+        const std::vector<double> coarse = j.at("coarse_transform").flat();
+        for (size_t i = 0; i < 16 && coarse.size() == 16; ++i) CHECK_NEAR(coarse[i], initial[i], 1e-12);
+        CHECK(j.at("counts").at("source_keypoints").text == "0" && j.at("final_inliers").text == "0");
+        // No solver inliers: nothing for them to cover.
+        CHECK(j.at("inlier_coverage").is(Json::Type::Null));
+        CHECK(j.at("refine_converged").boolean);
+        const PoseError end = error_of(j.at("transform").flat(), pair.truth);
+        std::printf("%s from %.3f deg %.3f m off: %.4f deg %.4f m\n", what.c_str(), start.deg, start.m, end.deg, end.m);
+        CHECK_MSG(end.deg < 0.1 && end.m < 0.02, "%s: %g deg %g m from the truth", what.c_str(), end.deg, end.m);
+        kissm_result lib{};
+        REQUIRE(library_result(pair.source, pair.target, 0.25, m.code, initial, &lib));
+        check_matches_library(j, lib, what.c_str());
+    }
+
+    // The ground-truth file itself starts with a '#' comment line.
+    const Run from_truth = run("refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path));
+    CHECK_MSG(from_truth.code == 0, "refine from the truth: exit %d (%s)", from_truth.code, from_truth.err.c_str());
+    for (const char *word : {"kissm", "refine", "initial transform (from", "refined transform",
+                             "refinement:", "moved the initial pose", "valid: yes", "normals"}) {
+        CHECK_MSG(contains(from_truth.out, word), "summary lacks '%s':\n%s", word, from_truth.out.c_str());
+    }
+    CHECK(!contains(from_truth.out, "keypoints") && !contains(from_truth.out, "inlier coverage"));
+
+    // Threads do not change the result.
+    const std::string base = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(initial_path) + " --json";
+    const std::string t1 = json_line_value(run(base + " --threads 1").out, "information");
+    CHECK(!t1.empty() && t1 != "null");
+    CHECK(json_line_value(run(base + " --threads 2").out, "information") == t1);
+}
+
+void test_refine_initial() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string base = "refine " + pair_args(pair) + " --voxel 0.25 --initial ";
+    struct Case {
+        const char *name;
+        const char *text;
+        const char *about; // besides the file's name
+    };
+    const Case cases[] = {
+        {"empty.txt", "", "0 rows"},
+        {"comments.txt", "# nothing but a comment\n\n", "0 rows"},
+        {"three_rows.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n", "3 rows"},
+        {"five_rows.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n0 0 0 1\n", "line 5"},
+        {"short_row.txt", "1 0 0 0\n0 1 0\n0 0 1 0\n0 0 0 1\n", "line 2"},
+        {"long_row.txt", "1 0 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "line 1"},
+        {"one_line.txt", "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n", "line 1"},
+        {"words.txt", "1 0 0 0\n0 one 0 0\n0 0 1 0\n0 0 0 1\n", "'one'"},
+        {"suffix.txt", "1 0 0 0x\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "'0x'"},
+        {"nan.txt", "1 0 0 0\n0 1 0 nan\n0 0 1 0\n0 0 0 1\n", "not finite"},
+        {"inf.txt", "1 0 0 -inf\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "not finite"},
+        {"overflow.txt", "1 0 0 1e999\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "not finite"},
+        // Well-formed but not rigid: the library's message names initial_transform.
+        {"scaled.txt", "2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n", "initial_transform"},
+        {"mirror.txt", "1 0 0 0\n0 1 0 0\n0 0 -1 0\n0 0 0 1\n", "initial_transform"},
+        {"sheared.txt", "1 0.1 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "initial_transform"},
+        {"last_row.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n", "initial_transform"},
+        {"far.txt", "1 0 0 1e10\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "initial_transform"},
+    };
+    for (const Case &c : cases) {
+        const std::string path = work(c.name);
+        REQUIRE(write_file(path, c.text));
+        expect_usage_error(base + quote(path), c.name);
+        expect_usage_error(base + quote(path), c.about);
+    }
+    expect_usage_error(base + quote(work("missing.txt")), "missing.txt");
+    expect_usage_error(base + quote(g_work), "folder");
+
+    // What --out-transform writes when no pose was estimated is refused as well.
+    const double none[16] = {std::nan(""), std::nan(""), std::nan(""), std::nan(""), std::nan(""), std::nan(""),
+                             std::nan(""), std::nan(""), std::nan(""), std::nan(""), std::nan(""), std::nan(""),
+                             std::nan(""), std::nan(""), std::nan(""), std::nan("")};
+    std::string error;
+    REQUIRE(kissm_cli::write_transform_file(work("no_pose.txt"), none, &error));
+    expect_usage_error(base + quote(work("no_pose.txt")), "not finite");
+
+    // Accepted layouts: comments, blank lines, tabs, CRLF, signs and exponents.
+    const std::string loose = work("loose.txt");
+    REQUIRE(write_file(loose, "# from a spreadsheet\r\n\r\n  1\t0 0 0\r\n0 1 0 0\r\n  # a comment between rows\n"
+                              "0 0 1.0e0 0\r\n+0 -0 0 1\r\n\n"));
+    const Run ok = run(base + quote(loose) + " --json");
+    CHECK_MSG(ok.code == 0 || ok.code == 1, "loose layout: exit %d (%s)", ok.code, ok.err.c_str());
+    CHECK(json_valid(ok.out));
+}
+
+void test_refine_roundtrip() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string coarse_path = work("coarse.txt"), refined_path = work("refined.txt");
+    const std::string again_path = work("again.txt"), aligned = work("aligned.ply"), picture = work("refine.png");
+    const Run reg = run("register " + pair_args(pair) + " --voxel 0.3 --json --out-transform " + quote(coarse_path));
+    CHECK_MSG(reg.code == 0, "register: exit %d (%s)", reg.code, reg.err.c_str());
+    const Json r = contract_json(reg, false, "register --out-transform");
+
+    const Run ref =
+        run("refine " + pair_args(pair) + " --voxel 0.3 --initial " + quote(coarse_path) + " --json --out-transform " +
+            quote(refined_path) + " --out-aligned " + quote(aligned) + " --out-topview " + quote(picture));
+    CHECK_MSG(ref.code == 0, "refine --initial register's file: exit %d (%s)", ref.code, ref.err.c_str());
+    const Json f = contract_json(ref, true, "refine --initial");
+    // %.17g carries register's doubles exactly into refine.
+    check_doubles(f.at("initial_transform").flat(), r.at("transform").flat().data(), 16, "round trip",
+                  "initial_transform");
+    const PoseError coarse = error_of(r.at("transform").flat(), pair.truth);
+    const PoseError refined = error_of(f.at("transform").flat(), pair.truth);
+    std::printf("register %.4f deg %.4f m, then refine %.4f deg %.4f m\n", coarse.deg, coarse.m, refined.deg,
+                refined.m);
+    CHECK_MSG(refined.deg < coarse.deg && refined.m < coarse.m && refined.deg < 0.1 && refined.m < 0.02,
+              "refined %g deg %g m, coarse %g deg %g m", refined.deg, refined.m, coarse.deg, coarse.m);
+
+    // The refine command's own files: the transform it printed, the source moved by it, the picture.
+    double written[16];
+    std::string error;
+    REQUIRE(kissm_cli::read_transform_file(refined_path, written, &error));
+    check_doubles(f.at("transform").flat(), written, 16, "refine --out-transform", "transform");
+    CHECK_EQ_INT(read_back(aligned).size(), read_back(pair.source).size());
+    try {
+        const PngImage png = decode_png(read_file(picture));
+        CHECK_MSG(png.width > 1000 && png.height > 1000, "refine --out-topview: %ux%u, expected 2 x 2 panels",
+                  png.width, png.height);
+    } catch (const std::exception &e) {
+        CHECK_MSG(false, "%s: %s", picture.c_str(), e.what());
+    }
+
+    // A refined pose is a fixed point: refining it again barely moves it.
+    const Run again = run("refine " + pair_args(pair) + " --voxel 0.3 --initial " + quote(refined_path) + " --json");
+    CHECK_MSG(again.code == 0, "refine --initial its own output: exit %d (%s)", again.code, again.err.c_str());
+    const Json a = contract_json(again, true, "refine again");
+    const std::vector<double> first = f.at("transform").flat(), second = a.at("transform").flat();
+    REQUIRE(first.size() == 16 && second.size() == 16);
+    CHECK_MSG(kissm_cli::rotation_error_deg(first.data(), second.data()) < 0.01 &&
+                  kissm_cli::translation_error(first.data(), second.data()) < 1e-3,
+              "refining the refined pose moved it by %g deg, %g m",
+              kissm_cli::rotation_error_deg(first.data(), second.data()),
+              kissm_cli::translation_error(first.data(), second.data()));
 }
 
 } // namespace
@@ -521,23 +1092,28 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "cannot create %s: %s\n", g_work.c_str(), ec.message().c_str());
         return 2;
     }
-    if (which == "usage") {
-        RUN_TEST(test_usage);
-    } else if (which == "errors") {
-        RUN_TEST(test_errors);
-    } else if (which == "malformed") {
-        RUN_TEST(test_malformed);
-    } else if (which == "demo") {
-        RUN_TEST(test_demo);
-    } else if (which == "json") {
-        RUN_TEST(test_json);
-    } else if (which == "threads") {
-        RUN_TEST(test_threads);
-    } else if (which == "realdata") {
-        return test_realdata();
-    } else {
-        std::fprintf(stderr, "unknown case '%s'\n", which.c_str());
-        return 2;
+    if (which == "realdata") return test_realdata(); // 77 when the data is absent
+    const struct {
+        const char *name;
+        void (*run)();
+    } cases[] = {{"usage", test_usage},
+                 {"errors", test_errors},
+                 {"malformed", test_malformed},
+                 {"demo", test_demo},
+                 {"json", test_json},
+                 {"threads", test_threads},
+                 {"refine_options", test_refine_options},
+                 {"refine_register", test_refine_register},
+                 {"refine_command", test_refine_command},
+                 {"refine_initial", test_refine_initial},
+                 {"refine_roundtrip", test_refine_roundtrip},
+                 {"validity_options", test_validity_options}};
+    for (const auto &c : cases) {
+        if (which != c.name) continue;
+        c.run();
+        std::fprintf(stderr, "%s %s\n", harness_failed ? "[FAIL]" : "[ ok ]", c.name);
+        return TEST_SUMMARY();
     }
-    return TEST_SUMMARY();
+    std::fprintf(stderr, "unknown case '%s'\n", which.c_str());
+    return 2;
 }

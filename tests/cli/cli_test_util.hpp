@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: MIT
-// Helpers for the command-line tool's tests: file I/O, a JSON syntax checker, a zlib/deflate decoder
+// Helpers for the command-line tool's tests: file I/O, a JSON parser, a zlib/deflate decoder
 // (stored and fixed-Huffman blocks, which is what the tool's PNG encoder emits) and a PNG reader. They are
 // written independently of the tool's own encoders so that each checks the other.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cli_test {
@@ -43,24 +45,75 @@ inline bool starts_with(const std::string &s, const std::string &prefix) {
 inline bool contains(const std::string &s, const std::string &part) { return s.find(part) != std::string::npos; }
 
 // ---------------------------------------------------------------------------------------------------
-// JSON syntax (RFC 8259), without building a tree.
+// JSON (RFC 8259): a strict parser into a small tree that keeps the members' order and each number's
+// literal (strtod of it gives the double the tool meant, exactly).
 // ---------------------------------------------------------------------------------------------------
-class JsonChecker {
-public:
-    explicit JsonChecker(const std::string &text) : s_(text) {}
+struct Json {
+    enum class Type { Null, Bool, Number, String, Array, Object };
+    Type type = Type::Null;
+    bool boolean = false;
+    double number = 0.0;
+    std::string text; // a string's value, or a number's literal
+    std::vector<Json> items;
+    std::vector<std::pair<std::string, Json>> members;
 
-    // True when the text is exactly one JSON value (surrounded by optional whitespace).
-    bool valid(std::string *error) {
-        try {
-            ws();
-            value(0);
-            ws();
-            if (i_ != s_.size()) fail("trailing characters");
-            return true;
-        } catch (const std::runtime_error &e) {
-            if (error) *error = e.what();
-            return false;
+    bool is(Type t) const { return type == t; }
+    // The member's value, or nullptr.
+    const Json *find(const std::string &key) const {
+        for (const auto &m : members) {
+            if (m.first == key) return &m.second;
         }
+        return nullptr;
+    }
+    const Json &at(const std::string &key) const {
+        static const Json missing;
+        const Json *v = find(key);
+        return v ? *v : missing;
+    }
+    std::vector<std::string> keys() const {
+        std::vector<std::string> out;
+        for (const auto &m : members) out.push_back(m.first);
+        return out;
+    }
+    // A number, or NaN for null (how the tool writes NaN); NaN for anything else too.
+    double as_double() const { return type == Type::Number ? number : std::nan(""); }
+    // The numbers of a (nested) array in order, NaN for null.
+    std::vector<double> flat() const {
+        std::vector<double> out;
+        for (const Json &item : items) {
+            if (item.is(Type::Array)) {
+                const std::vector<double> inner = item.flat();
+                out.insert(out.end(), inner.begin(), inner.end());
+            } else {
+                out.push_back(item.as_double());
+            }
+        }
+        return out;
+    }
+    // A rows x cols array of arrays of numbers (null allowed as an element when nulls is true).
+    bool is_matrix(size_t rows, size_t cols, bool nulls) const {
+        if (!is(Type::Array) || items.size() != rows) return false;
+        for (const Json &row : items) {
+            if (!row.is(Type::Array) || row.items.size() != cols) return false;
+            for (const Json &v : row.items) {
+                if (!v.is(Type::Number) && !(nulls && v.is(Type::Null))) return false;
+            }
+        }
+        return true;
+    }
+};
+
+class JsonParser {
+public:
+    explicit JsonParser(const std::string &text) : s_(text) {}
+
+    // Throws std::runtime_error on anything but exactly one JSON value (with optional whitespace around).
+    Json parse() {
+        ws();
+        Json v = value(0);
+        ws();
+        if (i_ != s_.size()) fail("trailing characters");
+        return v;
     }
 
 private:
@@ -85,7 +138,8 @@ private:
         if (!digit()) fail("digit expected");
         while (digit()) ++i_;
     }
-    void number() {
+    Json number() {
+        const size_t begin = i_;
         if (peek() == '-') ++i_;
         if (peek() == '0') {
             ++i_;
@@ -101,94 +155,146 @@ private:
             if (peek() == '+' || peek() == '-') ++i_;
             digits();
         }
+        Json v;
+        v.type = Json::Type::Number;
+        v.text = s_.substr(begin, i_ - begin);
+        v.number = std::strtod(v.text.c_str(), nullptr);
+        return v;
     }
-    void string() {
+    static void append_utf8(std::string &out, unsigned cp) {
+        if (cp < 0x80) {
+            out.push_back(static_cast<char>(cp));
+        } else if (cp < 0x800) {
+            out.push_back(static_cast<char>(0xC0 | (cp >> 6)));
+            out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+        } else {
+            out.push_back(static_cast<char>(0xE0 | (cp >> 12)));
+            out.push_back(static_cast<char>(0x80 | ((cp >> 6) & 0x3F)));
+            out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+        }
+    }
+    std::string string() {
         expect('"');
+        std::string out;
         while (true) {
             if (i_ >= s_.size()) fail("unterminated string");
             const unsigned char c = static_cast<unsigned char>(s_[i_++]);
-            if (c == '"') return;
+            if (c == '"') return out;
             if (c < 0x20) fail("control character in string");
-            if (c == '\\') {
-                const char e = peek();
-                ++i_;
-                if (e == 'u') {
-                    for (int k = 0; k < 4; ++k) {
-                        const char h = peek();
-                        if (!((h >= '0' && h <= '9') || (h >= 'a' && h <= 'f') || (h >= 'A' && h <= 'F'))) {
-                            fail("bad \\u escape");
-                        }
-                        ++i_;
+            if (c != '\\') {
+                out.push_back(static_cast<char>(c));
+                continue;
+            }
+            const char e = peek();
+            ++i_;
+            if (e == 'u') {
+                unsigned cp = 0;
+                for (int k = 0; k < 4; ++k) {
+                    const char h = peek();
+                    if (!((h >= '0' && h <= '9') || (h >= 'a' && h <= 'f') || (h >= 'A' && h <= 'F'))) {
+                        fail("bad \\u escape");
                     }
-                } else if (!std::strchr("\"\\/bfnrt", e) || e == '\0') {
-                    fail("bad escape");
+                    cp = cp * 16 + static_cast<unsigned>(h <= '9' ? h - '0' : (h | 0x20) - 'a' + 10);
+                    ++i_;
                 }
+                append_utf8(out, cp);
+            } else if (e == '\0' || !std::strchr("\"\\/bfnrt", e)) {
+                fail("bad escape");
+            } else {
+                const char *from = "\"\\/bfnrt", *to = "\"\\/\b\f\n\r\t";
+                out.push_back(to[std::strchr(from, e) - from]);
             }
         }
     }
-    void value(int depth) {
+    Json value(int depth) {
         if (depth > 64) fail("nesting too deep");
+        Json v;
         const char c = peek();
         if (c == '{') {
             ++i_;
+            v.type = Json::Type::Object;
             ws();
             if (peek() == '}') {
                 ++i_;
-                return;
+                return v;
             }
             while (true) {
                 ws();
-                string();
+                std::string key = string();
                 ws();
                 expect(':');
                 ws();
-                value(depth + 1);
+                v.members.emplace_back(std::move(key), value(depth + 1));
                 ws();
                 if (peek() == ',') {
                     ++i_;
                     continue;
                 }
                 expect('}');
-                return;
+                return v;
             }
         } else if (c == '[') {
             ++i_;
+            v.type = Json::Type::Array;
             ws();
             if (peek() == ']') {
                 ++i_;
-                return;
+                return v;
             }
             while (true) {
                 ws();
-                value(depth + 1);
+                v.items.push_back(value(depth + 1));
                 ws();
                 if (peek() == ',') {
                     ++i_;
                     continue;
                 }
                 expect(']');
-                return;
+                return v;
             }
         } else if (c == '"') {
-            string();
+            v.type = Json::Type::String;
+            v.text = string();
         } else if (c == 't') {
             literal("true");
+            v.type = Json::Type::Bool;
+            v.boolean = true;
         } else if (c == 'f') {
             literal("false");
+            v.type = Json::Type::Bool;
         } else if (c == 'n') {
             literal("null");
         } else if (c == '-' || (c >= '0' && c <= '9')) {
-            number();
+            v = number();
         } else {
             fail("value expected");
         }
+        return v;
     }
 
     const std::string &s_;
     size_t i_ = 0;
 };
 
-inline bool json_valid(const std::string &text, std::string *error = nullptr) { return JsonChecker(text).valid(error); }
+inline bool json_valid(const std::string &text, std::string *error = nullptr) {
+    try {
+        JsonParser(text).parse();
+        return true;
+    } catch (const std::runtime_error &e) {
+        if (error) *error = e.what();
+        return false;
+    }
+}
+
+// The parsed document, or a Null value (with *error set) when the text is not JSON.
+inline Json json_parse(const std::string &text, std::string *error = nullptr) {
+    try {
+        return JsonParser(text).parse();
+    } catch (const std::runtime_error &e) {
+        if (error) *error = e.what();
+        return Json();
+    }
+}
 
 // The raw text of a top-level "key": value on one line (how the tool prints arrays), e.g. the transform.
 inline std::string json_line_value(const std::string &json, const std::string &key) {

@@ -1,17 +1,22 @@
 // SPDX-License-Identifier: MIT
 // Unit tests of the command-line tool's own pieces: checksums, the deflate/PNG encoder, the JSON writer,
-// the PLY writer, the argument parsers and the demo scene simulator.
+// the PLY writer, the transform file, the argument parsers, the result's JSON and summary, the top view and
+// its coarse/refined detail, and the demo scene simulator.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include <kissm.h>
 
+#include "alignment_figure.hpp"
 #include "cli_args.hpp"
+#include "cli_result_check.hpp"
 #include "cli_test_util.hpp"
 #include "demo_scene.hpp"
 #include "harness.h"
@@ -20,7 +25,10 @@
 #include "png_writer.hpp"
 #include "pose_math.hpp"
 #include "raster.hpp"
+#include "report.hpp"
 #include "rng.hpp"
+#include "top_view.hpp"
+#include "transform_file.hpp"
 
 using namespace kissm_cli;
 
@@ -241,6 +249,17 @@ void test_args() {
     CHECK(parse_format("--f", "xyz") == KISSM_FORMAT_XYZ);
     CHECK(parse_format("--f", "auto") == KISSM_FORMAT_AUTO);
     CHECK(throws_usage([] { parse_format("--f", "las"); }));
+    CHECK(parse_refine_mode("--refine", "none") == KISSM_REFINE_NONE);
+    CHECK(parse_refine_mode("--refine", "gicp") == KISSM_REFINE_GICP);
+    CHECK(parse_refine_mode("--refine", "point-to-plane") == KISSM_REFINE_POINT_TO_PLANE);
+    CHECK(parse_refine_mode("--refine", "point_to_plane") == KISSM_REFINE_POINT_TO_PLANE);
+    for (const char *bad : {"", "GICP", "icp", "point to plane", "1"}) {
+        CHECK_MSG(throws_usage([&] { parse_refine_mode("--refine", bad); }), "'%s' accepted", bad);
+    }
+    for (int32_t mode : {KISSM_REFINE_NONE, KISSM_REFINE_GICP, KISSM_REFINE_POINT_TO_PLANE}) {
+        CHECK(parse_refine_mode("--refine", refine_mode_name(mode)) == mode);
+    }
+    CHECK(std::strcmp(refine_mode_name(99), "unknown") == 0);
     CHECK(one_line("a\nb\r\n") == "a b");
 
     ArgCursor cur("register", {"a", "--voxel=0.5", "--json", "--threads", "3", "--", "--b"});
@@ -257,6 +276,259 @@ void test_args() {
     }
     const std::vector<std::string> expected = {"pos:a", "--voxel=0.5", "json", "--threads=3", "pos:--b"};
     CHECK(seen == expected);
+}
+
+void test_transform_file() {
+    const std::string path = temp_path("T.txt");
+    std::string error;
+    // Written with %.17g, read back to the same bits, including awkward values.
+    const double T[16] = {0.1,    -0.0, 1e-300, 123456789.125, 0.30000000000000004,
+                          5e-324, -1.0, 2.5,    1.0 / 3.0,     2.0 / 3.0,
+                          -7e300, 1e-7, 0.0,    0.0,           0.0,
+                          1.0};
+    REQUIRE(write_transform_file(path, T, &error));
+    const std::string text = cli_test::read_file(path);
+    CHECK_EQ_INT(std::count(text.begin(), text.end(), '\n'), 4);
+    double back[16];
+    REQUIRE(read_transform_file(path, back, &error));
+    CHECK(std::memcmp(back, T, sizeof T) == 0);
+
+    // Comments, blank lines, tabs, CRLF line ends and extra spaces are fine.
+    REQUIRE(cli_test::write_file(path, "# T_target_source\r\n\r\n\t1  0 0 4\r\n  # between rows\n0 1 0 5\n"
+                                       "0 0 1 6   \n\n0 0 0 1"));
+    REQUIRE(read_transform_file(path, back, &error));
+    const double expected[16] = {1, 0, 0, 4, 0, 1, 0, 5, 0, 0, 1, 6, 0, 0, 0, 1};
+    CHECK(std::memcmp(back, expected, sizeof expected) == 0);
+
+    // Each failure names the file, and the line where there is one; nothing is accepted half-read.
+    struct Bad {
+        const char *text;
+        const char *about;
+    };
+    const Bad bad[] = {
+        {"", "0 rows"},
+        {"1 0 0 0\n0 1 0 0\n0 0 1 0\n", "3 rows"},
+        {"1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n1 1 1 1\n", "line 5"},
+        {"1 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "line 1 holds 3 values"},
+        {"1 0 0 0\n0 1 0 0 # a comment after numbers\n0 0 1 0\n0 0 0 1\n", "line 2 holds 9 values"},
+        {"1 0 0 0\n0 1 0 0\n0 0 1 0,\n0 0 0 1\n", "line 3: '0,' is not a number"},
+        {"1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 NaN\n", "line 4: 'NaN' is not finite"},
+        {"1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 infinity\n", "not finite"},
+        {"1 0 0 0\n0 1 0 0\n0 0 1 -1e400\n0 0 0 1\n", "not finite"},
+    };
+    for (const Bad &b : bad) {
+        REQUIRE(cli_test::write_file(path, b.text));
+        error.clear();
+        CHECK_MSG(!read_transform_file(path, back, &error), "accepted: %s", b.text);
+        CHECK_MSG(cli_test::contains(error, "'" + path + "'") && cli_test::contains(error, b.about),
+                  "message [%s] lacks the file or '%s'", error.c_str(), b.about);
+        CHECK(error.find('\n') == std::string::npos);
+    }
+    // Not a transform file at all.
+    REQUIRE(cli_test::write_file(path, std::string(2u << 20, ' ')));
+    CHECK(!read_transform_file(path, back, &error) && cli_test::contains(error, "too large"));
+    std::remove(path.c_str());
+    CHECK(!read_transform_file(path, back, &error) && cli_test::contains(error, "cannot open"));
+    const std::string dir = std::filesystem::temp_directory_path().string();
+    CHECK(!read_transform_file(dir, back, &error) && cli_test::contains(error, "folder"));
+    CHECK(!write_transform_file("/nonexistent_dir_kissm/T.txt", T, &error) && cli_test::contains(error, "T.txt"));
+}
+
+// The result part of the JSON: the contract's keys in order, null for what the library left NaN.
+void test_result_json() {
+    kissm_result r{};
+    REQUIRE(kissm_result_init(&r, sizeof r) == KISSM_OK);
+    const auto object_of = [](const kissm_result &result, int32_t mode, const double *initial) {
+        JsonWriter json;
+        json.begin_object();
+        add_result_json(json, result, mode, initial);
+        json.end_object();
+        std::string error;
+        const cli_test::Json j = cli_test::json_parse(json.str(), &error);
+        CHECK_MSG(error.empty(), "%s\n%s", error.c_str(), json.str().c_str());
+        return j;
+    };
+    std::vector<std::string> expected = cli_test::contract_keys(false);
+    expected.erase(expected.begin(), expected.begin() + 5); // version .. threads are the command's
+    expected.pop_back();                                    // read_ms too
+    cli_test::Json j = object_of(r, KISSM_REFINE_NONE, nullptr);
+    CHECK_MSG(j.keys() == expected, "keys %s", cli_test::joined(j.keys()).c_str());
+    CHECK(j.at("counts").keys() == cli_test::contract_count_keys());
+    CHECK(j.at("time_ms").keys() == cli_test::contract_time_keys());
+    CHECK(j.at("information").is(cli_test::Json::Type::Null));
+    CHECK(j.at("coarse_transform").is_matrix(4, 4, true) &&
+          j.at("coarse_transform").items[0].items[0].is(cli_test::Json::Type::Null));
+    CHECK(j.at("overlap").is(cli_test::Json::Type::Null) && j.at("refine_rmse").is(cli_test::Json::Type::Null));
+    CHECK(j.at("refine").text == "none" && !j.at("refine_converged").boolean);
+    CHECK(!refinement_ran(r));
+    // kissm_result_init leaves both validity measures NaN: null.
+    CHECK(j.at("rotation_uncertainty").is(cli_test::Json::Type::Null) &&
+          j.at("inlier_coverage").is(cli_test::Json::Type::Null));
+    // +inf (no inliers spread out) is null too; finite values are written exactly.
+    r.rotation_uncertainty = std::numeric_limits<double>::infinity();
+    CHECK(object_of(r, KISSM_REFINE_NONE, nullptr).at("rotation_uncertainty").is(cli_test::Json::Type::Null));
+    r.rotation_uncertainty = 0.1 + 0.2; // 0.30000000000000004: needs 17 digits
+    j = object_of(r, KISSM_REFINE_NONE, nullptr);
+    cli_test::check_scalar(j.at("rotation_uncertainty"), 0.1 + 0.2, "result json", "rotation_uncertainty");
+    CHECK(j.at("rotation_uncertainty").text == "0.30000000000000004");
+
+    // A refined result: information as 6x6, an entry left NaN written as null inside it.
+    for (int i = 0; i < 36; ++i) r.information[i] = i == 7 ? std::nan("") : 0.5 * i;
+    r.overlap = 0.75;
+    r.refine_converged = 1;
+    r.refine_iterations = 3;
+    CHECK(refinement_ran(r));
+    const double initial[16] = {1, 0, 0, 0.1, 0, 1, 0, 0.2, 0, 0, 1, 0.3, 0, 0, 0, 1};
+    j = object_of(r, KISSM_REFINE_POINT_TO_PLANE, initial);
+    expected.insert(expected.begin() + 3, "initial_transform");
+    CHECK_MSG(j.keys() == expected, "keys %s", cli_test::joined(j.keys()).c_str());
+    CHECK(j.at("information").is_matrix(6, 6, true));
+    CHECK(j.at("information").items[1].items[1].is(cli_test::Json::Type::Null));
+    CHECK(j.at("information").items[5].items[5].number == 17.5);
+    CHECK(j.at("refine").text == "point-to-plane" && j.at("refine_converged").boolean);
+    CHECK(j.at("refine_iterations").text == "3" && j.at("overlap").text == "0.75");
+    CHECK(j.at("inlier_coverage").is(cli_test::Json::Type::Null));
+    r.inlier_coverage = 0.625;
+    CHECK(object_of(r, KISSM_REFINE_GICP, nullptr).at("inlier_coverage").text == "0.625");
+    cli_test::check_doubles(j.at("initial_transform").flat(), initial, 16, "result json", "initial_transform");
+}
+
+// The summary a result prints, as text.
+std::string summary_of(const kissm_result &r, ResultKind kind) {
+    std::FILE *f = std::tmpfile();
+    if (!f) return std::string();
+    print_result_summary(f, r, kind);
+    std::string text;
+    std::rewind(f);
+    for (int c = std::fgetc(f); c != EOF; c = std::fgetc(f)) text.push_back(static_cast<char>(c));
+    std::fclose(f);
+    return text;
+}
+
+// The summary's rotation uncertainty (degrees; "-" without a pose, "unbounded" when infinite) and, for a
+// refined registration only, the inlier coverage.
+void test_summary_validity_measures() {
+    kissm_result r{};
+    REQUIRE(kissm_result_init(&r, sizeof r) == KISSM_OK);
+    using cli_test::contains;
+    CHECK(contains(summary_of(r, ResultKind::Global), "\nrotation uncertainty: -\n"));
+    r.rotation_uncertainty = deg_to_rad(1.25);
+    std::string text = summary_of(r, ResultKind::Global);
+    CHECK_MSG(contains(text, "\nrotation uncertainty: 1.25 deg\n"), "%s", text.c_str());
+    CHECK(!contains(text, "inlier coverage"));
+    r.rotation_uncertainty = std::numeric_limits<double>::infinity();
+    CHECK(contains(summary_of(r, ResultKind::Global), "\nrotation uncertainty: unbounded\n"));
+
+    // Refined: the coverage on the refinement's line; a refinement from a prior has no solver inliers.
+    for (int i = 0; i < 36; ++i) r.information[i] = 1.0;
+    r.overlap = 0.8;
+    r.refine_rmse = 0.01;
+    r.refine_condition = 0.2;
+    r.inlier_coverage = 0.4375;
+    text = summary_of(r, ResultKind::Global);
+    CHECK_MSG(contains(text, "overlap 0.8000, inlier coverage 0.4375, rmse 0.01, condition 0.2\n"), "%s", text.c_str());
+    r.inlier_coverage = std::nan("");
+    CHECK(contains(summary_of(r, ResultKind::Global), "inlier coverage -, "));
+    text = summary_of(r, ResultKind::Refine);
+    CHECK_MSG(contains(text, "overlap 0.8000, rmse 0.01") && !contains(text, "inlier coverage") &&
+                  !contains(text, "rotation uncertainty"),
+              "%s", text.c_str());
+}
+
+// A cloud in a square of side 40 m: flat ground everywhere (denser than the floor's cells), and a 2 m high
+// L-shaped wall near (12, -6).
+std::vector<double> yard_with_wall() {
+    std::vector<double> xyz;
+    for (int i = 0; i <= 160; ++i) {
+        for (int k = 0; k <= 160; ++k) xyz.insert(xyz.end(), {-20.0 + 0.25 * i, -20.0 + 0.25 * k, 0.0});
+    }
+    for (int i = 0; i < 40; ++i) {
+        for (int h = 1; h <= 8; ++h) {
+            xyz.insert(xyz.end(), {10.0 + 0.1 * i, -8.0, 0.25 * h});
+            xyz.insert(xyz.end(), {10.0, -8.0 + 0.1 * i, 0.25 * h});
+        }
+    }
+    return xyz;
+}
+
+void test_alignment_detail() {
+    const std::vector<double> xyz = yard_with_wall();
+    const size_t n = xyz.size() / 3;
+    const CloudLayer all{xyz.data(), n, nullptr, kTargetColor, nullptr};
+    const ViewBox view{0.0, 0.0, 22.0};
+    const HeightFloor floor = height_floor(all, view, 128, 0.6);
+    CHECK(floor.above(10.0, -8.0, 1.0));
+    CHECK(!floor.above(10.0, -8.0, 0.3) && !floor.above(0.0, 0.0, 0.0));
+    CHECK(!floor.above(30.0, 0.0, 5.0)); // outside the grid
+    CHECK(std::isinf(floor.min_z[0]));   // the corner cell holds no point
+
+    CloudLayer above = all;
+    above.floor = &floor;
+    size_t shown = 0;
+    for (size_t i = 0; i < n; ++i) {
+        double x = 0, y = 0;
+        if (project_point(above, i, &x, &y)) {
+            ++shown;
+            CHECK(x >= 9.9 && x <= 14.0 && y >= -8.1 && y <= -4.0);
+        }
+    }
+    CHECK_EQ_INT(shown, 40 * 2 * 6); // wall points 0.75 m and more above the ground
+    const ViewBox detail = detail_view(above, above, view, 3.0);
+    CHECK_MSG(std::fabs(detail.half - 3.0) < 0.2, "detail half %g", detail.half);
+    CHECK_MSG(detail.cx - detail.half <= 10.0 && detail.cx + detail.half >= 13.0 && detail.cy - detail.half <= -8.0 &&
+                  detail.cy + detail.half >= -5.0,
+              "detail (%g, %g) +- %g misses the wall", detail.cx, detail.cy, detail.half);
+
+    // The figure: with a coarse pose, four panels in two columns, the details magnified on that region.
+    const double pose[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const double coarse[16] = {1, 0, 0, 0.3, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    AlignmentInput in;
+    in.source_xyz = in.target_xyz = xyz.data();
+    in.source_count = in.target_count = n;
+    in.pose = pose;
+    in.coarse = coarse;
+    in.voxel = 0.3;
+    in.before_title = "B";
+    in.after_title = "A";
+    AlignmentFigure with_detail(in);
+    const AlignmentPicture &pic = with_detail.picture();
+    CHECK(pic.has_detail);
+    REQUIRE(pic.figure.panels.size() == 4);
+    CHECK_EQ_INT(pic.figure.columns, 2);
+    CHECK(pic.figure.panels[2].has_view && pic.figure.panels[3].has_view && pic.figure.panels[2].dot > 1);
+    CHECK(pic.figure.panels[1].outlines.size() == 1);
+    CHECK(pic.figure.panels[2].layers[1].transform == coarse && pic.figure.panels[3].layers[1].transform == pose);
+    const ViewBox &d = pic.figure.panels[2].view;
+    CHECK_MSG(d.cx - d.half <= 10.0 && d.cx + d.half >= 12.0 && d.cy - d.half <= -8.0 && d.cy + d.half >= -6.0,
+              "figure detail (%g, %g) +- %g misses the wall", d.cx, d.cy, d.half);
+    const Image four = render_top_view(pic.figure, pic.view);
+
+    in.coarse = nullptr; // no refinement: before and after only, in one row
+    AlignmentFigure plain(in);
+    CHECK(!plain.picture().has_detail && plain.picture().figure.panels.size() == 2);
+    const Image two = render_top_view(plain.picture().figure, plain.picture().view);
+    CHECK_EQ_INT(four.width(), two.width());
+    CHECK_MSG(four.height() > two.height() + plain.picture().figure.panel_size, "%d vs %d", four.height(),
+              two.height());
+
+    // In the refined detail the source covers the target (it is drawn on top); in the coarse one, 0.3 m off,
+    // the target's blue shows beside it.
+    const auto blue_pixels = [&pic](size_t panel) {
+        TopViewFigure alone;
+        alone.panels = {pic.figure.panels[panel]};
+        const Image img = render_top_view(alone, pic.view);
+        size_t blue = 0;
+        for (int y = 0; y < img.height(); ++y) {
+            for (int x = 0; x < img.width(); ++x) {
+                const Rgb c = img.get(x, y);
+                blue += (c.b > 150 && c.r < 120 && c.g < 170) ? 1u : 0u;
+            }
+        }
+        return blue;
+    };
+    const size_t coarse_blue = blue_pixels(2), refined_blue = blue_pixels(3);
+    CHECK_MSG(coarse_blue > 100 && refined_blue * 10 < coarse_blue, "blue pixels: coarse %zu, refined %zu", coarse_blue,
+              refined_blue);
 }
 
 void test_rng() {
@@ -359,6 +631,10 @@ int main() {
     RUN_TEST(test_json_writer);
     RUN_TEST(test_ply_writer);
     RUN_TEST(test_args);
+    RUN_TEST(test_transform_file);
+    RUN_TEST(test_result_json);
+    RUN_TEST(test_summary_validity_measures);
+    RUN_TEST(test_alignment_detail);
     RUN_TEST(test_rng);
     RUN_TEST(test_pose_math);
     RUN_TEST(test_demo_scene);

@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: MIT
 // Registers every pair listed in $KISSM_DATA_DIR/index.tsv, raw and with the source rotated about its origin
-// by large random rotations (fixed seeds), and checks the pose against the ground truth with the success
-// thresholds of SPEC section 7. LiDAR and indoor pairs must all succeed; object scans (the bunny) must never
-// be reported valid with a wrong pose and must succeed in most runs.
+// by large random rotations (fixed seeds), without refinement, with GICP and with point-to-plane, and checks
+// the pose against the ground truth with the success thresholds of SPEC section 7. No pose may be reported
+// valid when it is wrong, in any mode; LiDAR and indoor pairs must all succeed; object scans (the bunny) must
+// succeed in most runs, and refinement must register more of them than the coarse pose alone (it trusts the
+// dense alignment where the coarse rule needs more inliers). Refined LiDAR poses must be closer to the ground
+// truth than the coarse ones (medians).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -95,6 +99,16 @@ int32_t format_id(const std::string &name) {
     return KISSM_FORMAT_AUTO;
 }
 
+double median(std::vector<double> v) {
+    if (v.empty()) return NAN;
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+const int32_t kModes[] = {KISSM_REFINE_NONE, KISSM_REFINE_GICP, KISSM_REFINE_POINT_TO_PLANE};
+const char *const kModeNames[] = {"coarse", "gicp", "p2plane"};
+constexpr int kNumModes = 3;
+
 std::vector<double> read_cloud(const std::string &path, int32_t format) {
     kissm_cloud *cloud = nullptr;
     std::vector<double> xyz;
@@ -133,7 +147,8 @@ int main() {
         return "";
     };
 
-    int runs = 0, successes = 0, object_runs = 0, object_successes = 0;
+    int runs = 0, successes[kNumModes] = {}, object_runs = 0, object_successes[kNumModes] = {};
+    std::vector<double> lidar_rre[kNumModes], lidar_rte[kNumModes]; // pose errors of the LiDAR runs, per mode
     while (std::getline(index, line)) {
         if (line.empty()) continue;
         std::vector<std::string> row;
@@ -161,15 +176,17 @@ int main() {
         }
         const Mat3 gt_r{{gt[0], gt[1], gt[2], gt[4], gt[5], gt[6], gt[8], gt[9], gt[10]}};
 
-        kissm_config config;
-        kissm_config_init(&config, sizeof(config));
-        config.voxel_size = kind.voxel;
-        config.num_threads = 2;
-        kissm_matcher *matcher = nullptr;
-        if (kissm_create(&config, &matcher) != KISSM_OK) {
-            CHECK_MSG(false, "kissm_create: %s", kissm_last_error_message());
-            continue;
+        kissm_matcher *matchers[kNumModes] = {};
+        for (int mode = 0; mode < kNumModes; ++mode) {
+            kissm_config config;
+            kissm_config_init(&config, sizeof(config));
+            config.voxel_size = kind.voxel;
+            config.num_threads = 2;
+            config.refine_mode = kModes[mode];
+            CHECK_MSG(kissm_create(&config, &matchers[mode]) == KISSM_OK, "kissm_create: %s",
+                      kissm_last_error_message());
         }
+        const bool lidar = kind.max_trans_m >= 2.0;
         Rng rng{12345u + static_cast<unsigned long long>(runs)}; // fixed seeds, one stream per pair
         for (int variant = 0; variant <= kRotations; ++variant) {
             // The source turned about its origin by 90..180 degrees about a random axis.
@@ -188,39 +205,57 @@ int main() {
 
             kissm_points src{turned.data(), turned.size() / 3, 0, KISSM_SCALAR_FLOAT64, 0};
             kissm_points tgt{target.data(), target.size() / 3, 0, KISSM_SCALAR_FLOAT64, 0};
-            kissm_result result;
-            result.struct_size = sizeof(result);
-            const int32_t status = kissm_register(matcher, &src, &tgt, &result);
-            CHECK_MSG(status == KISSM_OK, "%s: %s", pair_dir.c_str(), kissm_last_error_message());
-            const Mat3 got{{result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3],
-                            result.rotation[4], result.rotation[5], result.rotation[6], result.rotation[7],
-                            result.rotation[8]}};
-            const double rre = result.valid ? rotation_error_deg(got, expect_r) : NAN;
-            const double rte = result.valid ? std::sqrt(std::pow(result.translation[0] - expect_t[0], 2) +
-                                                        std::pow(result.translation[1] - expect_t[1], 2) +
-                                                        std::pow(result.translation[2] - expect_t[2], 2))
-                                            : NAN;
-            const bool success = result.valid && rre < kind.max_rot_deg && rte < kind.max_trans_m;
-            const bool wrong_but_valid = result.valid && !success;
             ++runs;
-            successes += success;
-            std::printf("%-52s rot%d v=%.3f %s RRE=%7.3f deg RTE=%8.4f m inliers=%4llu reason=%s time=%.0f ms\n",
-                        pair_dir.c_str(), variant, kind.voxel, success ? "OK  " : "FAIL", rre, rte,
-                        static_cast<unsigned long long>(result.num_final_inliers), kissm_reason_string(result.reason),
-                        result.time_total_ms);
-            if (kind.must_succeed) {
-                CHECK_MSG(success, "%s variant %d failed", pair_dir.c_str(), variant);
-            } else {
-                ++object_runs;
-                object_successes += success;
-                CHECK_MSG(!wrong_but_valid, "%s variant %d: valid but wrong (%.2f deg, %.4f m)", pair_dir.c_str(),
-                          variant, rre, rte);
+            if (!kind.must_succeed) ++object_runs;
+            for (int mode = 0; mode < kNumModes; ++mode) {
+                if (matchers[mode] == nullptr) continue;
+                kissm_result result;
+                result.struct_size = sizeof(result);
+                const int32_t status = kissm_register(matchers[mode], &src, &tgt, &result);
+                CHECK_MSG(status == KISSM_OK, "%s: %s", pair_dir.c_str(), kissm_last_error_message());
+                const Mat3 got{{result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3],
+                                result.rotation[4], result.rotation[5], result.rotation[6], result.rotation[7],
+                                result.rotation[8]}};
+                const bool posed = std::isfinite(result.rotation[0]);
+                const double rre = posed ? rotation_error_deg(got, expect_r) : NAN;
+                const double rte = posed ? std::sqrt(std::pow(result.translation[0] - expect_t[0], 2) +
+                                                     std::pow(result.translation[1] - expect_t[1], 2) +
+                                                     std::pow(result.translation[2] - expect_t[2], 2))
+                                         : NAN;
+                const bool right = posed && rre < kind.max_rot_deg && rte < kind.max_trans_m;
+                const bool success = result.valid && right;
+                successes[mode] += success;
+                if (!kind.must_succeed) object_successes[mode] += success;
+                if (lidar && posed) lidar_rre[mode].push_back(rre), lidar_rte[mode].push_back(rte);
+                std::printf("%-52s rot%d %-7s %s RRE=%7.3f deg RTE=%8.4f m inliers=%4llu overlap=%.3f reason=%s "
+                            "time=%.0f ms\n",
+                            pair_dir.c_str(), variant, kModeNames[mode], success ? "OK  " : "FAIL", rre, rte,
+                            static_cast<unsigned long long>(result.num_final_inliers), result.overlap,
+                            kissm_reason_string(result.reason), result.time_total_ms);
+                CHECK_MSG(!(result.valid && !right), "%s variant %d %s: valid but wrong (%.2f deg, %.4f m)",
+                          pair_dir.c_str(), variant, kModeNames[mode], rre, rte);
+                if (kind.must_succeed)
+                    CHECK_MSG(success, "%s variant %d %s failed", pair_dir.c_str(), variant, kModeNames[mode]);
             }
         }
-        kissm_destroy(matcher);
+        for (kissm_matcher *m : matchers) kissm_destroy(m);
     }
-    std::printf("real data: %d/%d runs succeeded (objects %d/%d)\n", successes, runs, object_successes, object_runs);
+    for (int mode = 0; mode < kNumModes; ++mode)
+        std::printf("real data, %s: %d/%d runs succeeded (objects %d/%d); LiDAR median error %.3f deg, %.4f m\n",
+                    kModeNames[mode], successes[mode], runs, object_successes[mode], object_runs,
+                    median(lidar_rre[mode]), median(lidar_rte[mode]));
     CHECK(runs > 0);
-    CHECK_MSG(3 * object_successes >= 2 * object_runs, "object scans: %d/%d", object_successes, object_runs);
+    for (int mode = 0; mode < kNumModes; ++mode)
+        CHECK_MSG(3 * object_successes[mode] >= 2 * object_runs, "object scans, %s: %d/%d", kModeNames[mode],
+                  object_successes[mode], object_runs);
+    CHECK_MSG(object_successes[1] > object_successes[0], "GICP registered %d object runs, the coarse pose %d",
+              object_successes[1], object_successes[0]);
+    for (int mode = 1; mode < kNumModes; ++mode) {
+        CHECK_MSG(median(lidar_rre[mode]) < median(lidar_rre[0]), "%s: LiDAR median rotation error %.3f vs coarse %.3f",
+                  kModeNames[mode], median(lidar_rre[mode]), median(lidar_rre[0]));
+        CHECK_MSG(median(lidar_rte[mode]) < 0.75 * median(lidar_rte[0]),
+                  "%s: LiDAR median translation error %.4f vs coarse %.4f", kModeNames[mode], median(lidar_rte[mode]),
+                  median(lidar_rte[0]));
+    }
     return TEST_SUMMARY();
 }

@@ -132,7 +132,7 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     X(num_pruned_correspondences) X(num_rotation_inliers) X(num_final_inliers) X(max_core_number)    \
     X(num_refine_correspondences) X(refine_iterations) X(refine_converged)
 /* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
-#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition)
+#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage)
 #define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36)
 /* clang-format on */
 

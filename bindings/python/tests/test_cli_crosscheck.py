@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 
 import kissm
+from kissm import _ffi
 
-from cli_json import assert_matches_cli, run_cli
+import testdata
+from cli_json import assert_matches_cli, run_cli, write_transform
 
 
 def test_demo_clouds_bitwise_equal_cli(cli: Path, demo_clouds: tuple[Path, Path]) -> None:
@@ -96,3 +98,66 @@ def test_cli_threads_do_not_matter(cli: Path, demo_clouds: tuple[Path, Path], th
         kissm.register(kissm.read_points(source_path), kissm.read_points(target_path), voxel_size=0.3, num_threads=1),
         expected,
     )
+
+
+# ---- refinement: `register --refine` and `kissm refine` ------------------------------------------------------
+
+
+@pytest.fixture()
+def pair_files(pair, tmp_path: Path) -> tuple[Path, Path]:
+    np.save(tmp_path / "source.npy", pair.source)
+    np.save(tmp_path / "target.npy", pair.target)
+    return tmp_path / "source.npy", tmp_path / "target.npy"
+
+
+@pytest.mark.parametrize("mode", ["none", "gicp", "point_to_plane"])
+def test_refined_registration_bitwise_equals_cli(cli: Path, pair, pair_files, mode: str) -> None:
+    cli_mode = mode.replace("_", "-")
+    expected = run_cli(cli, *pair_files, pair.voxel_size, ["--refine", cli_mode])
+    assert expected["valid"] and (expected["information"] is None) == (mode == "none")
+    assert_matches_cli(kissm.register(pair.source, pair.target, pair.voxel_size, refine=mode), expected, mode)
+
+
+@pytest.mark.parametrize("mode", [None, "gicp", "point_to_plane"])
+def test_refine_command_bitwise_equals_cli(cli: Path, pair, pair_files, tmp_path: Path, mode: str | None) -> None:
+    """`kissm refine SRC TGT --initial T.txt` (GICP by default) against kissm.refine from the same prior."""
+    initial = testdata.pose(testdata.rotation_zyx(3.0), [0.2, -0.15, 0.05]) @ pair.transform
+    write_transform(tmp_path / "initial.txt", initial)
+    extra = ["--initial", str(tmp_path / "initial.txt")] + (["--refine", mode.replace("_", "-")] if mode else [])
+    expected = run_cli(cli, *pair_files, pair.voxel_size, extra, command_name="refine")
+    assert expected["valid"]
+    keys = list(expected)
+    assert keys.index("initial_transform") == keys.index("transform") - 1
+    assert np.array(expected["initial_transform"], dtype=float).tobytes() == initial.tobytes()
+    result = kissm.refine(pair.source, pair.target, initial, pair.voxel_size, refine=mode)
+    assert_matches_cli(result, expected, mode or "gicp")
+    assert testdata.rotation_error_deg(result.rotation, pair.rotation) < 0.05
+
+
+#: Each validity setting, whether its rule is the refined one, and the reason it gives one step past the value
+#: the committed pair measures.
+VALIDITY_SETTINGS = {
+    "max_rotation_uncertainty": (False, "KISSM_REASON_UNCERTAIN_ROTATION"),
+    "min_inlier_coverage": (True, "KISSM_REASON_CLUSTERED_INLIERS"),
+    "refine_min_inliers": (True, "KISSM_REASON_TOO_FEW_INLIERS"),
+}
+
+
+@pytest.mark.parametrize("setting", list(VALIDITY_SETTINGS))
+def test_cli_validity_flags_match_config_fields(cli: Path, pair, pair_files, setting: str) -> None:
+    """`--max-rotation-uncertainty`, `--min-inlier-coverage`, `--refine-min-inliers` are the Config fields: set
+    one step past what the pair measures, both refuse the pose for the same reason, with the same numbers."""
+    refined, reason = VALIDITY_SETTINGS[setting]
+    mode = "gicp" if refined else "none"
+    measured = kissm.register(pair.source, pair.target, pair.voxel_size, refine=mode)
+    assert measured.valid
+    value: float | int = {
+        "max_rotation_uncertainty": float(np.nextafter(measured.rotation_uncertainty, 0.0)),
+        "min_inlier_coverage": float(np.nextafter(measured.inlier_coverage, 1.0)),
+        "refine_min_inliers": measured.num_final_inliers + 1,
+    }[setting]
+    flags = ["--refine", mode, "--" + setting.replace("_", "-"), repr(value)]
+    expected = run_cli(cli, *pair_files, pair.voxel_size, flags)
+    result = kissm.register(pair.source, pair.target, pair.voxel_size, refine=mode, **{setting: value})
+    assert not result.valid and result.reason_code == getattr(_ffi.lib, reason)
+    assert_matches_cli(result, expected, mode)

@@ -87,7 +87,8 @@ def test_result_repr_is_readable(result) -> None:
     assert f"{result.num_final_inliers} final inliers of {result.num_initial_correspondences} matches" in text
     assert f"rotation {result.rotation_angle_deg:.2f} deg" in text and "transform=[[" in text
     assert text.endswith("]])")
-    assert len(text.splitlines()) == 7 and max(map(len, text.splitlines())) < 110
+    assert f"rotation_uncertainty {math.degrees(result.rotation_uncertainty):.3g} deg (the inliers' spread)," in text
+    assert len(text.splitlines()) == 8 and max(map(len, text.splitlines())) < 110
 
 
 def test_invalid_result_keeps_nan_pose_and_reason(pair) -> None:

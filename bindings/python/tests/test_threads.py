@@ -7,6 +7,7 @@ import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 
+import numpy as np
 import pytest
 
 import kissm
@@ -23,8 +24,15 @@ def serial(pairs) -> list[kissm.Result]:
         return [matcher.register(p.source, p.target) for p in pairs]
 
 
-def test_serial_results_are_valid(serial) -> None:
-    assert all(r.valid for r in serial)
+def test_serial_results_are_right_or_refused(pairs, serial) -> None:
+    """The problems are real ones: each gives a pose, a valid one is the true pose, and most are solved (one
+    variation's pose is 90 degrees off, which the validity rules refuse)."""
+    for pair, result in zip(pairs, serial, strict=True):
+        assert result.has_pose
+        if result.valid:
+            assert testdata.rotation_error_deg(result.rotation, pair.rotation) < 1.0, result
+            assert float(np.linalg.norm(result.translation - pair.translation)) < 0.2, result
+    assert sum(r.valid for r in serial) >= len(serial) // 2
 
 
 def test_thread_pool_sharing_one_matcher_equals_serial(pairs, serial) -> None:
@@ -61,22 +69,31 @@ def test_features_shared_between_threads_and_matchers(pairs, serial) -> None:
         assert_same_result(result, serial[k % len(pairs)])
 
 
-def test_the_gil_is_released_during_registration(pair) -> None:
-    """While one thread registers, another keeps running Python code."""
+@pytest.mark.parametrize("call", ["register", "refine"])
+def test_the_gil_is_released_during_registration(pair, call: str) -> None:
+    """While one thread registers (or refines), another keeps running Python code."""
+    args = (pair.source, pair.target) + ((pair.transform,) if call == "refine" else ())
     with kissm.Matcher(voxel_size=VOXEL, num_threads=1) as matcher:
-        start = time.perf_counter()
-        matcher.register(pair.source, pair.target)
-        duration = time.perf_counter() - start
+        run = getattr(matcher, call)
+        measured = []
+        # A busy machine may deschedule this thread for a while; a held GIL stalls every attempt.
+        for _ in range(3):
+            start = time.perf_counter()
+            run(*args)
+            duration = time.perf_counter() - start
 
-        worker = threading.Thread(target=matcher.register, args=(pair.source, pair.target))
-        worker.start()
-        last, longest_pause, ticks = time.perf_counter(), 0.0, 0
-        while worker.is_alive():
-            now = time.perf_counter()
-            longest_pause, last, ticks = max(longest_pause, now - last), now, ticks + 1
-        worker.join()
-    # Holding the GIL for the whole call would stall this loop for about `duration`.
-    assert longest_pause < 0.6 * duration, (longest_pause, duration, ticks)
+            worker = threading.Thread(target=run, args=args)
+            worker.start()
+            last, longest_pause, ticks = time.perf_counter(), 0.0, 0
+            while worker.is_alive():
+                now = time.perf_counter()
+                longest_pause, last, ticks = max(longest_pause, now - last), now, ticks + 1
+            worker.join()
+            measured.append((longest_pause, duration, ticks))
+            # Holding the GIL for the whole call would stall this loop for about `duration`.
+            if longest_pause < 0.6 * duration:
+                return
+    pytest.fail(f"the main thread stalled while {call} ran in another: (longest pause, duration, ticks) {measured}")
 
 
 def test_one_matcher_runs_one_call_at_a_time(pair) -> None:

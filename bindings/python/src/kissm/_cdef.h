@@ -55,6 +55,12 @@ const char *kissm_last_error_message(void);
 
 #define KISSM_REASON_UNCONSTRAINED 8
 
+#define KISSM_REASON_UNCERTAIN_ROTATION 9
+
+#define KISSM_REASON_CLUSTERED_INLIERS 10
+
+#define KISSM_REASON_NOT_CONVERGED 11
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0
@@ -139,7 +145,17 @@ typedef struct kissm_config {
 
     double refine_translation_epsilon_gain;
 
+    double max_rotation_uncertainty;
+
     double min_overlap;
+
+    double min_inlier_coverage;
+
+    int32_t refine_min_inliers;
+
+    int32_t reserved1;
+
+    double min_refine_condition;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
@@ -233,6 +249,10 @@ typedef struct kissm_result {
     double refine_rmse;
 
     double refine_condition;
+
+    double rotation_uncertainty;
+
+    double inlier_coverage;
 
     double time_refine_ms;
 

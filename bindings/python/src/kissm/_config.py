@@ -13,11 +13,21 @@ from ._ffi import ffi, lib
 
 NonFinitePolicy = Literal["reject", "drop"]
 ViewpointMode = Literal["fixed", "cloud_center"]
+RefineMode = Literal["none", "gicp", "point_to_plane"]
 
 #: Python names of the C enumerations (the fields hold the names; the ints are accepted too).
 NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "drop": lib.KISSM_NONFINITE_DROP}
 VIEWPOINT_MODES: dict[str, int] = {"fixed": lib.KISSM_VIEWPOINT_FIXED, "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER}
-_ENUMS: dict[str, dict[str, int]] = {"nonfinite_policy": NONFINITE_POLICIES, "viewpoint_mode": VIEWPOINT_MODES}
+REFINE_MODES: dict[str, int] = {
+    "none": lib.KISSM_REFINE_NONE,
+    "gicp": lib.KISSM_REFINE_GICP,
+    "point_to_plane": lib.KISSM_REFINE_POINT_TO_PLANE,
+}
+_ENUMS: dict[str, dict[str, int]] = {
+    "nonfinite_policy": NONFINITE_POLICIES,
+    "viewpoint_mode": VIEWPOINT_MODES,
+    "refine_mode": REFINE_MODES,
+}
 
 _FLOAT_FIELDS = (
     "voxel_size",
@@ -28,8 +38,24 @@ _FLOAT_FIELDS = (
     "prune_noise_bound_gain",
     "solver_noise_bound_gain",
     "noise_bound_max",
+    "refine_max_distance_gain",
+    "refine_kernel_gain",
+    "refine_rotation_epsilon",
+    "refine_translation_epsilon_gain",
+    "max_rotation_uncertainty",
+    "min_overlap",
+    "min_inlier_coverage",
+    "min_refine_condition",
 )
-_INT_FIELDS = ("num_threads", "min_normal_neighbors", "max_correspondences", "min_inliers", "log_level")
+_INT_FIELDS = (
+    "num_threads",
+    "min_normal_neighbors",
+    "max_correspondences",
+    "min_inliers",
+    "log_level",
+    "refine_max_iterations",
+    "refine_min_inliers",
+)
 
 
 def _new_c_config() -> Any:
@@ -116,7 +142,7 @@ class Config:
     max_correspondences: int = _DEFAULTS["max_correspondences"]
     """Cap on the mutual matches kept, best ratio first; 3..100000."""
     min_inliers: int = _DEFAULTS["min_inliers"]
-    """Final inliers needed for ``Result.valid``; 3..100000."""
+    """Final inliers needed for ``Result.valid`` without refinement (``refine_min_inliers`` with it); 3..100000."""
     nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]
     """'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are skipped and counted)."""
     viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
@@ -125,6 +151,38 @@ class Config:
     log_level: int = _DEFAULTS["log_level"]
     """Most verbose level passed to a log callback (0..4); kept for completeness: the Python package installs no log
     callback, and the library itself never prints."""
+    refine_mode: RefineMode = _DEFAULTS["refine_mode"]
+    """Fine registration of the solver's pose in the same call, on the voxelised clouds: 'none' (the solver's pose
+    as it is), 'gicp' (Generalized ICP, plane to plane) or 'point_to_plane'. :meth:`Matcher.refine` uses this
+    cost too ('gicp' when it is 'none'). With refinement, ``Result.transform`` is the refined pose and
+    ``Result.coarse_transform`` the solver's."""
+    refine_max_iterations: int = _DEFAULTS["refine_max_iterations"]
+    """Refinement iteration cap, 1..1000."""
+    refine_max_distance_gain: float = _DEFAULTS["refine_max_distance_gain"]
+    """Refinement's correspondence distance (and ``Result.overlap``'s) = gain * voxel_size; in (0, 100]."""
+    refine_kernel_gain: float = _DEFAULTS["refine_kernel_gain"]
+    """Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]."""
+    refine_rotation_epsilon: float = _DEFAULTS["refine_rotation_epsilon"]
+    """Refinement has converged when a step turns the pose by less than this (radians) and moves it by less than
+    ``refine_translation_epsilon_gain * voxel_size``; in [0, 1]."""
+    refine_translation_epsilon_gain: float = _DEFAULTS["refine_translation_epsilon_gain"]
+    """Convergence threshold on a refinement step's translation = gain * voxel_size; in [0, 1]."""
+    max_rotation_uncertainty: float = _DEFAULTS["max_rotation_uncertainty"]
+    """Without refinement, ``Result.valid`` needs ``Result.rotation_uncertainty`` <= this (radians; else reason "the
+    inliers leave the rotation uncertain": too few inliers, or all on one compact object); in (0, 3.15]."""
+    min_overlap: float = _DEFAULTS["min_overlap"]
+    """With refinement, ``Result.valid`` needs ``Result.overlap`` >= this (else reason "the refined pose overlaps
+    too little"); in [0, 1]."""
+    min_inlier_coverage: float = _DEFAULTS["min_inlier_coverage"]
+    """With refinement, ``Result.valid`` needs ``Result.inlier_coverage`` >= this (else reason "the inliers cover
+    too little of the overlap": one object may match itself in several poses); in [0, 1]."""
+    refine_min_inliers: int = _DEFAULTS["refine_min_inliers"]
+    """With refinement, the final inliers ``Result.valid`` needs (``min_inliers`` applies without refinement);
+    3..100000."""
+    min_refine_condition: float = _DEFAULTS["min_refine_condition"]
+    """With refinement (and :meth:`Matcher.refine`), ``Result.valid`` needs ``Result.refine_condition`` >= this
+    (else reason "the refined pose is not constrained in every direction": a direction carrying less than this
+    share of the strongest one's information slides, as along a corridor); in [0, 1]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object
@@ -158,6 +216,7 @@ class Config:
                 raise ValueError(f"config.{name} is {value}; it does not fit in a 32-bit int") from None
         for i in range(3):
             c.viewpoint[i] = self.viewpoint[i]
+        c.reserved1 = 0  # not a setting: the library refuses anything else (kept for a future field)
         return c
 
     def replace(self, **changes: Any) -> Config:

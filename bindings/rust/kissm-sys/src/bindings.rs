@@ -32,6 +32,9 @@ pub const KISSM_REASON_TOO_FEW_INLIERS: i32 = 5;
 pub const KISSM_REASON_DEGENERATE: i32 = 6;
 pub const KISSM_REASON_LOW_OVERLAP: i32 = 7;
 pub const KISSM_REASON_UNCONSTRAINED: i32 = 8;
+pub const KISSM_REASON_UNCERTAIN_ROTATION: i32 = 9;
+pub const KISSM_REASON_CLUSTERED_INLIERS: i32 = 10;
+pub const KISSM_REASON_NOT_CONVERGED: i32 = 11;
 pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
@@ -184,16 +187,29 @@ pub struct kissm_config {
     /// Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]. Default 1.0.
     pub refine_kernel_gain: f64,
     /** Refinement has converged when a step turns the pose by less than this (radians) ...; in [0, 1].
- Default 1e-4.*/
+ Default 5e-4.*/
     pub refine_rotation_epsilon: f64,
-    /// ... and moves it by less than gain * voxel_size; in [0, 1]. Default 1e-3.
+    /// ... and moves it by less than gain * voxel_size; in [0, 1]. Default 5e-3.
     pub refine_translation_epsilon_gain: f64,
-    /// With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0.
+    /** Without refinement, valid needs kissm_result.rotation_uncertainty <= this (radians); in (0, 3.15].
+ Default 0.0349 (2 degrees).*/
+    pub max_rotation_uncertainty: f64,
+    /// With refinement, valid needs kissm_result.overlap >= this; in [0, 1]. Default 0.2.
     pub min_overlap: f64,
+    /// With refinement, valid needs kissm_result.inlier_coverage >= this; in [0, 1]. Default 0.25.
+    pub min_inlier_coverage: f64,
+    /** With refinement, valid needs at least this many final inliers (min_inliers applies without
+ refinement); 3..100000. Default 10.*/
+    pub refine_min_inliers: i32,
+    /// Must be 0.
+    pub reserved1: i32,
+    /** With refinement, valid needs kissm_result.refine_condition >= this (a direction carrying less than this
+ share of the strongest one's information slides); in [0, 1]. Default 0.01.*/
+    pub min_refine_condition: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 200usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 232usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -277,8 +293,23 @@ const _: () = {
         "Offset of field: kissm_config::refine_translation_epsilon_gain",
     ][::core::mem::offset_of!(kissm_config, refine_translation_epsilon_gain) - 184usize];
     [
+        "Offset of field: kissm_config::max_rotation_uncertainty",
+    ][::core::mem::offset_of!(kissm_config, max_rotation_uncertainty) - 192usize];
+    [
         "Offset of field: kissm_config::min_overlap",
-    ][::core::mem::offset_of!(kissm_config, min_overlap) - 192usize];
+    ][::core::mem::offset_of!(kissm_config, min_overlap) - 200usize];
+    [
+        "Offset of field: kissm_config::min_inlier_coverage",
+    ][::core::mem::offset_of!(kissm_config, min_inlier_coverage) - 208usize];
+    [
+        "Offset of field: kissm_config::refine_min_inliers",
+    ][::core::mem::offset_of!(kissm_config, refine_min_inliers) - 216usize];
+    [
+        "Offset of field: kissm_config::reserved1",
+    ][::core::mem::offset_of!(kissm_config, reserved1) - 220usize];
+    [
+        "Offset of field: kissm_config::min_refine_condition",
+    ][::core::mem::offset_of!(kissm_config, min_refine_condition) - 224usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
@@ -428,24 +459,35 @@ pub struct kissm_result {
     /** Sum of the stage times (time_refine_ms included). Timings are the only fields that differ between
  identical calls.*/
     pub time_total_ms: f64,
-    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform. transform is the
- refined pose when refinement ran and this one otherwise. NaN when no pose was estimated.*/
+    /** The solver's pose, row-major as transform; for kissm_refine() the initial transform with its rotation
+ block made exactly rigid (the nearest rotation). transform is the refined pose when refinement ran and this
+ one otherwise. NaN when no pose was estimated.*/
     pub coarse_transform: [f64; 16usize],
     /** 6x6 information matrix of the refined pose, row-major, symmetric: the inverse covariance of the error
  xi in T_true = T exp(xi), xi = (rotation [rad], translation [m]) in the source's frame (the perturbation
- GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the refinement's
- cost scaled by its residual variance: correspondences count as independent, so it is optimistic;
- a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run.*/
+ GTSAM's Pose3 uses; g2o orders translation first). The Gauss-Newton information of the point-to-plane
+ distances of the final correspondences (in both modes: GICP's along-plane weights are a regularisation,
+ not a measurement), divided by their residual variance. Correspondences count as independent, so it is
+ optimistic; a small eigenvalue shows a direction the data leaves free. NaN when refinement did not run.*/
     pub information: [f64; 36usize],
     /** Share of the source's voxels that the refined pose lays within the refinement's correspondence distance
  of a target voxel, in [0, 1]. NaN when refinement did not run.*/
     pub overlap: f64,
-    /** Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, metres). NaN
- when refinement did not run or found no correspondence.*/
+    /** Weighted (Cauchy) RMS distance of the final correspondences to the target's planes, metres. NaN when
+ refinement did not run or found no correspondence.*/
     pub refine_rmse: f64,
     /** Weakest over strongest direction of the information, with rotations as displacements at the matched
  points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run.*/
     pub refine_condition: f64,
+    /** 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off by
+ the noise bound: noise_bound / sqrt(N (e1^2 + e2^2)) with e1, e2 the two smaller inlier_extent values.
+ Infinite when e1 = e2 = 0 (no inliers, or all on one point); NaN when no pose was estimated and after
+ kissm_refine() / kissm_refine_features() (no solver ran).*/
+    pub rotation_uncertainty: f64,
+    /** Principal standard deviation of the inliers over that of the source voxels the refined pose overlaps:
+ how much of the overlap the solver's matches span (above 1 when they reach beyond it). NaN unless a
+ registration was refined.*/
+    pub inlier_coverage: f64,
     /// Wall-clock ms: refinement (0 if not run).
     pub time_refine_ms: f64,
     /// Correspondences of the refinement at its final pose (0 if not run).
@@ -457,7 +499,7 @@ pub struct kissm_result {
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 904usize];
+    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 920usize];
     ["Alignment of kissm_result"][::core::mem::align_of::<kissm_result>() - 8usize];
     [
         "Offset of field: kissm_result::struct_size",
@@ -565,17 +607,23 @@ const _: () = {
         "Offset of field: kissm_result::refine_condition",
     ][::core::mem::offset_of!(kissm_result, refine_condition) - 872usize];
     [
+        "Offset of field: kissm_result::rotation_uncertainty",
+    ][::core::mem::offset_of!(kissm_result, rotation_uncertainty) - 880usize];
+    [
+        "Offset of field: kissm_result::inlier_coverage",
+    ][::core::mem::offset_of!(kissm_result, inlier_coverage) - 888usize];
+    [
         "Offset of field: kissm_result::time_refine_ms",
-    ][::core::mem::offset_of!(kissm_result, time_refine_ms) - 880usize];
+    ][::core::mem::offset_of!(kissm_result, time_refine_ms) - 896usize];
     [
         "Offset of field: kissm_result::num_refine_correspondences",
-    ][::core::mem::offset_of!(kissm_result, num_refine_correspondences) - 888usize];
+    ][::core::mem::offset_of!(kissm_result, num_refine_correspondences) - 904usize];
     [
         "Offset of field: kissm_result::refine_iterations",
-    ][::core::mem::offset_of!(kissm_result, refine_iterations) - 896usize];
+    ][::core::mem::offset_of!(kissm_result, refine_iterations) - 912usize];
     [
         "Offset of field: kissm_result::refine_converged",
-    ][::core::mem::offset_of!(kissm_result, refine_converged) - 900usize];
+    ][::core::mem::offset_of!(kissm_result, refine_converged) - 916usize];
 };
 impl Default for kissm_result {
     fn default() -> Self {
@@ -678,8 +726,9 @@ extern "C" {
         is #KISSM_REFINE_NONE). No descriptors, no global search.
 
  result->coarse_transform is the initial transform; result->transform the refined pose; valid = 1 when the
- refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. The result is
- always fully overwritten.
+ refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. Keypoint counts
+ are 0 (no descriptors are computed) and time_features_ms is the time of the normals. The result is always
+ fully overwritten.
  @param[in,out] matcher The matcher (its settings; one call at a time).
  @param[in] source The cloud to move; read during the call only.
  @param[in] target The cloud it is registered against; read during the call only.
@@ -774,9 +823,9 @@ extern "C" {
     ) -> i32;
 }
 extern "C" {
-    /** @brief kissm_refine() on described clouds: the same refined pose as kissm_refine() on the clouds the features
-        were computed from. Features computed with refinement enabled carry the index refinement searches, so
-        a map described once is not indexed again.
+    /** @brief kissm_refine() on described clouds: the same result as kissm_refine() on the clouds the features were
+        computed from (keypoint counts 0 as there), bit for bit but for the times. Features computed with
+        refinement enabled carry the index refinement searches, so a map described once is not indexed again.
 
  Voxelisation and feature times are reported as 0. The result is always fully overwritten.
  @param[in,out] matcher The matcher (its settings; one call at a time).

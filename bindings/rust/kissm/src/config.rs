@@ -24,6 +24,42 @@ pub enum NonFinitePolicy {
 #[deprecated(since = "0.1.0", note = "renamed to `NonFinitePolicy`")]
 pub type NonfinitePolicy = NonFinitePolicy;
 
+/// The fine registration that refines a pose on the voxelised clouds (`kissm_config.refine_mode`): after
+/// the global solver in [`Matcher::register`](crate::Matcher::register), and the cost that
+/// [`Matcher::refine`](crate::Matcher::refine) minimises.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum RefineMode {
+    /// No refinement: [`Matcher::register`](crate::Matcher::register) returns the solver's pose as it is
+    /// (the default). [`Matcher::refine`](crate::Matcher::refine) uses [`RefineMode::Gicp`] then.
+    #[default]
+    None,
+    /// Generalized ICP (plane-to-plane).
+    Gicp,
+    /// Point-to-plane ICP.
+    PointToPlane,
+}
+
+impl RefineMode {
+    /// The mode of a `KISSM_REFINE_*` code (`None` for a value the library does not define).
+    pub fn from_code(code: i32) -> Option<RefineMode> {
+        match code {
+            sys::KISSM_REFINE_NONE => Some(RefineMode::None),
+            sys::KISSM_REFINE_GICP => Some(RefineMode::Gicp),
+            sys::KISSM_REFINE_POINT_TO_PLANE => Some(RefineMode::PointToPlane),
+            _ => None,
+        }
+    }
+
+    /// The `KISSM_REFINE_*` code.
+    pub fn code(self) -> i32 {
+        match self {
+            RefineMode::None => sys::KISSM_REFINE_NONE,
+            RefineMode::Gicp => sys::KISSM_REFINE_GICP,
+            RefineMode::PointToPlane => sys::KISSM_REFINE_POINT_TO_PLANE,
+        }
+    }
+}
+
 /// Where surface normals are oriented toward.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Viewpoint {
@@ -44,8 +80,10 @@ impl Default for Viewpoint {
 /// Built with [`Config::builder`], whose defaults are the C library's (`kissm_config_init`): voxel size
 /// 0.3, normal radius gain 3.5, FPFH radius gain 5.0, maximum linearity 0.99, ratio test 0.9, pruning
 /// and solver noise bound gains 1.0 and 0.75, no noise bound cap, viewpoint at the origin, 3 normal
-/// neighbours, 5000 correspondences, 15 inliers, non-finite points rejected, all hardware threads. Every
-/// length scales with the voxel size, so it is usually the only value to set.
+/// neighbours, 5000 correspondences, 15 inliers, non-finite points rejected, all hardware threads, no
+/// refinement ([`RefineMode::None`]; the refinement settings and the validity rules' thresholds as
+/// `kissm.h` documents them, read from the library). Every length scales with the voxel size, so it is
+/// usually the only value to set.
 ///
 /// ```
 /// let config = kissm::Config::builder().voxel_size(0.5).num_threads(2).build()?;
@@ -169,7 +207,8 @@ impl Config {
     pub fn max_correspondences(&self) -> usize {
         usize::try_from(self.raw.max_correspondences).unwrap_or(0)
     }
-    /// Final inliers needed for a valid pose.
+    /// Final inliers needed for a valid pose without refinement
+    /// ([`refine_min_inliers`](Config::refine_min_inliers) with it).
     pub fn min_inliers(&self) -> usize {
         usize::try_from(self.raw.min_inliers).unwrap_or(0)
     }
@@ -180,6 +219,54 @@ impl Config {
         } else {
             NonFinitePolicy::Reject
         }
+    }
+    /// The fine registration after the solver, and the cost of [`Matcher::refine`](crate::Matcher::refine).
+    /// A raw config (see [`Config::from_raw`]) holding no `KISSM_REFINE_*` code reads as [`RefineMode::None`]
+    /// here; creating a matcher from it fails.
+    pub fn refine_mode(&self) -> RefineMode {
+        RefineMode::from_code(self.raw.refine_mode).unwrap_or_default()
+    }
+    /// Refinement iteration cap.
+    pub fn refine_max_iterations(&self) -> usize {
+        usize::try_from(self.raw.refine_max_iterations).unwrap_or(0)
+    }
+    /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap)),
+    /// in voxel sizes.
+    pub fn refine_max_distance_gain(&self) -> f64 {
+        self.raw.refine_max_distance_gain
+    }
+    /// Scale of refinement's Cauchy kernel, in voxel sizes.
+    pub fn refine_kernel_gain(&self) -> f64 {
+        self.raw.refine_kernel_gain
+    }
+    /// Refinement has converged when a step turns the pose by less than this (radians) and moves it by less
+    /// than [`refine_translation_epsilon_gain`](Config::refine_translation_epsilon_gain) voxel sizes.
+    pub fn refine_rotation_epsilon(&self) -> f64 {
+        self.raw.refine_rotation_epsilon
+    }
+    /// Refinement's convergence threshold on translation steps, in voxel sizes.
+    pub fn refine_translation_epsilon_gain(&self) -> f64 {
+        self.raw.refine_translation_epsilon_gain
+    }
+    /// Without refinement, a valid pose needs
+    /// [`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this
+    /// (radians).
+    pub fn max_rotation_uncertainty(&self) -> f64 {
+        self.raw.max_rotation_uncertainty
+    }
+    /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this.
+    pub fn min_overlap(&self) -> f64 {
+        self.raw.min_overlap
+    }
+    /// With refinement, a valid registration needs
+    /// [`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage) at least this.
+    pub fn min_inlier_coverage(&self) -> f64 {
+        self.raw.min_inlier_coverage
+    }
+    /// With refinement, final inliers a valid registration needs ([`min_inliers`](Config::min_inliers)
+    /// applies without refinement).
+    pub fn refine_min_inliers(&self) -> usize {
+        usize::try_from(self.raw.refine_min_inliers).unwrap_or(0)
     }
 }
 
@@ -207,6 +294,16 @@ impl fmt::Debug for Config {
             .field("max_correspondences", &self.raw.max_correspondences)
             .field("min_inliers", &self.raw.min_inliers)
             .field("nonfinite_policy", &self.nonfinite_policy())
+            .field("refine_mode", &self.refine_mode())
+            .field("refine_max_iterations", &self.raw.refine_max_iterations)
+            .field("refine_max_distance_gain", &self.raw.refine_max_distance_gain)
+            .field("refine_kernel_gain", &self.raw.refine_kernel_gain)
+            .field("refine_rotation_epsilon", &self.raw.refine_rotation_epsilon)
+            .field("refine_translation_epsilon_gain", &self.raw.refine_translation_epsilon_gain)
+            .field("max_rotation_uncertainty", &self.raw.max_rotation_uncertainty)
+            .field("min_overlap", &self.raw.min_overlap)
+            .field("min_inlier_coverage", &self.raw.min_inlier_coverage)
+            .field("refine_min_inliers", &self.raw.refine_min_inliers)
             .finish()
     }
 }
@@ -314,7 +411,8 @@ impl ConfigBuilder {
         self.raw.max_correspondences = to_i32(count);
         self
     }
-    /// Final inliers a valid pose needs, 3..=100000 (default 15).
+    /// Final inliers a valid pose needs without refinement, 3..=100000 (default 15); with refinement
+    /// [`refine_min_inliers`](ConfigBuilder::refine_min_inliers) applies instead.
     pub fn min_inliers(mut self, count: usize) -> Self {
         self.raw.min_inliers = to_i32(count);
         self
@@ -325,6 +423,66 @@ impl ConfigBuilder {
             NonFinitePolicy::Reject => sys::KISSM_NONFINITE_REJECT,
             NonFinitePolicy::Drop => sys::KISSM_NONFINITE_DROP,
         };
+        self
+    }
+    /// Refines the solver's pose in every registration with this cost (default [`RefineMode::None`]), and
+    /// the cost of [`Matcher::refine`](crate::Matcher::refine) (GICP when `None`).
+    pub fn refine_mode(mut self, mode: RefineMode) -> Self {
+        self.raw.refine_mode = mode.code();
+        self
+    }
+    /// Refinement iteration cap, 1..=1000 (default: the library's, see `kissm.h`).
+    pub fn refine_max_iterations(mut self, count: usize) -> Self {
+        self.raw.refine_max_iterations = to_i32(count);
+        self
+    }
+    /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap))
+    /// in voxel sizes, in (0, 100] (default: the library's).
+    pub fn refine_max_distance_gain(mut self, gain: f64) -> Self {
+        self.raw.refine_max_distance_gain = gain;
+        self
+    }
+    /// Scale of refinement's Cauchy kernel in voxel sizes, in (0, 100] (default: the library's).
+    pub fn refine_kernel_gain(mut self, gain: f64) -> Self {
+        self.raw.refine_kernel_gain = gain;
+        self
+    }
+    /// Convergence threshold on a step's rotation, radians, in [0, 1] (default: the library's).
+    pub fn refine_rotation_epsilon(mut self, epsilon: f64) -> Self {
+        self.raw.refine_rotation_epsilon = epsilon;
+        self
+    }
+    /// Convergence threshold on a step's translation in voxel sizes, in [0, 1] (default: the library's).
+    pub fn refine_translation_epsilon_gain(mut self, gain: f64) -> Self {
+        self.raw.refine_translation_epsilon_gain = gain;
+        self
+    }
+    /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this
+    /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default: the library's).
+    pub fn min_overlap(mut self, overlap: f64) -> Self {
+        self.raw.min_overlap = overlap;
+        self
+    }
+    /// Without refinement, a valid pose needs inliers that pin its rotation down to this many radians
+    /// ([`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this;
+    /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default:
+    /// the library's, 2 degrees).
+    pub fn max_rotation_uncertainty(mut self, radians: f64) -> Self {
+        self.raw.max_rotation_uncertainty = radians;
+        self
+    }
+    /// With refinement, a valid registration needs solver inliers spread over at least this much of the
+    /// aligned overlap ([`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage); below it:
+    /// [`Reason::ClusteredInliers`](crate::Reason::ClusteredInliers)); in [0, 1] (default: the library's).
+    pub fn min_inlier_coverage(mut self, coverage: f64) -> Self {
+        self.raw.min_inlier_coverage = coverage;
+        self
+    }
+    /// With refinement, final inliers a valid registration needs (fewer:
+    /// [`Reason::TooFewInliers`](crate::Reason::TooFewInliers)), 3..=100000 (default: the library's);
+    /// [`min_inliers`](ConfigBuilder::min_inliers) applies without refinement.
+    pub fn refine_min_inliers(mut self, count: usize) -> Self {
+        self.raw.refine_min_inliers = to_i32(count);
         self
     }
 

@@ -65,6 +65,10 @@
 //!
 //! - **Input**: `&[[f32; 3]]`, `&[[f64; 3]]`, their `Vec`s, strided flat slices ([`PointsView`]) and
 //!   files ([`read_points`]), without copies; anything implementing [`AsPoints`].
+//! - **Refinement**: [`Config::refine_mode`] refines the global pose with GICP or point-to-plane ICP in
+//!   the same call, and [`Matcher::refine`] refines a known pose; [`Registration::refinement`] then holds
+//!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose, and how much of
+//!   the overlap the solver's inliers cover.
 //! - **Results** are bitwise identical to the C library's (and the `kissm` tool's) on the same input,
 //!   whatever the thread count and whether the matcher is fresh or reused.
 //! - **Errors**: every failure is an [`Error`] with the C status code and the library's message naming
@@ -73,6 +77,50 @@
 //! - **Threads**: a [`Matcher`] is `Send` (one thread at a time); [`Features`] are `Send + Sync` and can be
 //!   shared by matchers on several threads; a [`CancelHandle`] stops a running call from any thread.
 //! - Nothing here panics, and no Rust code is ever called back from C.
+//!
+//! # Refinement
+//!
+//! With [`Config::refine_mode`] the global pose is refined in the same call (GICP or point-to-plane ICP on
+//! the voxelised clouds), and [`Matcher::refine`] refines a known pose without any global search
+//! (tracking, re-localisation from a prior). [`Registration::refinement`] then holds what the refined pose
+//! rests on; [`Registration::coarse_transform`] keeps the solver's (or the initial) pose. This example runs
+//! as a doc test on the shared test scene (`source` and `target` are its clouds) and is the refinement
+//! example of the READMEs (`tests/readme.rs`).
+//!
+//! ```
+//! # // Setup: the committed pair of tests/data (or KISSM_TEST_DATA).
+//! # use std::path::PathBuf;
+//! # let data = match std::env::var_os("KISSM_TEST_DATA") {
+//! #     Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+//! #     _ => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../tests/data"),
+//! # };
+//! # if !data.join("roundtrip_source.ply").is_file() {
+//! #     let why = "SKIP README refinement example: the test scene was not found (set KISSM_TEST_DATA)";
+//! #     assert!(!matches!(std::env::var("KISSM_REQUIRE_TEST_DATA").as_deref(), Ok("1")), "{why}");
+//! #     eprintln!("{why}");
+//! #     return Ok(());
+//! # }
+//! # let source = kissm::read_points(data.join("roundtrip_source.ply"))?;
+//! # let target = kissm::read_points(data.join("roundtrip_target.ply"))?;
+//! # let next_scan = kissm::read_points(data.join("roundtrip_source.ply"))?;
+//! use kissm::{Config, Matcher, RefineMode};
+//!
+//! let config = Config::builder().voxel_size(0.25).refine_mode(RefineMode::Gicp).build()?;
+//! let mut matcher = Matcher::new(&config)?;
+//! let reg = matcher.register(&source, &target)?;           // global pose, then GICP
+//! if let (true, Some(fine)) = (reg.valid, reg.refinement) {
+//!     println!("overlap {:.2}, rmse {:.3}", fine.overlap, fine.rmse);
+//!     println!("{:?}", fine.information);                  // 6x6, rotation then translation (GTSAM)
+//! }
+//! let tracked = matcher.refine(&next_scan, &target, &reg.transform)?; // from a known pose
+//! # // Checks: refined, valid, and refining the refined pose again stays put.
+//! # let fine = reg.refinement.expect("refined");
+//! # assert!(reg.valid && tracked.valid, "{} {}", reg.reason, tracked.reason);
+//! # assert!(fine.overlap > 0.5 && fine.converged);
+//! # let moved = (0..3).map(|i| (tracked.transform[i][3] - reg.transform[i][3]).abs()).fold(0.0, f64::max);
+//! # assert!(moved < 0.01, "refining the refined pose moved it by {moved}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![deny(missing_docs)]
 #![warn(unsafe_op_in_unsafe_fn)]
 
@@ -90,11 +138,11 @@ use kissm_sys as sys;
 
 #[allow(deprecated)] // the former name, kept as an alias
 pub use config::NonfinitePolicy;
-pub use config::{Config, ConfigBuilder, NonFinitePolicy, Viewpoint};
+pub use config::{Config, ConfigBuilder, NonFinitePolicy, RefineMode, Viewpoint};
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher};
 pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};
-pub use registration::{Counts, Reason, Registration, Timings};
+pub use registration::{Counts, Reason, Refinement, Registration, Timings};
 
 /// Fewest points a cloud may have; smaller clouds fail with [`ErrorKind::TooFewPoints`].
 pub const MIN_POINTS: usize = sys::KISSM_MIN_POINTS as usize;

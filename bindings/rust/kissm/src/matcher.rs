@@ -119,9 +119,82 @@ impl Matcher {
         Ok(Registration::from_raw(&result))
     }
 
+    /// Fine registration from a known pose (tracking, re-localisation from a prior, checking a loop
+    /// closure): voxelises both clouds, estimates their normals and refines `initial` (4 x 4,
+    /// `initial[row][col]`, maps source points into the target frame) with the config's
+    /// [`refine_mode`](Config::refine_mode) ([`RefineMode::Gicp`](crate::RefineMode::Gicp) when it is
+    /// `None`). No descriptors and no global search, so it needs a start within the refinement's reach (a
+    /// few voxel sizes, a few degrees).
+    ///
+    /// The result's [`coarse_transform`](Registration::coarse_transform) is `initial` (its rotation block
+    /// made exactly rigid: the nearest rotation), its
+    /// [`transform`](Registration::transform) the refined pose, its
+    /// [`refinement`](Registration::refinement) is `Some`, and [`valid`](Registration::valid) says whether
+    /// the refined pose passes the refined rule (overlap and conditioning; otherwise
+    /// [`Reason::LowOverlap`](crate::Reason::LowOverlap) or [`Reason::Unconstrained`](crate::Reason::Unconstrained)).
+    /// Fails with [`ErrorKind::InvalidArgument`](crate::ErrorKind::InvalidArgument), the message naming
+    /// `initial_transform`, when `initial` is not finite, its last row is not (0, 0, 0, 1), its rotation
+    /// block is not a rotation (orthonormal to 1e-3, determinant +1) or a translation component exceeds 1e9;
+    /// otherwise with the errors of [`register`](Matcher::register).
+    ///
+    /// ```no_run
+    /// use kissm::{Config, Matcher, RefineMode};
+    /// # let (scan, map): (Vec<[f32; 3]>, Vec<[f32; 3]>) = (Vec::new(), Vec::new());
+    /// # let prior = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+    /// let config = Config::builder().voxel_size(0.5).refine_mode(RefineMode::Gicp).build()?;
+    /// let reg = Matcher::new(&config)?.refine(&scan, &map, &prior)?;
+    /// if let (true, Some(fine)) = (reg.valid, reg.refinement) {
+    ///     println!("{:?} overlap {:.2}, information {:?}", reg.transform, fine.overlap, fine.information);
+    /// }
+    /// # Ok::<(), kissm::Error>(())
+    /// ```
+    pub fn refine<S, T>(&mut self, source: &S, target: &T, initial: &[[f64; 4]; 4]) -> Result<Registration, Error>
+    where
+        S: AsPoints + ?Sized,
+        T: AsPoints + ?Sized,
+    {
+        let source = source.as_points();
+        let target = target.as_points();
+        let initial = flat_transform(initial);
+        let mut result = Self::new_result()?;
+        // SAFETY: as in register; initial is 16 doubles read during the call only.
+        let status =
+            unsafe { sys::kissm_refine(self.ptr(), source.as_raw(), target.as_raw(), initial.as_ptr(), &mut result) };
+        Error::check(status)?;
+        Ok(Registration::from_raw(&result))
+    }
+
+    /// [`refine`](Matcher::refine) on described clouds: the same result as on the clouds the features were
+    /// computed from (keypoint counts 0, as refinement uses no descriptor), but for the voxelisation and
+    /// feature times, which are 0. Features computed
+    /// by a matcher with refinement enabled carry the index refinement searches, so a map described once is
+    /// not indexed again. Fails as [`register_features`](Matcher::register_features) does, and as
+    /// [`refine`](Matcher::refine) does for a bad `initial`.
+    pub fn refine_features(
+        &mut self,
+        source: &Features,
+        target: &Features,
+        initial: &[[f64; 4]; 4],
+    ) -> Result<Registration, Error> {
+        let initial = flat_transform(initial);
+        let mut result = Self::new_result()?;
+        // SAFETY: as in register_features; initial is 16 doubles read during the call only.
+        let status = unsafe {
+            sys::kissm_refine_features(
+                self.ptr(),
+                source.raw.as_ptr(),
+                target.raw.as_ptr(),
+                initial.as_ptr(),
+                &mut result,
+            )
+        };
+        Error::check(status)?;
+        Ok(Registration::from_raw(&result))
+    }
+
     /// Describes a cloud once (voxelisation, normals, descriptors) for any number of
-    /// [`register_features`](Matcher::register_features) calls, on any matcher with the same descriptor
-    /// settings and from any thread.
+    /// [`register_features`](Matcher::register_features) and [`refine_features`](Matcher::refine_features)
+    /// calls, on any matcher with the same descriptor settings and from any thread.
     pub fn compute_features<P: AsPoints + ?Sized>(&mut self, cloud: &P) -> Result<Features, Error> {
         let cloud = cloud.as_points();
         let mut raw: *mut sys::kissm_features = std::ptr::null_mut();
@@ -152,13 +225,22 @@ impl Matcher {
     }
 }
 
+/// A 4 x 4 transform as the 16 row-major doubles the C API takes.
+fn flat_transform(m: &[[f64; 4]; 4]) -> [f64; 16] {
+    let mut flat = [0.0; 16];
+    for (out, row) in flat.chunks_exact_mut(4).zip(m) {
+        out.copy_from_slice(row);
+    }
+    flat
+}
+
 impl fmt::Debug for Matcher {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Matcher").field("config", &self.config).finish()
     }
 }
 
-/// Stops a [`Matcher`]'s running registration (or feature computation) from any thread: the call then
+/// Stops a [`Matcher`]'s running registration (or refinement, or feature computation) from any thread: the call then
 /// fails with [`ErrorKind::Cancelled`](crate::ErrorKind::Cancelled). A request made while no call is
 /// running is cleared when the next call starts. `Send + Sync + Clone`.
 ///

@@ -21,10 +21,26 @@ pub enum Reason {
     TooFewCorrespondences,
     /// The robust solver found no consistent rotation.
     SolverFailed,
-    /// Final inliers below [`Config::min_inliers`](crate::Config::min_inliers).
+    /// Final inliers below [`Config::min_inliers`](crate::Config::min_inliers) (with refinement:
+    /// [`Config::refine_min_inliers`](crate::Config::refine_min_inliers)).
     TooFewInliers,
     /// The inliers are collinear or planar: the pose is ambiguous.
     Degenerate,
+    /// Refinement ran and its pose lays too little of the source onto the target:
+    /// [`Refinement::overlap`] below [`Config::min_overlap`](crate::Config::min_overlap), or fewer than 6
+    /// correspondences.
+    LowOverlap,
+    /// Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
+    /// [`Refinement::condition`] and [`Refinement::information`].
+    Unconstrained,
+    /// Without refinement: the inliers pin the rotation down no better than
+    /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)
+    /// ([`Registration::rotation_uncertainty`] above it): too few of them, or all on one compact object.
+    UncertainRotation,
+    /// With refinement: the solver's inliers cover less than
+    /// [`Config::min_inlier_coverage`](crate::Config::min_inlier_coverage) of the aligned overlap
+    /// ([`Refinement::inlier_coverage`] below it): one object may match itself in several poses.
+    ClusteredInliers,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -40,6 +56,10 @@ impl Reason {
             sys::KISSM_REASON_SOLVER_FAILED => Reason::SolverFailed,
             sys::KISSM_REASON_TOO_FEW_INLIERS => Reason::TooFewInliers,
             sys::KISSM_REASON_DEGENERATE => Reason::Degenerate,
+            sys::KISSM_REASON_LOW_OVERLAP => Reason::LowOverlap,
+            sys::KISSM_REASON_UNCONSTRAINED => Reason::Unconstrained,
+            sys::KISSM_REASON_UNCERTAIN_ROTATION => Reason::UncertainRotation,
+            sys::KISSM_REASON_CLUSTERED_INLIERS => Reason::ClusteredInliers,
             other => Reason::Other(other),
         }
     }
@@ -54,6 +74,10 @@ impl Reason {
             Reason::SolverFailed => sys::KISSM_REASON_SOLVER_FAILED,
             Reason::TooFewInliers => sys::KISSM_REASON_TOO_FEW_INLIERS,
             Reason::Degenerate => sys::KISSM_REASON_DEGENERATE,
+            Reason::LowOverlap => sys::KISSM_REASON_LOW_OVERLAP,
+            Reason::Unconstrained => sys::KISSM_REASON_UNCONSTRAINED,
+            Reason::UncertainRotation => sys::KISSM_REASON_UNCERTAIN_ROTATION,
+            Reason::ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
             Reason::Other(code) => code,
         }
     }
@@ -118,8 +142,50 @@ pub struct Timings {
     pub pruning_ms: f64,
     /// GNC-TLS rotation, translation, inliers and validity.
     pub solver_ms: f64,
-    /// Sum of the stages.
+    /// Fine registration ([`Registration::refinement`]; 0 when it did not run).
+    pub refine_ms: f64,
+    /// Sum of the stages (refinement included).
     pub total_ms: f64,
+}
+
+/// What the fine registration found ([`Registration::refinement`]): present exactly when refinement ran,
+/// after the solver ([`Config::refine_mode`](crate::Config::refine_mode)) or in
+/// [`Matcher::refine`](crate::Matcher::refine).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Refinement {
+    /// The 6 x 6 information matrix of the refined pose, `information[row][col]`, symmetric: the inverse
+    /// covariance of the error `xi` in `T_true = T exp(xi)`, where `T` is
+    /// [`Registration::transform`] and `xi = (rotation [rad], translation [clouds' unit])` is expressed in
+    /// the source's frame (rotation first, then translation: the right perturbation GTSAM's `Pose3` uses;
+    /// g2o orders translation first).
+    ///
+    /// It is the Gauss-Newton information of the refinement's cost scaled by its residual variance, with
+    /// every correspondence counted as an independent measurement, so it is **optimistic**: the true
+    /// uncertainty is larger. Use it to weight pose-graph edges relative to each other, or to find a
+    /// direction the data leaves free (a small eigenvalue), not as a calibrated covariance.
+    pub information: [[f64; 6]; 6],
+    /// Share of the source's voxels that the refined pose lays within the refinement's correspondence
+    /// distance of a target voxel, in [0, 1].
+    pub overlap: f64,
+    /// Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, in the
+    /// clouds' unit); NaN when it found no correspondence.
+    pub rmse: f64,
+    /// Weakest over strongest direction of the information, with rotations taken as displacements at the
+    /// matched points' radius, in [0, 1]: near 0 the pose slides along some direction.
+    pub condition: f64,
+    /// Principal standard deviation of the solver's inliers over that of the source voxels the refined
+    /// pose overlaps: how much of the overlap the global matches span (inliers on one compact object span
+    /// little of it, whatever the pose). A valid refined registration needs at least
+    /// [`Config::min_inlier_coverage`](crate::Config::min_inlier_coverage). NaN after
+    /// [`Matcher::refine`](crate::Matcher::refine) (no solver, no inliers) and when there are no inliers.
+    pub inlier_coverage: f64,
+    /// Correspondences at the final pose.
+    pub correspondences: u64,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Whether refinement stopped on its convergence test rather than its iteration cap.
+    pub converged: bool,
 }
 
 /// The result of a registration: the rigid transform mapping source points into the target frame
@@ -140,6 +206,14 @@ pub struct Registration {
     pub rotation: [[f64; 3]; 3],
     /// The translation `t`.
     pub translation: [f64; 3],
+    /// The global solver's pose, `coarse_transform[row][col]`; for
+    /// [`Matcher::refine`](crate::Matcher::refine) the initial transform (its rotation block made exactly
+    /// rigid: the nearest rotation). [`transform`](Registration::transform) is the refined pose when
+    /// refinement ran and equals this one otherwise. NaN when no pose was estimated.
+    pub coarse_transform: [[f64; 4]; 4],
+    /// What the fine registration found: `Some` exactly when refinement ran (see
+    /// [`Config::refine_mode`](crate::Config::refine_mode) and [`Matcher::refine`](crate::Matcher::refine)).
+    pub refinement: Option<Refinement>,
     /// Counts per stage.
     pub counts: Counts,
     /// Final inliers / initial correspondences (0 when there are none).
@@ -151,26 +225,68 @@ pub struct Registration {
     /// Square roots of the eigenvalues (descending) of the inliers' source covariance: how well spread
     /// the inliers are.
     pub inlier_extent: [f64; 3],
+    /// 1-sigma uncertainty (radians) of the solver's rotation about its worst axis if every inlier were off
+    /// by [`noise_bound`](Registration::noise_bound): `noise_bound / sqrt(N (e1^2 + e2^2))`, with `N` the
+    /// final inliers and `e1`, `e2` the two smaller [`inlier_extent`](Registration::inlier_extent) values.
+    /// Without refinement a valid pose needs at most
+    /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty). Infinite without
+    /// inliers; NaN when no pose was estimated and after [`Matcher::refine`](crate::Matcher::refine) (no
+    /// solver).
+    pub rotation_uncertainty: f64,
     /// Milliseconds per stage.
     pub timings: Timings,
 }
 
+/// A row-major C array as rows: `R` rows of `C` values.
+fn rows<const R: usize, const C: usize>(flat: &[f64]) -> [[f64; C]; R] {
+    let mut out = [[0.0; C]; R];
+    for (row, values) in out.iter_mut().zip(flat.chunks_exact(C)) {
+        row.copy_from_slice(values);
+    }
+    out
+}
+
+/// Whether two arrays of doubles (or of rows of them) hold the same bits.
+fn bits<T: AsFlat + ?Sized>(a: &T, b: &T) -> bool {
+    a.flat().eq(b.flat())
+}
+
+/// Arrays and matrices of doubles seen as the bits of their values, row by row.
+trait AsFlat {
+    fn flat(&self) -> impl Iterator<Item = u64> + '_;
+}
+impl<const N: usize> AsFlat for [f64; N] {
+    fn flat(&self) -> impl Iterator<Item = u64> + '_ {
+        self.iter().map(|v| v.to_bits())
+    }
+}
+impl<const R: usize, const C: usize> AsFlat for [[f64; C]; R] {
+    fn flat(&self) -> impl Iterator<Item = u64> + '_ {
+        self.iter().flatten().map(|v| v.to_bits())
+    }
+}
+
 impl Registration {
     pub(crate) fn from_raw(r: &sys::kissm_result) -> Registration {
-        let mut transform = [[0.0; 4]; 4];
-        for (row, out) in transform.iter_mut().enumerate() {
-            out.copy_from_slice(&r.transform[4 * row..4 * row + 4]);
-        }
-        let mut rotation = [[0.0; 3]; 3];
-        for (row, out) in rotation.iter_mut().enumerate() {
-            out.copy_from_slice(&r.rotation[3 * row..3 * row + 3]);
-        }
+        // The library writes NaN into overlap exactly when refinement did not run.
+        let refinement = (!r.overlap.is_nan()).then(|| Refinement {
+            information: rows(&r.information),
+            overlap: r.overlap,
+            rmse: r.refine_rmse,
+            condition: r.refine_condition,
+            inlier_coverage: r.inlier_coverage,
+            correspondences: r.num_refine_correspondences,
+            iterations: u32::try_from(r.refine_iterations).unwrap_or(0),
+            converged: r.refine_converged != 0,
+        });
         Registration {
             valid: r.valid != 0,
             reason: Reason::from_code(r.reason),
-            transform,
-            rotation,
+            transform: rows(&r.transform),
+            rotation: rows(&r.rotation),
             translation: r.translation,
+            coarse_transform: rows(&r.coarse_transform),
+            refinement,
             counts: Counts {
                 source_points: r.num_source_points,
                 target_points: r.num_target_points,
@@ -190,12 +306,14 @@ impl Registration {
             residual_rms: r.residual_rms,
             noise_bound: r.noise_bound,
             inlier_extent: r.inlier_extent,
+            rotation_uncertainty: r.rotation_uncertainty,
             timings: Timings {
                 voxelize_ms: r.time_voxelize_ms,
                 features_ms: r.time_features_ms,
                 matching_ms: r.time_matching_ms,
                 pruning_ms: r.time_pruning_ms,
                 solver_ms: r.time_solver_ms,
+                refine_ms: r.time_refine_ms,
                 total_ms: r.time_total_ms,
             },
         }
@@ -204,6 +322,11 @@ impl Registration {
     /// Final inliers (the same as `counts.final_inliers`).
     pub fn final_inliers(&self) -> u64 {
         self.counts.final_inliers
+    }
+
+    /// Whether the pose was refined ([`refinement`](Registration::refinement) is `Some`).
+    pub fn is_refined(&self) -> bool {
+        self.refinement.is_some()
     }
 
     /// Whether a pose was estimated (the transform is finite), valid or not.
@@ -225,19 +348,32 @@ impl Registration {
     /// Whether two results are identical bit for bit in everything but the timings (the library's
     /// determinism promise: same input and config give the same bits, whatever the thread count).
     pub fn same_result(&self, other: &Registration) -> bool {
-        fn bits<const N: usize>(a: &[f64; N], b: &[f64; N]) -> bool {
-            a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-        }
+        let same_refinement = match (&self.refinement, &other.refinement) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                a.correspondences == b.correspondences
+                    && a.iterations == b.iterations
+                    && a.converged == b.converged
+                    && bits(&a.information, &b.information)
+                    && bits(
+                        &[a.overlap, a.rmse, a.condition, a.inlier_coverage],
+                        &[b.overlap, b.rmse, b.condition, b.inlier_coverage],
+                    )
+            }
+            _ => false,
+        };
         self.valid == other.valid
             && self.reason == other.reason
             && self.counts == other.counts
-            && self.transform.iter().zip(&other.transform).all(|(a, b)| bits(a, b))
-            && self.rotation.iter().zip(&other.rotation).all(|(a, b)| bits(a, b))
+            && bits(&self.transform, &other.transform)
+            && bits(&self.coarse_transform, &other.coarse_transform)
+            && bits(&self.rotation, &other.rotation)
             && bits(&self.translation, &other.translation)
             && bits(
-                &[self.inlier_ratio, self.residual_rms, self.noise_bound],
-                &[other.inlier_ratio, other.residual_rms, other.noise_bound],
+                &[self.inlier_ratio, self.residual_rms, self.noise_bound, self.rotation_uncertainty],
+                &[other.inlier_ratio, other.residual_rms, other.noise_bound, other.rotation_uncertainty],
             )
             && bits(&self.inlier_extent, &other.inlier_extent)
+            && same_refinement
     }
 }

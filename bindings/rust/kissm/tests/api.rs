@@ -8,7 +8,7 @@ use std::io::Write as _;
 
 use kissm::{
     AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonFinitePolicy, PointsView,
-    Reason, Viewpoint,
+    Reason, RefineMode, Refinement, Registration, Viewpoint,
 };
 use kissm_sys as sys;
 
@@ -61,6 +61,152 @@ fn config_defaults_are_the_documented_ones() {
     let built = Config::builder().build().unwrap();
     assert_eq!(format!("{built:?}"), format!("{c:?}"));
     assert!(c.as_raw().log_fn.is_none() && c.as_raw().progress_fn.is_none());
+}
+
+/// The library's own defaults (`kissm_config_init`), read without this crate's wrapper.
+fn library_defaults() -> sys::kissm_config {
+    let mut raw = sys::kissm_config::default();
+    // SAFETY: raw is a writable kissm_config of exactly the size passed.
+    let status = unsafe { sys::kissm_config_init(&mut raw, std::mem::size_of::<sys::kissm_config>() as u32) };
+    assert_eq!(status, sys::KISSM_OK);
+    raw
+}
+
+#[test]
+fn refine_defaults_are_the_library_ones() {
+    // The library may tune these values: the crate reads them, so compare with kissm_config_init's.
+    let lib = library_defaults();
+    for c in [Config::default(), Config::builder().build().unwrap()] {
+        assert_eq!(c.refine_mode(), RefineMode::None);
+        assert_eq!(c.refine_mode().code(), lib.refine_mode);
+        assert_eq!(c.refine_max_iterations(), lib.refine_max_iterations as usize);
+        assert_eq!(c.refine_max_distance_gain().to_bits(), lib.refine_max_distance_gain.to_bits());
+        assert_eq!(c.refine_kernel_gain().to_bits(), lib.refine_kernel_gain.to_bits());
+        assert_eq!(c.refine_rotation_epsilon().to_bits(), lib.refine_rotation_epsilon.to_bits());
+        assert_eq!(c.refine_translation_epsilon_gain().to_bits(), lib.refine_translation_epsilon_gain.to_bits());
+        assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
+        // Every default is inside the range the builder documents (and the library validates).
+        assert!((1..=1000).contains(&c.refine_max_iterations()));
+        assert!(c.refine_max_distance_gain() > 0.0 && c.refine_max_distance_gain() <= 100.0);
+        assert!(c.refine_kernel_gain() > 0.0 && c.refine_kernel_gain() <= 100.0);
+        for v in [c.refine_rotation_epsilon(), c.refine_translation_epsilon_gain(), c.min_overlap()] {
+            assert!((0.0..=1.0).contains(&v), "{v}");
+        }
+    }
+    assert_eq!(RefineMode::default(), RefineMode::None);
+}
+
+#[test]
+fn validity_settings_are_the_library_ones() {
+    // The lead may tune these defaults: the crate reads them from kissm_config_init.
+    let lib = library_defaults();
+    for c in [Config::default(), Config::builder().build().unwrap()] {
+        assert_eq!(c.max_rotation_uncertainty().to_bits(), lib.max_rotation_uncertainty.to_bits());
+        assert_eq!(c.min_inlier_coverage().to_bits(), lib.min_inlier_coverage.to_bits());
+        assert_eq!(c.refine_min_inliers(), lib.refine_min_inliers as usize);
+        assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
+        // Inside the documented ranges.
+        assert!(c.max_rotation_uncertainty() > 0.0 && c.max_rotation_uncertainty() <= 3.15);
+        assert!((0.0..=1.0).contains(&c.min_inlier_coverage()));
+        assert!((3..=100_000).contains(&c.refine_min_inliers()));
+        // The reserved field is zero and not a setting.
+        assert_eq!(c.as_raw().reserved1, 0);
+        assert!(!format!("{c:?}").contains("reserved"), "{c:?}");
+    }
+    assert_eq!(lib.reserved1, 0);
+}
+
+#[test]
+fn builder_sets_every_validity_field() {
+    let c = Config::builder().max_rotation_uncertainty(0.01).min_inlier_coverage(0.6).refine_min_inliers(25).build();
+    let c = c.unwrap();
+    assert_eq!(c.max_rotation_uncertainty(), 0.01);
+    assert_eq!(c.min_inlier_coverage(), 0.6);
+    assert_eq!(c.refine_min_inliers(), 25);
+    // Under their C names in the raw struct, next to a zero reserved field; the Debug output names them.
+    let raw = c.as_raw();
+    assert_eq!((raw.max_rotation_uncertainty, raw.min_inlier_coverage), (0.01, 0.6));
+    assert_eq!((raw.refine_min_inliers, raw.reserved1), (25, 0));
+    let debug = format!("{c:?}");
+    for field in ["max_rotation_uncertainty: 0.01", "min_inlier_coverage: 0.6", "refine_min_inliers: 25"] {
+        assert!(debug.contains(field), "{debug}");
+    }
+    // Every other field keeps the library's default.
+    let back = c
+        .to_builder()
+        .max_rotation_uncertainty(Config::default().max_rotation_uncertainty())
+        .min_inlier_coverage(Config::default().min_inlier_coverage())
+        .refine_min_inliers(Config::default().refine_min_inliers())
+        .build()
+        .unwrap();
+    assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
+    // A matcher keeps them.
+    assert_eq!(format!("{:?}", Matcher::new(&c).unwrap().config()), debug);
+    // The range ends are accepted.
+    let ends = Config::builder().max_rotation_uncertainty(3.15).min_inlier_coverage(0.0).refine_min_inliers(3);
+    let ends = ends.build().unwrap();
+    assert_eq!((ends.max_rotation_uncertainty(), ends.refine_min_inliers()), (3.15, 3));
+    let ends = ends.to_builder().max_rotation_uncertainty(1e-300).min_inlier_coverage(1.0).refine_min_inliers(100_000);
+    assert_eq!(ends.build().unwrap().refine_min_inliers(), 100_000);
+}
+
+#[test]
+fn refine_modes_map_their_codes() {
+    for (mode, code) in [
+        (RefineMode::None, sys::KISSM_REFINE_NONE),
+        (RefineMode::Gicp, sys::KISSM_REFINE_GICP),
+        (RefineMode::PointToPlane, sys::KISSM_REFINE_POINT_TO_PLANE),
+    ] {
+        assert_eq!(mode.code(), code);
+        assert_eq!(RefineMode::from_code(code), Some(mode));
+        let c = Config::builder().refine_mode(mode).build().unwrap();
+        assert_eq!(c.refine_mode(), mode);
+        assert_eq!(c.as_raw().refine_mode, code);
+    }
+    assert_eq!(RefineMode::from_code(3), None);
+    assert_eq!(RefineMode::from_code(-1), None);
+}
+
+#[test]
+fn builder_sets_every_refine_field() {
+    let c = Config::builder()
+        .refine_mode(RefineMode::PointToPlane)
+        .refine_max_iterations(7)
+        .refine_max_distance_gain(2.5)
+        .refine_kernel_gain(0.75)
+        .refine_rotation_epsilon(2e-4)
+        .refine_translation_epsilon_gain(5e-3)
+        .min_overlap(0.4)
+        .build()
+        .unwrap();
+    assert_eq!(c.refine_mode(), RefineMode::PointToPlane);
+    assert_eq!(c.refine_max_iterations(), 7);
+    assert_eq!(c.refine_max_distance_gain(), 2.5);
+    assert_eq!(c.refine_kernel_gain(), 0.75);
+    assert_eq!(c.refine_rotation_epsilon(), 2e-4);
+    assert_eq!(c.refine_translation_epsilon_gain(), 5e-3);
+    assert_eq!(c.min_overlap(), 0.4);
+    // The raw struct holds them under the C names, and a matcher keeps them.
+    let raw = c.as_raw();
+    assert_eq!((raw.refine_mode, raw.refine_max_iterations), (sys::KISSM_REFINE_POINT_TO_PLANE, 7));
+    assert_eq!((raw.refine_max_distance_gain, raw.refine_kernel_gain), (2.5, 0.75));
+    assert_eq!((raw.refine_rotation_epsilon, raw.refine_translation_epsilon_gain, raw.min_overlap), (2e-4, 5e-3, 0.4));
+    let m = Matcher::new(&c).unwrap();
+    assert_eq!(format!("{:?}", m.config()), format!("{c:?}"));
+    assert!(format!("{c:?}").contains("refine_mode: PointToPlane"), "{c:?}");
+    // The range ends are accepted.
+    let ends = Config::builder()
+        .refine_max_iterations(1)
+        .refine_max_distance_gain(100.0)
+        .refine_kernel_gain(100.0)
+        .refine_rotation_epsilon(0.0)
+        .refine_translation_epsilon_gain(1.0)
+        .min_overlap(1.0)
+        .build()
+        .unwrap();
+    assert_eq!(ends.refine_max_iterations(), 1);
+    let ends = ends.to_builder().refine_max_iterations(1000).refine_rotation_epsilon(1.0).min_overlap(0.0).build();
+    assert_eq!(ends.unwrap().refine_max_iterations(), 1000);
 }
 
 #[test]
@@ -134,6 +280,50 @@ fn invalid_config_values_are_errors_not_panics() {
     invalid(b().min_normal_neighbors(2), "min_normal_neighbors");
     invalid(b().max_correspondences(usize::MAX), "max_correspondences");
     invalid(b().min_inliers(2), "min_inliers");
+    invalid(b().refine_max_iterations(0), "refine_max_iterations");
+    invalid(b().refine_max_iterations(1001), "refine_max_iterations");
+    invalid(b().refine_max_iterations(usize::MAX), "refine_max_iterations");
+    invalid(b().refine_max_distance_gain(0.0), "refine_max_distance_gain");
+    invalid(b().refine_max_distance_gain(100.5), "refine_max_distance_gain");
+    invalid(b().refine_max_distance_gain(f64::NAN), "refine_max_distance_gain");
+    invalid(b().refine_kernel_gain(0.0), "refine_kernel_gain");
+    invalid(b().refine_kernel_gain(f64::INFINITY), "refine_kernel_gain");
+    invalid(b().refine_rotation_epsilon(-1e-9), "refine_rotation_epsilon");
+    invalid(b().refine_rotation_epsilon(1.5), "refine_rotation_epsilon");
+    invalid(b().refine_translation_epsilon_gain(-0.1), "refine_translation_epsilon_gain");
+    invalid(b().refine_translation_epsilon_gain(f64::NAN), "refine_translation_epsilon_gain");
+    invalid(b().min_overlap(-0.01), "min_overlap");
+    invalid(b().min_overlap(1.01), "min_overlap");
+    invalid(b().min_overlap(f64::NAN), "min_overlap");
+    invalid(b().max_rotation_uncertainty(0.0), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(-0.1), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(3.16), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(f64::NAN), "config.max_rotation_uncertainty");
+    invalid(b().max_rotation_uncertainty(f64::INFINITY), "config.max_rotation_uncertainty");
+    invalid(b().min_inlier_coverage(-0.01), "config.min_inlier_coverage");
+    invalid(b().min_inlier_coverage(1.01), "config.min_inlier_coverage");
+    invalid(b().min_inlier_coverage(f64::NAN), "config.min_inlier_coverage");
+    invalid(b().refine_min_inliers(2), "config.refine_min_inliers");
+    invalid(b().refine_min_inliers(100_001), "config.refine_min_inliers");
+    invalid(b().refine_min_inliers(usize::MAX), "config.refine_min_inliers");
+    // The reserved field is no setting; a raw config holding anything but 0 there is rejected.
+    let mut raw = *Config::default().as_raw();
+    raw.reserved1 = 1;
+    let err = Matcher::new(&Config::from_raw(raw)).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::InvalidArgument);
+    assert!(err.message().contains("reserved1"), "{err}");
+    // refine_mode cannot be out of range through the enum; a raw config can hold any code.
+    for code in [3, -1] {
+        let mut raw = *Config::default().as_raw();
+        raw.refine_mode = code;
+        let config = Config::from_raw(raw);
+        assert_eq!(config.refine_mode(), RefineMode::None);
+        let err = config.validate().unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::InvalidArgument, "{err}");
+        assert!(err.message().contains("refine_mode"), "{err}");
+        let err = Matcher::new(&config).unwrap_err();
+        assert!(err.message().contains("refine_mode"), "{err}");
+    }
     // An unvalidated raw config is checked again by Matcher::new.
     let mut raw = *Config::default().as_raw();
     raw.voxel_size = -1.0;
@@ -173,12 +363,24 @@ fn error_kinds_map_every_code() {
 
 #[test]
 fn reasons_round_trip() {
-    for code in 0..=6 {
+    let mut descriptions = std::collections::HashSet::new();
+    for code in 0..=10 {
         let reason = Reason::from_code(code);
         assert_eq!(reason.code(), code);
         assert!(!matches!(reason, Reason::Other(_)));
         assert!(!reason.as_str().is_empty());
+        assert_ne!(reason.as_str(), "unknown reason");
+        assert!(descriptions.insert(reason.as_str()), "distinct description for {code}");
     }
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_LOW_OVERLAP), Reason::LowOverlap);
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_UNCONSTRAINED), Reason::Unconstrained);
+    assert_eq!(Reason::LowOverlap.code(), 7);
+    assert_eq!(Reason::Unconstrained.code(), 8);
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_UNCERTAIN_ROTATION), Reason::UncertainRotation);
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_CLUSTERED_INLIERS), Reason::ClusteredInliers);
+    assert_eq!(Reason::UncertainRotation.code(), 9);
+    assert_eq!(Reason::ClusteredInliers.code(), 10);
+    assert_eq!(Reason::from_code(11), Reason::Other(11));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);
@@ -263,14 +465,8 @@ fn nonfinite_points_are_dropped_and_counted() {
 
 #[test]
 fn degenerate_input_is_invalid_not_an_error() {
-    // A flat, featureless plane (a 71 x 71 grid, 0.14 apart, nudged by a fixed formula so it is not a
-    // perfect lattice): accepted, but no trustworthy pose.
-    let plane: Vec<[f64; 3]> = (0..71 * 71)
-        .map(|i| {
-            let (x, y) = ((i % 71) as f64, (i / 71) as f64);
-            [-5.0 + 0.14 * x + 0.03 * (1.7 * y).sin(), -5.0 + 0.14 * y + 0.03 * (2.3 * x).cos(), 0.0]
-        })
-        .collect();
+    // A flat, featureless plane: accepted, but no trustworthy pose.
+    let plane = common::flat_plane();
     let mut m = Matcher::with_voxel_size(0.3).unwrap();
     let reg = m.register(&plane, &plane).expect("well-formed input is not an error");
     assert!(!reg.valid);
@@ -399,4 +595,8 @@ fn thread_safety_contract() {
     assert_sync::<Error>();
     assert_send::<PointsView<'static>>();
     assert_sync::<PointsView<'static>>();
+    assert_send::<Registration>();
+    assert_sync::<Registration>();
+    assert_send::<Refinement>();
+    assert_sync::<Refinement>();
 }

@@ -2,8 +2,10 @@
 //! The README example is the crate documentation's doc test (`src/lib.rs`, run by `cargo test --doc` on
 //! the shared test scene): the visible lines of that doc test must equal the `rust` block of this
 //! crate's README.md, of the repository's README.md (its "Rust" section) and of bindings/rust/README.md,
-//! so that a change to any README that the doc test does not carry fails here. The last two are only
-//! absent outside a source checkout (a packaged crate); those comparisons alone are skipped then.
+//! so that a change to any README that the doc test does not carry fails here. Likewise the refinement
+//! example (the doc test under "# Refinement") and the "## Refinement" blocks of this crate's README.md
+//! and of bindings/rust/README.md. The repository's files are only absent outside a source checkout (a
+//! packaged crate); those comparisons alone are skipped then.
 
 mod common;
 
@@ -23,8 +25,14 @@ fn fenced_block(text: &str, after: &str, open: &str) -> Option<Vec<String>> {
     None
 }
 
-/// The doc test of the crate documentation, without the hidden (`# `) lines rustdoc does not show.
+/// The doc test of the crate documentation's "# Example", without the hidden (`# `) lines rustdoc does
+/// not show.
 fn doc_test_lines() -> Vec<String> {
+    section_doc_test_lines("# Example")
+}
+
+/// The doc test under the crate documentation's heading `heading`, without the hidden lines.
+fn section_doc_test_lines(heading: &str) -> Vec<String> {
     let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
     let docs: String = lib
         .lines()
@@ -35,7 +43,8 @@ fn doc_test_lines() -> Vec<String> {
             acc.push('\n');
             acc
         });
-    let block = fenced_block(&docs, "# Example", "```").expect("src/lib.rs has a doc test under \"# Example\"");
+    let block =
+        fenced_block(&docs, heading, "```").unwrap_or_else(|| panic!("src/lib.rs has a doc test under {heading:?}"));
     block.into_iter().filter(|l| l != "#" && !l.starts_with("# ")).collect()
 }
 
@@ -65,6 +74,9 @@ fn crate_readme_example_is_the_doc_test() {
     assert!(doc.iter().any(|l| l.contains("Matcher::new")), "the doc test is the README example: {doc:?}");
     let readme = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("README.md");
     assert_same(&doc, &readme_lines(&readme, "## Example"), "kissm/README.md's example");
+    let refine = section_doc_test_lines("# Refinement");
+    assert!(refine.iter().any(|l| l.contains(".refine(")), "the refinement doc test: {refine:?}");
+    assert_same(&refine, &readme_lines(&readme, "## Refinement"), "kissm/README.md's refinement example");
 }
 
 /// The repository's root, or `None` outside a source checkout (a packaged crate, which has no
@@ -85,5 +97,10 @@ fn repository_readme_example_is_the_doc_test() {
         &doc_test_lines(),
         &readme_lines(&root.join("bindings/rust/README.md"), "# kissm for Rust"),
         "bindings/rust/README.md's example",
+    );
+    assert_same(
+        &section_doc_test_lines("# Refinement"),
+        &readme_lines(&root.join("bindings/rust/README.md"), "## Refinement"),
+        "bindings/rust/README.md's refinement example",
     );
 }

@@ -77,6 +77,16 @@ impl Pose {
         Pose { r, t: [m[0][3], m[1][3], m[2][3]] }
     }
 
+    /// The 4 x 4 homogeneous matrix, `[row][col]`.
+    pub fn to_matrix(self) -> [[f64; 4]; 4] {
+        let mut m = [[0.0, 0.0, 0.0, 1.0]; 4];
+        for i in 0..3 {
+            m[i][..3].copy_from_slice(&self.r[i]);
+            m[i][3] = self.t[i];
+        }
+        m
+    }
+
     pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
         let r = &self.r;
         [
@@ -119,6 +129,11 @@ impl Pose {
         let dt = [estimate.t[0] - self.t[0], estimate.t[1] - self.t[1], estimate.t[2] - self.t[2]];
         (cos.acos().to_degrees(), (dt[0] * dt[0] + dt[1] * dt[1] + dt[2] * dt[2]).sqrt())
     }
+}
+
+/// Whether two matrices hold the same bits in every element.
+pub fn same_bits_matrix<const R: usize, const C: usize>(a: &[[f64; C]; R], b: &[[f64; C]; R]) -> bool {
+    a.iter().flatten().zip(b.iter().flatten()).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -190,6 +205,23 @@ pub fn scene(test: &str) -> Option<&'static Scene> {
         skip(test, why);
     }
     scene.as_ref()
+}
+
+/// A prior such as odometry gives: `truth` turned by 3 degrees about a tilted axis and moved by about 0.3
+/// (a little over a voxel of the shared scene).
+pub fn perturbed(truth: &Pose) -> Pose {
+    Pose::axis_angle([0.2, -0.3, 1.0], 3.0, [0.2, -0.15, 0.17]).compose(truth)
+}
+
+/// A flat, featureless plane z = 0: a 71 x 71 grid 0.14 apart, nudged within the plane by a fixed formula
+/// so that it is not a perfect lattice.
+pub fn flat_plane() -> Vec<[f64; 3]> {
+    (0..71 * 71)
+        .map(|i| {
+            let (x, y) = ((i % 71) as f64, (i / 71) as f64);
+            [-5.0 + 0.14 * x + 0.03 * (1.7 * y).sin(), -5.0 + 0.14 * y + 0.03 * (2.3 * x).cos(), 0.0]
+        })
+        .collect()
 }
 
 /// `points` moved by `pose`.
@@ -431,16 +463,70 @@ impl Parser<'_> {
 // ------------------------------------------------------------------------------------------------
 
 fn same_bits(what: &str, c: f64, rust: f64, failures: &mut Vec<String>) {
-    // The tool writes NaN as null; any NaN matches it.
-    let equal = if c.is_nan() { rust.is_nan() } else { c.to_bits() == rust.to_bits() };
+    // The tool writes NaN and infinities as null (read as NaN here); any of them matches it.
+    let equal = if c.is_nan() { !rust.is_finite() } else { c.to_bits() == rust.to_bits() };
     if !equal {
         failures.push(format!("{what}: C {c:?} vs Rust {rust:?}"));
     }
 }
 
+/// A 4 x 4 (or any) nested JSON matrix against Rust rows, bit for bit.
+fn same_matrix<const C: usize>(what: &str, json: &Json, rows: &[[f64; C]], failures: &mut Vec<String>) {
+    let json_rows = json.arr();
+    if json_rows.len() != rows.len() {
+        failures.push(format!("{what}: C has {} rows, Rust {}", json_rows.len(), rows.len()));
+        return;
+    }
+    for (i, (row, rust)) in json_rows.iter().zip(rows).enumerate() {
+        let values = row.nums();
+        if values.len() != C {
+            failures.push(format!("{what}[{i}]: C has {} columns, Rust {C}", values.len()));
+            continue;
+        }
+        for (j, v) in values.into_iter().enumerate() {
+            same_bits(&format!("{what}[{i}][{j}]"), v, rust[j], failures);
+        }
+    }
+}
+
+/// The refinement keys of the tool's `--json` output against `reg`: `coarse_transform`, `information`
+/// (`null` exactly when refinement did not run), `overlap`, `refine_rmse`, `refine_condition`,
+/// `inlier_coverage` bit for bit (null == NaN), `refine_iterations`, `refine_converged` and `counts.refine_correspondences` exactly.
+fn compare_refinement_with_cli_json(json: &Json, reg: &kissm::Registration, failures: &mut Vec<String>) {
+    same_matrix("coarse_transform", json.get("coarse_transform"), &reg.coarse_transform, failures);
+    let fine = reg.refinement;
+    match (json.get("information"), &fine) {
+        (Json::Null, None) => {}
+        (info @ Json::Arr(_), Some(f)) => same_matrix("information", info, &f.information, failures),
+        (info, _) => failures.push(format!("information: C {info:?} vs Rust refinement {:?}", fine.is_some())),
+    }
+    let nan = f64::NAN;
+    same_bits("overlap", json.get("overlap").num(), fine.map_or(nan, |f| f.overlap), failures);
+    same_bits("refine_rmse", json.get("refine_rmse").num(), fine.map_or(nan, |f| f.rmse), failures);
+    same_bits("refine_condition", json.get("refine_condition").num(), fine.map_or(nan, |f| f.condition), failures);
+    same_bits("inlier_coverage", json.get("inlier_coverage").num(), fine.map_or(nan, |f| f.inlier_coverage), failures);
+    let iterations = fine.map_or(0, |f| u64::from(f.iterations));
+    if json.get("refine_iterations").u64() != iterations {
+        failures.push(format!("refine_iterations: C {} vs Rust {iterations}", json.get("refine_iterations").u64()));
+    }
+    let converged = fine.is_some_and(|f| f.converged);
+    if json.get("refine_converged").bool() != converged {
+        failures.push(format!("refine_converged: C {} vs Rust {converged}", json.get("refine_converged").bool()));
+    }
+    let correspondences = fine.map_or(0, |f| f.correspondences);
+    if json.get("counts").get("refine_correspondences").u64() != correspondences {
+        failures.push(format!(
+            "counts.refine_correspondences: C {} vs Rust {correspondences}",
+            json.get("counts").get("refine_correspondences").u64()
+        ));
+    }
+}
+
 /// Every field of `reg` against the tool's `--json` output (all but the timings): the transform,
-/// rotation, translation, inlier ratio, residual, noise bound and inlier extent bit for bit, the counts,
-/// validity and reason exactly. Returns the differences.
+/// rotation, translation, inlier ratio, residual, noise bound, inlier extent and rotation uncertainty bit for
+/// bit (null == NaN or infinite), the counts,
+/// validity and reason exactly, and the refinement keys (`compare_refinement_with_cli_json`). Returns the
+/// differences.
 pub fn compare_with_cli_json(json: &Json, reg: &kissm::Registration) -> Vec<String> {
     let mut failures = Vec::new();
     if json.get("valid").bool() != reg.valid {
@@ -452,18 +538,8 @@ pub fn compare_with_cli_json(json: &Json, reg: &kissm::Registration) -> Vec<Stri
     if json.get("reason").str() != reg.reason.as_str() {
         failures.push(format!("reason: C {} vs Rust {}", json.get("reason").str(), reg.reason.as_str()));
     }
-    let transform = json.get("transform").arr();
-    assert_eq!(transform.len(), 4, "transform rows");
-    for (i, row) in transform.iter().enumerate() {
-        for (j, v) in row.nums().into_iter().enumerate() {
-            same_bits(&format!("transform[{i}][{j}]"), v, reg.transform[i][j], &mut failures);
-        }
-    }
-    for (i, row) in json.get("rotation").arr().iter().enumerate() {
-        for (j, v) in row.nums().into_iter().enumerate() {
-            same_bits(&format!("rotation[{i}][{j}]"), v, reg.rotation[i][j], &mut failures);
-        }
-    }
+    same_matrix("transform", json.get("transform"), &reg.transform, &mut failures);
+    same_matrix("rotation", json.get("rotation"), &reg.rotation, &mut failures);
     for (i, v) in json.get("translation").nums().into_iter().enumerate() {
         same_bits(&format!("translation[{i}]"), v, reg.translation[i], &mut failures);
     }
@@ -473,6 +549,7 @@ pub fn compare_with_cli_json(json: &Json, reg: &kissm::Registration) -> Vec<Stri
     for (i, v) in json.get("inlier_extent").nums().into_iter().enumerate() {
         same_bits(&format!("inlier_extent[{i}]"), v, reg.inlier_extent[i], &mut failures);
     }
+    same_bits("rotation_uncertainty", json.get("rotation_uncertainty").num(), reg.rotation_uncertainty, &mut failures);
     let c = &reg.counts;
     let counts = json.get("counts");
     let pairs = [
@@ -499,6 +576,7 @@ pub fn compare_with_cli_json(json: &Json, reg: &kissm::Registration) -> Vec<Stri
     if json.get("final_inliers").u64() != reg.final_inliers() {
         failures.push(format!("final_inliers: C {} vs Rust {}", json.get("final_inliers").u64(), reg.final_inliers()));
     }
+    compare_refinement_with_cli_json(json, reg, &mut failures);
     failures
 }
 

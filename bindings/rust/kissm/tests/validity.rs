@@ -1,0 +1,114 @@
+// SPDX-License-Identifier: MIT
+//! The validity rules' settings on the shared test scene (the committed pair of `tests/data`, or
+//! `KISSM_TEST_DATA`): each moves the decision exactly at the value the result reports, and only in its
+//! own rule, never the pose. Without refinement `max_rotation_uncertainty` against
+//! `Registration::rotation_uncertainty`; with refinement `refine_min_inliers` against the final inliers and
+//! `min_inlier_coverage` against `Refinement::inlier_coverage`.
+
+mod common;
+
+use common::{scene, Pose, Scene, SCENE_VOXEL};
+use kissm::{Config, ConfigBuilder, Matcher, Reason, RefineMode, Registration};
+
+fn builder(mode: RefineMode) -> ConfigBuilder {
+    Config::builder().voxel_size(SCENE_VOXEL).num_threads(2).refine_mode(mode)
+}
+
+fn register(builder: ConfigBuilder, pair: &Scene) -> Registration {
+    Matcher::new(&builder.build().unwrap()).unwrap().register(&pair.source, &pair.target).unwrap()
+}
+
+/// The next double toward 0 and away from it (for positive finite values).
+fn just_below(v: f64) -> f64 {
+    f64::from_bits(v.to_bits() - 1)
+}
+fn just_above(v: f64) -> f64 {
+    f64::from_bits(v.to_bits() + 1)
+}
+
+/// Another decision on the same result: every bit but `valid` and `reason` is `base`'s.
+fn same_but_decision(reg: &Registration, base: &Registration, what: &str) {
+    let mut decided = *reg;
+    decided.valid = base.valid;
+    decided.reason = base.reason;
+    assert!(decided.same_result(base), "{what}: more than the decision changed");
+}
+
+/// A threshold exactly at the measured value gives `base` itself; one just beyond it the same result with
+/// `valid == false` and `reason`.
+fn decision_flips(base: &Registration, at: &Registration, beyond: &Registration, reason: Reason, what: &str) {
+    assert!(at.same_result(base), "{what}: at the measured value: {}", at.reason);
+    assert!(!beyond.valid, "{what}: just beyond the measured value, still valid");
+    assert_eq!(beyond.reason, reason, "{what}");
+    same_but_decision(beyond, base, what);
+}
+
+/// The scene's pose is close to its ground truth, so the correct decision is "valid".
+fn accurate(pair: &Scene, reg: &Registration, what: &str) {
+    let (deg, dist) = pair.truth.errors(&Pose::from_matrix(&reg.transform));
+    assert!(deg < 1.0 && dist < SCENE_VOXEL, "{what}: {deg} deg, {dist} from the truth");
+    assert!(reg.valid, "{what}: an accurate pose is not valid: {}", reg.reason);
+}
+
+#[test]
+fn rotation_uncertainty_decides_an_unrefined_pose() {
+    let Some(pair) = scene("rotation_uncertainty_decides_an_unrefined_pose") else { return };
+    let base = register(builder(RefineMode::None), pair);
+    accurate(pair, &base, "default");
+    let u = base.rotation_uncertainty;
+    assert!(u.is_finite() && u > 0.0 && u <= Config::default().max_rotation_uncertainty(), "{u}");
+    // It is the formula kissm.h gives, from the result's own fields.
+    let [_, e1, e2] = base.inlier_extent;
+    let expected = base.noise_bound / (base.final_inliers() as f64 * (e1 * e1 + e2 * e2)).sqrt();
+    assert!((u - expected).abs() <= 1e-12 * expected, "rotation_uncertainty {u}, formula {expected}");
+    // As a 1-sigma bound it covers the solver's actual rotation error.
+    let (deg, _) = pair.truth.errors(&Pose::from_matrix(&base.coarse_transform));
+    assert!(deg.to_radians() <= 3.0 * u, "coarse rotation error {deg} deg, uncertainty {} deg", u.to_degrees());
+
+    // Exactly the measured uncertainty is allowed; one ulp less is not.
+    let at = register(builder(RefineMode::None).max_rotation_uncertainty(u), pair);
+    let below = register(builder(RefineMode::None).max_rotation_uncertainty(just_below(u)), pair);
+    decision_flips(&base, &at, &below, Reason::UncertainRotation, "max_rotation_uncertainty");
+    assert_eq!(below.reason.code(), kissm_sys::KISSM_REASON_UNCERTAIN_ROTATION);
+
+    // With refinement the solver's uncertainty is still reported, but the refined rule decides.
+    let refined = register(builder(RefineMode::Gicp).max_rotation_uncertainty(just_below(u)), pair);
+    assert!(refined.is_refined());
+    assert_eq!(refined.rotation_uncertainty.to_bits(), u.to_bits());
+    accurate(pair, &refined, "refined, with a rotation threshold below the uncertainty");
+}
+
+#[test]
+fn the_refined_rule_needs_inliers_covering_the_overlap() {
+    let Some(pair) = scene("the_refined_rule_needs_inliers_covering_the_overlap") else { return };
+    let base = register(builder(RefineMode::Gicp), pair);
+    accurate(pair, &base, "GICP");
+    let coverage = base.refinement.expect("refined").inlier_coverage;
+    let inliers = base.final_inliers() as usize;
+    assert!(coverage >= Config::default().min_inlier_coverage() && coverage < 1.0, "{coverage}");
+    assert!(inliers >= Config::default().refine_min_inliers());
+
+    // min_inlier_coverage: the measured coverage is enough, one ulp more is not.
+    let at = register(builder(RefineMode::Gicp).min_inlier_coverage(coverage), pair);
+    let above = register(builder(RefineMode::Gicp).min_inlier_coverage(just_above(coverage)), pair);
+    decision_flips(&base, &at, &above, Reason::ClusteredInliers, "min_inlier_coverage");
+    assert_eq!(above.reason.code(), kissm_sys::KISSM_REASON_CLUSTERED_INLIERS);
+
+    // refine_min_inliers: the final inliers are enough, one more is not.
+    let at = register(builder(RefineMode::Gicp).refine_min_inliers(inliers), pair);
+    let short = register(builder(RefineMode::Gicp).refine_min_inliers(inliers + 1), pair);
+    decision_flips(&base, &at, &short, Reason::TooFewInliers, "refine_min_inliers");
+
+    // Without refinement neither setting applies, and there is no coverage to measure.
+    let plain = register(builder(RefineMode::None).refine_min_inliers(inliers + 1).min_inlier_coverage(1.0), pair);
+    assert!(plain.refinement.is_none());
+    accurate(pair, &plain, "unrefined, with the refined rule's settings at their strictest");
+
+    // A refinement from a prior has no solver: neither measure exists.
+    let config = builder(RefineMode::Gicp).min_inlier_coverage(1.0).refine_min_inliers(100_000).build().unwrap();
+    let from_truth =
+        Matcher::new(&config).unwrap().refine(&pair.source, &pair.target, &pair.truth.to_matrix()).unwrap();
+    assert!(from_truth.refinement.expect("refined").inlier_coverage.is_nan());
+    assert!(from_truth.rotation_uncertainty.is_nan());
+    accurate(pair, &from_truth, "refine from the truth, with the refined rule's settings at their strictest");
+}

@@ -1,0 +1,412 @@
+// SPDX-License-Identifier: MIT
+#include "pair_command.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "alignment_figure.hpp"
+#include "cli_args.hpp"
+#include "commands.hpp"
+#include "json_writer.hpp"
+#include "ply_writer.hpp"
+#include "png_writer.hpp"
+#include "pose_math.hpp"
+#include "report.hpp"
+#include "top_view.hpp"
+#include "transform_file.hpp"
+
+namespace kissm_cli {
+namespace {
+
+const char *command_name(PairCommand command) { return command == PairCommand::Register ? "register" : "refine"; }
+
+double elapsed_ms(std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+
+CloudPtr read_cloud(const char *role, const std::string &path, int32_t format) {
+    kissm_cloud *cloud = nullptr;
+    const int32_t status = kissm_read_points(path.c_str(), format, &cloud);
+    if (status != KISSM_OK) {
+        throw UsageError(std::string("cannot read ") + role + " '" + one_line(path) +
+                         "': " + library_error(status, path));
+    }
+    return CloudPtr(cloud);
+}
+
+kissm_points points_of(const kissm_cloud *cloud, const char *role) {
+    kissm_points points{};
+    const int32_t status = kissm_cloud_points(cloud, &points);
+    if (status != KISSM_OK)
+        throw UsageError(std::string("cannot use the ") + role + " cloud: " + library_error(status));
+    return points;
+}
+
+// The option that sets each config field the library may reject, so that its message (which names the
+// field) can name the option too.
+struct FieldOption {
+    const char *field;
+    const char *option;
+};
+constexpr FieldOption kFieldOptions[] = {
+    {"config.voxel_size ", "--voxel"},
+    {"config.num_threads ", "--threads"},
+    {"config.min_inliers ", "--min-inliers"},
+    {"config.max_correspondences ", "--max-correspondences"},
+    {"config.refine_max_iterations ", "--refine-iterations"},
+    {"config.refine_max_distance_gain ", "--refine-distance"},
+    {"config.min_overlap ", "--min-overlap"},
+    {"config.max_rotation_uncertainty ", "--max-rotation-uncertainty"},
+    {"config.min_inlier_coverage ", "--min-inlier-coverage"},
+    {"config.refine_min_inliers ", "--refine-min-inliers"},
+};
+
+std::string settings_error(int32_t status) {
+    const std::string message = library_error(status);
+    for (const FieldOption &f : kFieldOptions) {
+        if (message.find(f.field) != std::string::npos) return std::string("invalid ") + f.option + ": " + message;
+    }
+    return "invalid settings: " + message;
+}
+
+void write_outputs(PairCommand command, const PairOptions &opt, const kissm_cloud *source, const kissm_cloud *target,
+                   const kissm_result &result) {
+    const bool have_pose = matrix_is_finite(result.transform);
+    std::string error;
+    if (!opt.out_transform.empty() && !write_transform_file(opt.out_transform, result.transform, &error)) {
+        throw UsageError(error);
+    }
+    const double *source_xyz = kissm_cloud_data(source);
+    const size_t source_count = static_cast<size_t>(kissm_cloud_count(source));
+    if (!opt.out_aligned.empty()) {
+        if (have_pose) {
+            const std::vector<std::string> comments = {std::string("kissm ") + kissm_version_string() +
+                                                       ": source moved into the target frame"};
+            if (!write_ply_xyz(opt.out_aligned, source_xyz, source_count, result.transform, comments, &error)) {
+                throw UsageError(error);
+            }
+        } else {
+            std::fprintf(stderr, "kissm: no pose was estimated; '%s' not written\n", opt.out_aligned.c_str());
+        }
+    }
+    if (opt.out_topview.empty()) return;
+    const bool refined = refinement_ran(result) && matrix_is_finite(result.coarse_transform);
+    const bool from_initial = command == PairCommand::Refine;
+    AlignmentInput in;
+    in.source_xyz = source_xyz;
+    in.source_count = source_count;
+    in.target_xyz = kissm_cloud_data(target);
+    in.target_count = static_cast<size_t>(kissm_cloud_count(target));
+    in.before = from_initial ? result.coarse_transform : nullptr;
+    in.pose = have_pose ? result.transform : nullptr;
+    in.coarse = (have_pose && refined) ? result.coarse_transform : nullptr;
+    in.voxel = opt.voxel;
+    in.before_title = from_initial ? "BEFORE: SOURCE MOVED BY THE INITIAL POSE" : "BEFORE: EACH CLOUD IN ITS OWN FRAME";
+    in.after_title = !have_pose ? "AFTER: NO POSE ESTIMATED"
+                     : refined  ? "AFTER: SOURCE ALIGNED BY KISSM (REFINED)"
+                                : "AFTER: SOURCE ALIGNED BY KISSM";
+    in.coarse_title = from_initial ? "DETAIL: INITIAL POSE" : "DETAIL: COARSE POSE (SOLVER)";
+    in.refined_title = std::string("DETAIL: REFINED POSE (") + refine_mode_name(opt.refine_mode) + ")";
+    AlignmentFigure figure(in);
+    AlignmentPicture &pic = figure.picture();
+    char note[200];
+    if (from_initial) {
+        std::snprintf(note, sizeof note, "VALID: %s   VOXEL %g", result.valid ? "YES" : "NO", opt.voxel);
+    } else {
+        std::snprintf(note, sizeof note, "VALID: %s   FINAL INLIERS %llu   VOXEL %g", result.valid ? "YES" : "NO",
+                      static_cast<unsigned long long>(result.num_final_inliers), opt.voxel);
+    }
+    pic.figure.notes.push_back(note);
+    if (refined) {
+        std::snprintf(note, sizeof note, "REFINEMENT MOVED THE %s POSE BY %.3f DEG, %.3g. OVERLAP %.3f",
+                      from_initial ? "INITIAL" : "COARSE",
+                      rotation_error_deg(result.coarse_transform, result.transform),
+                      translation_error(result.coarse_transform, result.transform), result.overlap);
+        pic.figure.notes.push_back(note);
+    }
+    const Image image = render_top_view(pic.figure, pic.view);
+    if (!write_png_rgb(opt.out_topview, image.width(), image.height(), image.data(), &error)) throw UsageError(error);
+}
+
+void print_json(PairCommand command, const PairOptions &opt, const kissm_result &result, const double *initial,
+                double read_ms) {
+    JsonWriter json;
+    json.begin_object();
+    json.field("version", kissm_version_string());
+    json.field("source", opt.files[0]);
+    json.field("target", opt.files[1]);
+    json.field("voxel_size", opt.voxel);
+    json.field("threads", opt.threads);
+    add_result_json(json, result, opt.refine_mode, command == PairCommand::Refine ? initial : nullptr);
+    json.field("read_ms", read_ms);
+    json.end_object();
+    std::fputs(json.str().c_str(), stdout);
+}
+
+void print_human(PairCommand command, const PairOptions &opt, const kissm_result &result, double read_ms) {
+    std::printf("kissm %s %s\n", kissm_version_string(), command_name(command));
+    std::printf("  source: %s (%llu points)\n", opt.files[0].c_str(),
+                static_cast<unsigned long long>(result.num_source_points));
+    std::printf("  target: %s (%llu points)\n", opt.files[1].c_str(),
+                static_cast<unsigned long long>(result.num_target_points));
+    std::printf("  voxel %g, threads %d%s, refinement %s, files read in %.1f ms\n", opt.voxel, opt.threads,
+                opt.threads == 0 ? " (all)" : "", refine_mode_name(opt.refine_mode), read_ms);
+    if (command == PairCommand::Refine) {
+        std::printf("initial transform (from %s):\n", opt.initial.c_str());
+        print_matrix(stdout, result.coarse_transform, "  ");
+    }
+    const bool refined = refinement_ran(result);
+    std::printf("%stransform (maps source into target, row-major):\n", refined ? "refined " : "");
+    print_matrix(stdout, result.transform, "  ");
+    if (matrix_is_finite(result.transform)) {
+        std::printf("  rotation %.3f deg, translation %.3f\n", rotation_angle_deg(result.transform),
+                    translation_norm(result.transform));
+    }
+    if (command == PairCommand::Register && refined) {
+        std::printf("coarse transform (the solver's, before refinement):\n");
+        print_matrix(stdout, result.coarse_transform, "  ");
+    }
+    print_result_summary(stdout, result, command == PairCommand::Register ? ResultKind::Global : ResultKind::Refine);
+}
+
+} // namespace
+
+int run_pair_command(PairCommand command, const std::vector<std::string> &args) {
+    PairOptions opt;
+    if (!parse_pair_options(command, args, &opt)) return kExitOk;
+    return run_pair(command, opt);
+}
+
+bool parse_pair_options(PairCommand command, const std::vector<std::string> &args, PairOptions *out) {
+    const bool is_register = command == PairCommand::Register;
+    PairOptions opt;
+    opt.refine_mode = is_register ? KISSM_REFINE_NONE : KISSM_REFINE_GICP;
+    ArgCursor cur(command_name(command), args);
+    constexpr int32_t kAnyInt = std::numeric_limits<int32_t>::max(); // the library checks the range
+    while (cur.next()) {
+        const std::string name = cur.current();
+        if (!cur.is_option()) {
+            opt.files.push_back(name);
+        } else if (name == "-h" || name == "--help") {
+            if (is_register) {
+                print_register_help(stdout);
+            } else {
+                print_refine_help(stdout);
+            }
+            return false;
+        } else if (name == "--voxel") {
+            opt.voxel = parse_positive(name, cur.value());
+            opt.have_voxel = true;
+        } else if (name == "--threads") {
+            opt.threads = parse_int32(name, cur.value(), 0, 4096);
+        } else if (is_register && name == "--min-inliers") {
+            opt.min_inliers = parse_int32(name, cur.value(), 3, 1 << 30);
+        } else if (is_register && name == "--max-correspondences") {
+            opt.max_correspondences = parse_int32(name, cur.value(), 3, 1 << 30);
+        } else if (is_register && name == "--max-rotation-uncertainty") {
+            opt.max_rotation_uncertainty = parse_double(name, cur.value());
+            opt.have_max_rotation_uncertainty = true;
+        } else if (is_register && name == "--min-inlier-coverage") {
+            opt.min_inlier_coverage = parse_double(name, cur.value());
+            opt.have_min_inlier_coverage = true;
+        } else if (is_register && name == "--refine-min-inliers") {
+            opt.refine_min_inliers = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
+            opt.have_refine_min_inliers = true;
+        } else if (!is_register && name == "--initial") {
+            opt.initial = cur.value();
+        } else if (name == "--refine") {
+            opt.refine_mode = parse_refine_mode(name, cur.value());
+            if (!is_register && opt.refine_mode == KISSM_REFINE_NONE) {
+                throw UsageError("refine: --refine none leaves nothing to do (expected gicp or point-to-plane)");
+            }
+        } else if (name == "--refine-iterations") {
+            opt.refine_iterations = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
+            opt.have_refine_iterations = true;
+        } else if (name == "--refine-distance") {
+            opt.refine_distance = parse_double(name, cur.value());
+            opt.have_refine_distance = true;
+        } else if (name == "--min-overlap") {
+            opt.min_overlap = parse_double(name, cur.value());
+            opt.have_min_overlap = true;
+        } else if (name == "--format-src") {
+            opt.source_format = parse_format(name, cur.value());
+        } else if (name == "--format-tgt") {
+            opt.target_format = parse_format(name, cur.value());
+        } else if (name == "--format") {
+            opt.source_format = opt.target_format = parse_format(name, cur.value());
+        } else if (name == "--out-transform") {
+            opt.out_transform = cur.value();
+        } else if (name == "--out-aligned") {
+            opt.out_aligned = cur.value();
+        } else if (name == "--out-topview") {
+            opt.out_topview = cur.value();
+        } else if (!cur.take_flag("--drop-nonfinite", &opt.drop_nonfinite) &&
+                   !cur.take_flag("--viewpoint-center", &opt.viewpoint_center) && !cur.take_flag("--json", &opt.json) &&
+                   !cur.take_flag("--verbose", &opt.verbose, "-v")) {
+            cur.unknown();
+        }
+    }
+    const std::string see = std::string(" (see 'kissm ") + command_name(command) + " --help')";
+    if (opt.files.size() != 2) {
+        throw UsageError(std::string(command_name(command)) + " expects 2 files (SOURCE TARGET), got " +
+                         std::to_string(opt.files.size()) + see);
+    }
+    if (!opt.have_voxel) {
+        throw UsageError(std::string(command_name(command)) +
+                         " needs --voxel V, the voxel size in the clouds' unit (e.g. --voxel 0.3 for outdoor LiDAR "
+                         "in metres)");
+    }
+    if (!is_register && opt.initial.empty()) {
+        throw UsageError("refine needs --initial FILE, the starting transform (4 rows of 4 numbers, as "
+                         "--out-transform writes)" +
+                         see);
+    }
+    *out = opt;
+    return true;
+}
+
+kissm_config config_defaults() {
+    kissm_config config{};
+    const int32_t status = kissm_config_init(&config, sizeof config);
+    if (status != KISSM_OK) throw UsageError("cannot initialise the configuration: " + library_error(status));
+    return config;
+}
+
+kissm_config pair_config(PairCommand command, const PairOptions &opt) {
+    kissm_config config = config_defaults();
+    config.voxel_size = opt.voxel;
+    config.num_threads = opt.threads;
+    if (command == PairCommand::Register) {
+        if (opt.min_inliers >= 0) config.min_inliers = opt.min_inliers;
+        if (opt.max_correspondences >= 0) config.max_correspondences = opt.max_correspondences;
+        if (opt.have_max_rotation_uncertainty) config.max_rotation_uncertainty = opt.max_rotation_uncertainty;
+        if (opt.have_min_inlier_coverage) config.min_inlier_coverage = opt.min_inlier_coverage;
+        if (opt.have_refine_min_inliers) config.refine_min_inliers = opt.refine_min_inliers;
+    }
+    config.refine_mode = opt.refine_mode;
+    if (opt.have_refine_iterations) config.refine_max_iterations = opt.refine_iterations;
+    if (opt.have_refine_distance) config.refine_max_distance_gain = opt.refine_distance;
+    if (opt.have_min_overlap) config.min_overlap = opt.min_overlap;
+    if (opt.drop_nonfinite) config.nonfinite_policy = KISSM_NONFINITE_DROP;
+    if (opt.viewpoint_center) config.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
+    if (opt.verbose) {
+        config.log_fn = log_to_stderr;
+        config.log_level = KISSM_LOG_INFO;
+    }
+    const int32_t status = kissm_config_validate(&config);
+    if (status != KISSM_OK) throw UsageError(settings_error(status));
+    return config;
+}
+
+int run_pair(PairCommand command, const PairOptions &opt) {
+    const kissm_config config = pair_config(command, opt);
+    double initial[16] = {};
+    if (command == PairCommand::Refine) {
+        std::string error;
+        if (!read_transform_file(opt.initial, initial, &error)) throw UsageError("--initial: " + error);
+    }
+
+    const auto read_start = std::chrono::steady_clock::now();
+    const CloudPtr source = read_cloud("source", opt.files[0], opt.source_format);
+    const CloudPtr target = read_cloud("target", opt.files[1], opt.target_format);
+    const double read_ms = elapsed_ms(read_start);
+    const kissm_points source_points = points_of(source.get(), "source");
+    const kissm_points target_points = points_of(target.get(), "target");
+
+    kissm_matcher *raw_matcher = nullptr;
+    int32_t status = kissm_create(&config, &raw_matcher);
+    if (status != KISSM_OK) throw UsageError(settings_error(status));
+    const MatcherPtr matcher(raw_matcher);
+
+    kissm_result result{};
+    result.struct_size = sizeof result;
+    const std::string pair = "'" + one_line(opt.files[0]) + "' against '" + one_line(opt.files[1]) + "'";
+    if (command == PairCommand::Register) {
+        status = kissm_register(matcher.get(), &source_points, &target_points, &result);
+        if (status != KISSM_OK) throw UsageError("cannot register " + pair + ": " + library_error(status));
+    } else {
+        status = kissm_refine(matcher.get(), &source_points, &target_points, initial, &result);
+        const std::string message = status == KISSM_OK ? std::string() : library_error(status);
+        if (status == KISSM_ERR_INVALID_ARGUMENT && message.find("initial_transform") != std::string::npos) {
+            throw UsageError("--initial: '" + one_line(opt.initial) + "' is not a rigid transform: " + message);
+        }
+        if (status != KISSM_OK) throw UsageError("cannot refine " + pair + ": " + message);
+    }
+
+    // Files first, so that a write error is reported before anything is printed.
+    write_outputs(command, opt, source.get(), target.get(), result);
+    if (opt.json) {
+        print_json(command, opt, result, initial, read_ms);
+    } else {
+        print_human(command, opt, result, read_ms);
+    }
+    std::fflush(stdout);
+    return result.valid ? kExitOk : kExitInvalid;
+}
+
+void print_pair_input_help(std::FILE *out) {
+    std::fprintf(out,
+                 "Input files (the format is picked by extension, then by content):\n"
+                 "  .ply (ascii/binary)  .pcd (ascii/binary)  .bin (KITTI float32 x y z intensity)\n"
+                 "  .npy (float32/float64, N x 3 or more)  .xyz .txt .pts .asc (whitespace-separated x y z)\n"
+                 "  --format-src FMT        force SOURCE's format: %s\n"
+                 "  --format-tgt FMT        force TARGET's format (bin_xyz = raw float32 x y z triples)\n"
+                 "  --format FMT            force both\n"
+                 "  --drop-nonfinite        skip NaN/Inf points (default: such points are an error)\n"
+                 "\n",
+                 format_names());
+}
+
+void print_refinement_help(std::FILE *out, PairCommand command, const kissm_config &d) {
+    if (command == PairCommand::Register) {
+        std::fprintf(out, "Refinement (after the global solver, on the voxelised clouds):\n"
+                          "  --refine MODE           gicp, point-to-plane or none (default none); the JSON's\n"
+                          "                          transform is then the refined pose, coarse_transform the\n"
+                          "                          solver's\n");
+    } else {
+        std::fprintf(out, "Refinement:\n"
+                          "  --refine MODE           gicp or point-to-plane (default gicp)\n");
+    }
+    std::fprintf(out,
+                 "  --refine-iterations N   iteration cap, 1..1000 (default %d)\n"
+                 "  --refine-distance GAIN  correspondence distance = GAIN * voxel, in (0, 100] (default %g); also\n"
+                 "                          the distance within which a source voxel counts as overlapping\n"
+                 "  --min-overlap X         least overlap of a valid refined pose, in [0, 1] (default %g): the\n"
+                 "                          share of the source's voxels within that distance of the target\n",
+                 d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap);
+    if (command == PairCommand::Register) {
+        std::fprintf(out,
+                     "  --refine-min-inliers N  final inliers a valid refined pose needs, 3..100000 (default %d);\n"
+                     "                          --min-inliers applies without refinement\n"
+                     "  --min-inlier-coverage X least inlier coverage of a valid refined pose (default %g), in\n"
+                     "                          [0, 1]: the spread of the solver's inliers over that of the aligned\n"
+                     "                          overlap (inliers on one object cover little of it)\n",
+                     d.refine_min_inliers, d.min_inlier_coverage);
+    }
+    std::fprintf(out, "\n");
+}
+
+void print_pair_output_help(std::FILE *out) {
+    std::fprintf(out,
+                 "Output:\n"
+                 "  --json                  print one JSON object instead of the summary (see src/cli/README.md):\n"
+                 "                          valid, reason, transform (4x4 row-major), coarse_transform, refine,\n"
+                 "                          information (6x6, null without refinement), overlap, refine_rmse,\n"
+                 "                          counts, time_ms, ...; numbers read back to the exact doubles, NaN\n"
+                 "                          is written as null\n"
+                 "  --out-transform FILE    write the 4x4 transform as 4 lines of 4 numbers (%%.17g); NaN when\n"
+                 "                          no pose was estimated. `kissm refine --initial FILE` reads it\n"
+                 "  --out-aligned FILE.ply  write SOURCE moved into TARGET's frame (binary little-endian PLY,\n"
+                 "                          float64 x y z); skipped when no pose was estimated\n"
+                 "  --out-topview FILE.png  top-down picture: before and after (source orange, target blue);\n"
+                 "                          with refinement also a detail under the coarse and refined poses\n"
+                 "  -v, --verbose           print the library's log messages on stderr\n"
+                 "  -h, --help              this text\n"
+                 "\n");
+}
+
+} // namespace kissm_cli
