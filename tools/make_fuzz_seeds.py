@@ -131,6 +131,8 @@ def pipeline():
           bytes([3 + 10 * 5, 0x20, 0xC5]) + pair + encode_transform(10, *truth, at=2))  # p2p, 1 iteration
     write("register", "refine_min_overlap_all_nan_prior",
           bytes([3 + 10 * 16, 0x20, 0xC5]) + pair + encode_transform(6, *truth, at=7))  # GICP, min_overlap 1
+    write("register", "loose_validity_rules",  # no refinement, every validity setting at its loosest
+          bytes([3 + 10 * 24, 0x20, 0xC5]) + pair + encode_transform(1, *truth))
     write("register", "refine_far_prior",
           bytes([gicp, 0x22, 0xC5]) + pair + encode_transform(1, (0.0, 0.0, ang), (30.0, -30.0, 0.0)))
     # One matcher: features of clouds 0 and 1, kissm_refine 0 -> 1 from the truth, kissm_refine_features from a

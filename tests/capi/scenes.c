@@ -571,7 +571,7 @@ int scn_result_is_reset(const kissm_result *r) {
     size_t k;
     if (r->struct_size != sizeof(*r)) SCN_FAIL("struct_size %u", (unsigned)r->struct_size);
     if (r->valid != 0) SCN_FAIL("valid %d", (int)r->valid);
-    if (r->reason < KISSM_REASON_NONE || r->reason > KISSM_REASON_UNCONSTRAINED) SCN_FAIL("reason %d", (int)r->reason);
+    if (r->reason < KISSM_REASON_NONE || r->reason > KISSM_REASON_NOT_CONVERGED) SCN_FAIL("reason %d", (int)r->reason);
     for (i = 0; i < 16; ++i)
         if (!isnan(r->transform[i])) SCN_FAIL("transform[%d] = %g", i, r->transform[i]);
     for (i = 0; i < 9; ++i)
@@ -590,6 +590,8 @@ int scn_result_is_reset(const kissm_result *r) {
     if (!isnan(r->overlap)) SCN_FAIL("overlap %g", r->overlap);
     if (!isnan(r->refine_rmse)) SCN_FAIL("refine_rmse %g", r->refine_rmse);
     if (!isnan(r->refine_condition)) SCN_FAIL("refine_condition %g", r->refine_condition);
+    if (!isnan(r->rotation_uncertainty)) SCN_FAIL("rotation_uncertainty %g", r->rotation_uncertainty);
+    if (!isnan(r->inlier_coverage)) SCN_FAIL("inlier_coverage %g", r->inlier_coverage);
     if (r->time_refine_ms != 0.0) SCN_FAIL("time_refine_ms %g", r->time_refine_ms);
     if (r->num_refine_correspondences != 0)
         SCN_FAIL("num_refine_correspondences %llu", (unsigned long long)r->num_refine_correspondences);

@@ -127,8 +127,8 @@ kissm_config scn_config(double voxel_size);
 void scn_result_poison(kissm_result *r);
 /* 1 when a registration call overwrote every field of a poisoned result the way a failed call must:
  * struct_size kept, valid = 0, every pose entry NaN (coarse_transform and information too), every count 0,
- * overlap, refine_rmse and refine_condition NaN, the refinement's counts and time 0, no byte pattern of the
- * poison left. Prints what is wrong to stderr otherwise. */
+ * overlap, refine_rmse, refine_condition, rotation_uncertainty and inlier_coverage NaN, the refinement's
+ * counts and time 0, no byte pattern of the poison left. Prints what is wrong to stderr otherwise. */
 int scn_result_is_reset(const kissm_result *r);
 /* 0 when no 4-byte run of the poison is left in *r, else 1 + the byte offset of the first one. */
 size_t scn_result_poison_left(const kissm_result *r);

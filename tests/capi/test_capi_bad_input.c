@@ -498,7 +498,12 @@ enum {
     F_REFINE_KERNEL_GAIN,
     F_REFINE_ROTATION_EPSILON,
     F_REFINE_TRANSLATION_EPSILON_GAIN,
-    F_MIN_OVERLAP
+    F_MIN_OVERLAP,
+    F_MAX_ROTATION_UNCERTAINTY,
+    F_MIN_INLIER_COVERAGE,
+    F_REFINE_MIN_INLIERS,
+    F_RESERVED1,
+    F_MIN_REFINE_CONDITION
 };
 
 typedef struct field_case {
@@ -533,6 +538,11 @@ static void set_field(kissm_config *c, int field, double v) {
     case F_REFINE_ROTATION_EPSILON: c->refine_rotation_epsilon = v; break;
     case F_REFINE_TRANSLATION_EPSILON_GAIN: c->refine_translation_epsilon_gain = v; break;
     case F_MIN_OVERLAP: c->min_overlap = v; break;
+    case F_MAX_ROTATION_UNCERTAINTY: c->max_rotation_uncertainty = v; break;
+    case F_MIN_INLIER_COVERAGE: c->min_inlier_coverage = v; break;
+    case F_REFINE_MIN_INLIERS: c->refine_min_inliers = (int32_t)v; break;
+    case F_RESERVED1: c->reserved1 = (int32_t)v; break;
+    case F_MIN_REFINE_CONDITION: c->min_refine_condition = v; break;
     default: break;
     }
 }
@@ -618,6 +628,22 @@ static const field_case k_bad_fields[] = {
     {F_MIN_OVERLAP, 1.01, "config.min_overlap"},
     {F_MIN_OVERLAP, NAN, "config.min_overlap"},
     {F_MIN_OVERLAP, -INFINITY, "config.min_overlap"},
+    {F_MAX_ROTATION_UNCERTAINTY, 0.0, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, -0.1, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, 3.16, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, NAN, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, INFINITY, "config.max_rotation_uncertainty"},
+    {F_MIN_INLIER_COVERAGE, -0.01, "config.min_inlier_coverage"},
+    {F_MIN_INLIER_COVERAGE, 1.01, "config.min_inlier_coverage"},
+    {F_MIN_INLIER_COVERAGE, NAN, "config.min_inlier_coverage"},
+    {F_REFINE_MIN_INLIERS, 2, "config.refine_min_inliers"},
+    {F_REFINE_MIN_INLIERS, -1, "config.refine_min_inliers"},
+    {F_REFINE_MIN_INLIERS, 100001, "config.refine_min_inliers"},
+    {F_RESERVED1, 1, "config.reserved1"},
+    {F_RESERVED1, -1, "config.reserved1"},
+    {F_MIN_REFINE_CONDITION, -1e-9, "config.min_refine_condition"},
+    {F_MIN_REFINE_CONDITION, 1.5, "config.min_refine_condition"},
+    {F_MIN_REFINE_CONDITION, NAN, "config.min_refine_condition"},
 };
 
 /* Documented boundary values that must be accepted. */
@@ -667,6 +693,15 @@ static const field_case k_good_fields[] = {
     {F_REFINE_TRANSLATION_EPSILON_GAIN, 1.0, ""},
     {F_MIN_OVERLAP, 0.0, ""},
     {F_MIN_OVERLAP, 1.0, ""},
+    {F_MAX_ROTATION_UNCERTAINTY, 1e-6, ""},
+    {F_MAX_ROTATION_UNCERTAINTY, 3.15, ""},
+    {F_MIN_INLIER_COVERAGE, 0.0, ""},
+    {F_MIN_INLIER_COVERAGE, 1.0, ""},
+    {F_REFINE_MIN_INLIERS, 3, ""},
+    {F_REFINE_MIN_INLIERS, 100000, ""},
+    {F_RESERVED1, 0, ""},
+    {F_MIN_REFINE_CONDITION, 0.0, ""},
+    {F_MIN_REFINE_CONDITION, 1.0, ""},
 };
 
 static void test_config_fields(void) {
@@ -861,7 +896,7 @@ static void check_invalid_result(const char *what, kissm_matcher *m, const scn_c
     st = kissm_register(m, &s, &t, &r);
     CHECK_MSG(st == KISSM_OK, "%s: status %d (%s)", what, (int)st, kissm_last_error_message());
     CHECK_MSG(r.valid == 0, "%s: valid", what);
-    CHECK_MSG(r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_UNCONSTRAINED, "%s: reason %d", what,
+    CHECK_MSG(r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED, "%s: reason %d", what,
               (int)r.reason);
     if (expected_reason >= 0) CHECK_MSG(r.reason == expected_reason, "%s: reason %d", what, (int)r.reason);
     CHECK_MSG(scn_result_poison_left(&r) == 0, "%s: poison left", what);
@@ -1241,7 +1276,7 @@ static void check_invalid_refine(const char *what, kissm_matcher *m, const scn_c
     scn_result_poison(&r);
     st = kissm_refine(m, &s, &t, initial, &r);
     CHECK_MSG(st == KISSM_OK, "%s: status %d (%s)", what, (int)st, kissm_last_error_message());
-    CHECK_MSG(r.valid == 0 && r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_UNCONSTRAINED,
+    CHECK_MSG(r.valid == 0 && r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED,
               "%s: valid %d reason %d", what, (int)r.valid, (int)r.reason);
     if (expected_reason >= 0) CHECK_MSG(r.reason == expected_reason, "%s: reason %d", what, (int)r.reason);
     CHECK_MSG(scn_result_poison_left(&r) == 0, "%s: poison left", what);

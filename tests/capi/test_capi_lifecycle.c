@@ -400,7 +400,7 @@ static void test_result_init(void) {
     CHECK(isnan(r->residual_rms));
     CHECK(r->num_source_points == 0 && r->num_final_inliers == 0 && r->max_core_number == 0);
     CHECK(r->inlier_ratio == 0.0 && r->time_total_ms == 0.0);
-    CHECK(scn_result_is_reset(r)); /* the refinement's fields too: NaN, 0 */
+    CHECK(scn_result_is_reset(r));            /* the refinement's fields too: NaN, 0 */
     CHECK(buf[sizeof(kissm_result)] == 0x5a); /* nothing written past the size given */
 
     /* A newer caller's larger struct: its unknown tail is zeroed. */

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 // Stage 6 (refine_pose) on synthetic scenes with exact planes and exact normals, independent of the
-// normals stage: convergence to a known pose in both modes, the same bits at any thread count, the
-// information matrix against an independent sum of w J^T M J with J taken by finite differences of the
-// right perturbation T exp(xi) (in the source's local frame and, moved by information_in_caller_frame, in a
-// caller's frame), the slide direction of a corridor and a plane as the near-null direction with a small
-// condition, the overlap against brute force, and clouds that never meet.
+// normals stage: convergence to a known pose in both modes, the same bits at any thread count and with or
+// without the index's cell hash, the information matrix against an independent sum of w J^T n n^T J (the
+// point-to-plane term in both modes) with J taken by finite differences of the right perturbation T exp(xi)
+// (in the source's local frame and, moved by information_in_caller_frame, in a caller's frame), the slide
+// direction of a corridor and a plane as the null direction with a small condition, the overlap against brute
+// force, clouds that never meet, and the validity rules that read these numbers.
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
@@ -116,9 +117,10 @@ RefineParams params_for(RefineMode mode) {
     return p;
 }
 
+// The index as the pipeline builds it: cells of about the sampling step.
 RefineOutput run(const Scene &source, const Scene &target, const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0,
-                 const RefineParams &p, int threads) {
-    const PointIndex index(target.points);
+                 const RefineParams &p, int threads, double cell = 0.2) {
+    const PointIndex index(target.points, cell);
     RunContext ctx(threads, nullptr, Hooks());
     return refine_pose(source.cloud(), target.cloud(), index, R0, t0, p, ctx);
 }
@@ -131,17 +133,14 @@ struct Corr {
     double w, r2;
 };
 
-// The definition refine.hpp gives: each source point with a normal, moved by (R, t) and rounded to float, to
-// its nearest target point (float squared distance, lowest index on ties) within max_distance, kept when
-// that target point has a normal; M = (C(n_b) + R C(n_a) R^T)^-1 with C(n) = (n n^T + (I - n n^T) / 1e-3) / 2
-// (GICP) or n_b n_b^T (point-to-plane); Cauchy weight 1 / (1 + r^2 / k^2).
+// The definition refine.hpp gives for the numbers of the final pose: each source point with a normal, moved by
+// (R, t) and rounded to float, to its nearest target point (float squared distance, lowest index on ties)
+// within max_distance, kept when that target point has a normal; in both modes the point-to-plane term
+// M = n_b n_b^T (GICP's along-plane weights are a regularisation, not information) with the Cauchy weight
+// 1 / (1 + r^2 / k^2) of its r^2 = (n_b . e)^2.
 std::vector<Corr> correspondences(const Scene &src, const Scene &tgt, const Eigen::Matrix3d &R,
                                   const Eigen::Vector3d &t, const RefineParams &p) {
     const float max_d2 = static_cast<float>(p.max_distance * p.max_distance);
-    auto C = [](const Vec3d &n) {
-        const Eigen::Matrix3d P = n * n.transpose();
-        return Eigen::Matrix3d(0.5 * (P + (Eigen::Matrix3d::Identity() - P) / 1e-3));
-    };
     std::vector<Corr> out;
     for (std::size_t i = 0; i < src.points.size(); ++i) {
         if (!src.normals.valid[i]) continue;
@@ -157,9 +156,8 @@ std::vector<Corr> correspondences(const Scene &src, const Scene &tgt, const Eige
         Corr c;
         c.a = src.points[i].cast<double>();
         c.b = tgt.points[best].cast<double>();
-        const Vec3d na = src.normals.normal[i].cast<double>(), nb = tgt.normals.normal[best].cast<double>();
-        c.M = p.mode == RefineMode::PointToPlane ? Eigen::Matrix3d(nb * nb.transpose())
-                                                 : Eigen::Matrix3d((C(nb) + R * C(na) * R.transpose()).inverse());
+        const Vec3d nb = tgt.normals.normal[best].cast<double>();
+        c.M = nb * nb.transpose();
         const Vec3d e = c.b - (R * c.a + t);
         c.r2 = e.dot(c.M * e);
         c.w = 1.0 / (1.0 + c.r2 / (p.kernel_scale * p.kernel_scale));
@@ -288,18 +286,17 @@ static void test_thread_counts_bitwise() {
             const RefineOutput other = run(source, target, R0, t0, params_for(mode), threads);
             CHECK_MSG(same_bits(one, other), "%s: %d threads differ from 1", mode_name(mode), threads);
         }
-        // aligned_overlap alone, at any thread count, equals the output's.
-        const PointIndex index(target.points);
-        for (const int threads : {1, 3}) {
-            RunContext ctx(threads, nullptr, Hooks());
-            const double ov = aligned_overlap(source.points, index, one.rotation, one.translation, 1.0, ctx);
-            CHECK(std::memcmp(&ov, &one.overlap, sizeof ov) == 0);
+        // The index's cell hash is a shortcut to the same answers: without it, or with other cells, the same bits.
+        for (const double cell : {0.0, 0.05, 1.0}) {
+            const RefineOutput other = run(source, target, R0, t0, params_for(mode), 2, cell);
+            CHECK_MSG(same_bits(one, other), "%s: cells of %g m differ", mode_name(mode), cell);
         }
     }
 }
 
 // The Gauss-Newton information against finite differences of e(xi) = b - T exp(xi) a, at the final pose,
-// with the correspondences, weight matrices and weights found by brute force.
+// with the correspondences, normals and weights found by brute force: the same point-to-plane information
+// whichever cost was minimised.
 static void test_information_matches_differences() {
     TestRng rng(97);
     const Scene target = room(0.2, 0.0);
@@ -349,23 +346,18 @@ static void test_information_matches_differences() {
 }
 
 // A corridor leaves the translation along its axis free: the weakest direction of the information, in the
-// source frame, is (0, R^T x), and the condition is small; a plane leaves three directions free. With exact
-// normals, point-to-plane has no information at all along them; GICP only what its plane regularisation
-// (eps = 1e-3 of the in-plane distance) adds: at most eps per unit weight. Either way the condition must be
-// below the refined validity rule's threshold, kMinCondition = 1e-3 in src/core/pipeline.cpp, so that the
-// pose is reported UNCONSTRAINED.
+// source frame, is (0, R^T x), and the condition is near 0; a plane leaves three directions free. With exact
+// normals the point-to-plane information (what both modes report) has nothing at all along them.
 static void test_corridor_and_plane_are_unconstrained() {
-    constexpr double kPlaneEps = 1e-3, kMinCondition = 1e-3;
+    constexpr double free_share = 1e-9;
     for (const RefineMode mode : kModes) {
-        const double free_share = mode == RefineMode::Gicp ? kPlaneEps : 1e-9;
         const Scene target = corridor(0.2, 0.0);
         const Scene source = to_source(corridor(0.2, 0.6), kRtrue, kTtrue);
         const RefineOutput o = run(source, target, kRtrue * rotation(Vec3d(1, 0, 1), 1.0),
                                    kTtrue + Eigen::Vector3d(0.05, 0.05, -0.05), params_for(mode), 2);
         std::fprintf(stderr, "  %s corridor: condition %.3g\n", mode_name(mode), o.condition);
         CHECK(o.num_correspondences > 1000);
-        CHECK_MSG(o.condition < kMinCondition, "%s corridor: condition %g", mode_name(mode), o.condition);
-        if (mode == RefineMode::PointToPlane) CHECK_MSG(o.condition < 1e-6, "corridor: condition %g", o.condition);
+        CHECK_MSG(o.condition < 1e-6, "%s corridor: condition %g", mode_name(mode), o.condition);
         CHECK(o.rotation.allFinite() && o.translation.allFinite());
         // The constrained directions are still found: the walls and the floor where they belong.
         CHECK_MSG(angle_deg(o.rotation, kRtrue) < 0.05, "%s corridor: rotation %g deg off", mode_name(mode),
@@ -389,13 +381,12 @@ static void test_corridor_and_plane_are_unconstrained() {
         }
     }
     for (const RefineMode mode : kModes) {
-        const double free_share = mode == RefineMode::Gicp ? kPlaneEps : 1e-9;
         const Scene target = plane(0.25, 0.0);
         const Scene source = to_source(plane(0.25, 0.4), kRtrue, kTtrue);
         const RefineOutput o = run(source, target, kRtrue * rotation(Vec3d(0, 1, 0), 1.0), kTtrue, params_for(mode), 2);
         std::fprintf(stderr, "  %s plane: condition %.3g\n", mode_name(mode), o.condition);
         CHECK(o.num_correspondences > 1000);
-        CHECK_MSG(o.condition < kMinCondition, "%s plane: condition %g", mode_name(mode), o.condition);
+        CHECK_MSG(o.condition < 1e-6, "%s plane: condition %g", mode_name(mode), o.condition);
         CHECK(o.rotation.allFinite() && o.translation.allFinite());
         // The in-plane translations carry at most the regularisation's share, the normal one all of it.
         for (int axis = 0; axis < 3; ++axis) {
@@ -509,31 +500,68 @@ static void test_iteration_cap() {
     CHECK(capped.iterations == 7 || capped.converged);
 }
 
-// The refined validity rule (validity.cpp): the coarse reason first, then at least 6 correspondences and the
-// overlap (LOW_OVERLAP), then the condition (UNCONSTRAINED); the bounds themselves pass.
-static void test_refined_validity_rule() {
-    const RefinedRule rule{0.4, 1e-3};
+// The validity rules (validity.cpp) on evidence built by hand, each bound passing and the value next to it
+// failing. Without refinement: min_inliers, then the inliers' shape, then the rotation uncertainty. From a
+// prior: 6 correspondences and the overlap, the condition, convergence. With refinement: refine_min_inliers,
+// the shape, the overlap, then the inliers' coverage of it, then condition and convergence.
+static void test_validity_rules() {
+    InlierEvidence spread;
+    spread.rotation_uncertainty = 0.01;
+    InlierEvidence flat = spread;
+    flat.shape = Reason::Degenerate;
+    const CoarseRule coarse{15, 0.01};
+    CHECK(coarse_validity(15, spread, coarse) == Reason::None);
+    CHECK(coarse_validity(14, spread, coarse) == Reason::TooFewInliers);
+    CHECK(coarse_validity(14, flat, coarse) == Reason::TooFewInliers);
+    CHECK(coarse_validity(100, flat, coarse) == Reason::Degenerate);
+    InlierEvidence loose = spread;
+    loose.rotation_uncertainty = std::nextafter(0.01, 1.0);
+    CHECK(coarse_validity(100, loose, coarse) == Reason::UncertainRotation);
+    loose.rotation_uncertainty = std::numeric_limits<double>::infinity(); // all inliers on one point
+    CHECK(coarse_validity(100, loose, coarse) == Reason::UncertainRotation);
+
+    const RefinedRule rule{10, 0.4, 1e-2, 0.25};
     RefinedEvidence good;
-    good.num_final_inliers = 50;
     good.num_correspondences = 6;
     good.overlap = 0.4;
-    good.condition = 1e-3;
-    good.rmse = 0.01;
+    good.condition = 1e-2;
+    good.inlier_coverage = 0.25;
     good.converged = true;
-    CHECK(check_refined_validity(Reason::None, good, rule) == Reason::None);
-    for (const Reason coarse : {Reason::TooFewVoxels, Reason::SolverFailed, Reason::TooFewInliers, Reason::Degenerate})
-        CHECK(check_refined_validity(coarse, good, rule) == coarse);
+    CHECK(prior_validity(good, rule) == Reason::None);
+    CHECK(refined_validity(10, spread, good, rule) == Reason::None);
     RefinedEvidence e = good;
     e.num_correspondences = 5;
-    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::LowOverlap);
+    CHECK(prior_validity(e, rule) == Reason::LowOverlap);
     e = good;
     e.overlap = std::nextafter(0.4, 0.0);
-    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::LowOverlap);
-    e.condition = 0.0; // both fail: the overlap is reported
-    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::LowOverlap);
+    CHECK(prior_validity(e, rule) == Reason::LowOverlap);
+    e.condition = 0.0, e.converged = false; // several fail: the overlap is reported
+    CHECK(prior_validity(e, rule) == Reason::LowOverlap);
+    CHECK(refined_validity(10, spread, e, rule) == Reason::LowOverlap);
     e = good;
-    e.condition = std::nextafter(1e-3, 0.0);
-    CHECK(check_refined_validity(Reason::None, e, rule) == Reason::Unconstrained);
+    e.condition = std::nextafter(1e-2, 0.0);
+    CHECK(prior_validity(e, rule) == Reason::Unconstrained);
+    e.converged = false;
+    CHECK(prior_validity(e, rule) == Reason::Unconstrained);
+    e = good;
+    e.converged = false;
+    CHECK(prior_validity(e, rule) == Reason::NotConverged);
+    CHECK(refined_validity(10, spread, e, rule) == Reason::NotConverged);
+    // A prior's refinement has no inliers: their coverage is not asked for.
+    e = good;
+    e.inlier_coverage = std::numeric_limits<double>::quiet_NaN();
+    CHECK(prior_validity(e, rule) == Reason::None);
+    // With refinement: the inliers first, then coverage before condition and convergence.
+    CHECK(refined_validity(9, spread, good, rule) == Reason::TooFewInliers);
+    CHECK(refined_validity(100, flat, good, rule) == Reason::Degenerate);
+    CHECK(refined_validity(100, loose, good, rule) == Reason::None); // the uncertainty is the coarse rule's
+    e.inlier_coverage = std::nextafter(0.25, 0.0);
+    e.condition = 0.0;
+    CHECK(refined_validity(100, spread, e, rule) == Reason::ClusteredInliers);
+    e.inlier_coverage = std::numeric_limits<double>::quiet_NaN();
+    CHECK(refined_validity(100, spread, e, rule) == Reason::ClusteredInliers);
+    e.inlier_coverage = 3.0; // inliers reaching beyond the overlap
+    CHECK(refined_validity(100, spread, e, rule) == Reason::Unconstrained);
 }
 
 int main() {
@@ -545,6 +573,6 @@ int main() {
     RUN_TEST(test_overlap_against_brute_force);
     RUN_TEST(test_nothing_to_match);
     RUN_TEST(test_iteration_cap);
-    RUN_TEST(test_refined_validity_rule);
+    RUN_TEST(test_validity_rules);
     return TEST_SUMMARY();
 }

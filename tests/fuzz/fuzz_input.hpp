@@ -34,12 +34,12 @@ private:
     std::size_t size_, pos_ = 0;
 };
 
-// The refinement settings come from the voxel byte's tens (v / 10): the mode (none, GICP, point-to-plane) and
-// one of eight variants, the last out of range. A voxel byte below 10 (every seed written before refinement
-// existed) keeps the defaults, so old seeds decode as they always did.
+// The refinement and validity settings come from the voxel byte's tens (v / 10): the mode (none, GICP,
+// point-to-plane) and one of nine variants, one of them out of range. A voxel byte below 10 (every seed written before
+// refinement existed) keeps the defaults, so old seeds decode as they always did.
 inline void set_refinement(kissm_config &c, unsigned tens) {
     c.refine_mode = static_cast<int32_t>(tens % 3);
-    switch ((tens / 3) % 8) {
+    switch ((tens / 3) % 9) {
     case 1: c.refine_max_iterations = 1; break;
     case 2: c.refine_max_distance_gain = 100.0; break; // every voxel within reach
     case 3: c.refine_kernel_gain = 1e-3; break;        // every residual an outlier
@@ -49,6 +49,10 @@ inline void set_refinement(kissm_config &c, unsigned tens) {
     case 5: c.min_overlap = 1.0; break;
     case 6: c.refine_max_distance_gain = 0.05; break; // hardly anything within reach
     case 7: c.refine_max_iterations = 0; break;       // out of range: kissm_create refuses it
+    case 8:                                           // the validity rules at their loosest
+        c.max_rotation_uncertainty = 3.15, c.min_inlier_coverage = 0.0, c.refine_min_inliers = 3;
+        c.min_overlap = 0.0, c.min_refine_condition = 0.0;
+        break;
     default: break;
     }
 }
@@ -210,7 +214,10 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
     if (r.refine_iterations < 0 || r.refine_iterations > c.refine_max_iterations) return false;
     if (r.refine_converged != 0 && r.refine_converged != 1) return false;
     if (r.num_refine_correspondences > r.num_source_voxels) return false;
-    if (r.valid && (r.num_refine_correspondences < 6 || r.overlap < c.min_overlap)) return false;
+    // A valid refined pose passed the refined rule's dense part (docs/refinement.md).
+    if (r.valid && (r.num_refine_correspondences < 6 || !(r.overlap >= c.min_overlap) ||
+                    !(r.refine_condition >= c.min_refine_condition) || r.refine_converged != 1))
+        return false;
     return r.time_refine_ms >= 0.0 && r.time_total_ms >= r.time_refine_ms;
 }
 
@@ -218,16 +225,25 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
 // final inliers; an invalid one reports why; either way the refinement's fields are sane.
 inline bool result_sane(const kissm_result &r, const kissm_config &c) {
     if (!refine_fields_sane(r, c)) return false;
-    if (!r.valid) return r.reason != KISSM_REASON_NONE;
-    return rigid_pose(r) && r.num_final_inliers >= 3;
+    if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED;
+    if (!rigid_pose(r) || r.num_final_inliers < 3) return false;
+    // Valid with refinement: its inliers' part of the rule too; without: the rotation pinned down.
+    if (!std::isnan(r.overlap))
+        return r.num_final_inliers >= static_cast<std::uint64_t>(c.refine_min_inliers) &&
+               r.inlier_coverage >= c.min_inlier_coverage;
+    return r.num_final_inliers >= static_cast<std::uint64_t>(c.min_inliers) &&
+           r.rotation_uncertainty <= c.max_rotation_uncertainty;
 }
 
 // A refinement from the caller's pose (kissm_refine, kissm_refine_features) always ran: valid, or
-// LOW_OVERLAP / UNCONSTRAINED, with a rigid pose either way; coarse_transform is the initial transform made
-// rigid, so within 1e-3 of it.
+// LOW_OVERLAP / UNCONSTRAINED / NOT_CONVERGED, with a rigid pose either way and no solver numbers;
+// coarse_transform is the initial transform made rigid, so within 1e-3 of it.
 inline bool refine_result_sane(const kissm_result &r, const kissm_config &c, const double initial[16]) {
     if (!refine_fields_sane(r, c) || std::isnan(r.overlap) || !rigid_pose(r)) return false;
-    if (!r.valid && r.reason != KISSM_REASON_LOW_OVERLAP && r.reason != KISSM_REASON_UNCONSTRAINED) return false;
+    if (!r.valid && r.reason != KISSM_REASON_LOW_OVERLAP && r.reason != KISSM_REASON_UNCONSTRAINED &&
+        r.reason != KISSM_REASON_NOT_CONVERGED)
+        return false;
+    if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage)) return false;
     if (r.valid && r.reason != KISSM_REASON_NONE) return false;
     for (int i = 0; i < 16; ++i)
         if (!(std::fabs(r.coarse_transform[i] - initial[i]) <= 1e-3 * (1.0 + std::fabs(initial[i])))) return false;
@@ -241,7 +257,8 @@ inline bool result_reset(const kissm_result &r) {
         if (!std::isnan(v)) return false;
     for (double v : r.coarse_transform)
         if (!std::isnan(v)) return false;
-    return std::isnan(r.overlap) && r.num_refine_correspondences == 0 && r.refine_iterations == 0;
+    return std::isnan(r.overlap) && std::isnan(r.rotation_uncertainty) && std::isnan(r.inlier_coverage) &&
+           r.num_refine_correspondences == 0 && r.refine_iterations == 0;
 }
 
 inline bool same_bits(const double *a, const double *b, std::size_t n) { return std::memcmp(a, b, n * sizeof *a) == 0; }
@@ -252,6 +269,8 @@ inline bool same_result(const kissm_result &a, const kissm_result &b) {
            same_bits(a.coarse_transform, b.coarse_transform, 16) && same_bits(a.information, b.information, 36) &&
            same_bits(&a.overlap, &b.overlap, 1) && same_bits(&a.refine_rmse, &b.refine_rmse, 1) &&
            same_bits(&a.refine_condition, &b.refine_condition, 1) &&
+           same_bits(&a.rotation_uncertainty, &b.rotation_uncertainty, 1) &&
+           same_bits(&a.inlier_coverage, &b.inlier_coverage, 1) &&
            a.num_refine_correspondences == b.num_refine_correspondences && a.refine_iterations == b.refine_iterations &&
            a.refine_converged == b.refine_converged && a.num_final_inliers == b.num_final_inliers &&
            a.num_initial_correspondences == b.num_initial_correspondences &&
