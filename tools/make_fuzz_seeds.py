@@ -87,6 +87,20 @@ def encode_cloud(pts, head=0x00, scale=1e-3):
     return bytes(out)
 
 
+def encode_transform(kind, rotation_vector=(0.0, 0.0, 0.0), translation=(0.0, 0.0, 0.0), at=0):
+    """The fuzz_input.hpp transform encoding: kind byte (0 identity, 1-5 rigid, 6-12 refused), then for kinds
+    above 0 a rotation vector (3 x uint16 at 1e-4 rad, offset 32768), a translation (3 x uint16 at 1 mm) and
+    the byte choosing the entry a refused kind spoils."""
+    if kind == 0:
+        return bytes([0])
+    out = bytearray([kind])
+    for w in rotation_vector:
+        out += struct.pack("<H", int(round(w / 1e-4)) + 32768)
+    for t in translation:
+        out += struct.pack("<H", int(round(t / 1e-3)) + 32768)
+    return bytes(out + bytes([at]))
+
+
 def pipeline():
     rng = random.Random(7)
     base = scene(rng, 1500)
@@ -105,6 +119,28 @@ def pipeline():
     three = encode_cloud(base[:500]) + encode_cloud(moved[:500]) + encode_cloud(small)
     ops = bytes([0x01, 0x01, 0x10, 0x11, 0x12, 0x21, 0x30, 0x01, 0x40, 0x05, 0x25, 0x01])
     write("stateful", "register_features_cancel", config + three + ops)
+
+    # Refinement (the voxel byte's tens pick refine_mode and a variant of its settings, fuzz_input.hpp): the
+    # trailing bytes of a register input are kissm_refine's initial transform, here the true one (moved =
+    # R_z(25 deg) base + (1.5, -0.5, 0.1)) or one kissm_refine must refuse.
+    truth = ((0.0, 0.0, ang), (1.5, -0.5, 0.1))
+    gicp, p2p = 13, 23  # voxel 0.5 with refine_mode GICP / point-to-plane, default settings
+    write("register", "refine_gicp_true_prior", bytes([gicp, 0x20, 0xC5]) + pair + encode_transform(1, *truth))
+    write("register", "refine_p2p_float_prior", bytes([p2p, 0x21, 0xC5]) + pair + encode_transform(5, *truth, at=4))
+    write("register", "refine_capped_reflected_prior",
+          bytes([3 + 10 * 5, 0x20, 0xC5]) + pair + encode_transform(10, *truth, at=2))  # p2p, 1 iteration
+    write("register", "refine_min_overlap_all_nan_prior",
+          bytes([3 + 10 * 16, 0x20, 0xC5]) + pair + encode_transform(6, *truth, at=7))  # GICP, min_overlap 1
+    write("register", "loose_validity_rules",  # no refinement, every validity setting at its loosest
+          bytes([3 + 10 * 24, 0x20, 0xC5]) + pair + encode_transform(1, *truth))
+    write("register", "refine_far_prior",
+          bytes([gicp, 0x22, 0xC5]) + pair + encode_transform(1, (0.0, 0.0, ang), (30.0, -30.0, 0.0)))
+    # One matcher: features of clouds 0 and 1, kissm_refine 0 -> 1 from the truth, kissm_refine_features from a
+    # float-rounded truth and from a sheared one, a registration, kissm_refine from the identity.
+    refine_ops = (bytes([0x12, 0x10, 0x54]) + encode_transform(1, *truth) + bytes([0x66]) +
+                  encode_transform(5, *truth, at=1) + bytes([0x66]) + encode_transform(9, *truth, at=3) +
+                  bytes([0x03, 0x54]) + encode_transform(0))
+    write("stateful", "refine_features_and_points", bytes([gicp, 0x20, 0xC5]) + three + refine_ops)
 
 
 if __name__ == "__main__":

@@ -240,6 +240,24 @@ double scn_translation_error(const double ta[3], const double tb[3]) {
     return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+void scn_pose_to_matrix(const scn_pose *p, double m[16]) {
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) m[4 * i + j] = p->R[3 * i + j];
+        m[4 * i + 3] = p->t[i];
+    }
+    m[12] = m[13] = m[14] = 0.0;
+    m[15] = 1.0;
+}
+
+void scn_pose_from_matrix(const double m[16], scn_pose *p) {
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) p->R[3 * i + j] = m[4 * i + j];
+        p->t[i] = m[4 * i + 3];
+    }
+}
+
 /* ---------------------------------------------------------------------------------------------- */
 /* Surface samplers                                                                                 */
 /* ---------------------------------------------------------------------------------------------- */
@@ -453,6 +471,47 @@ void scn_make_plane(scn_cloud *out, uint64_t seed, size_t n, double noise_sigma)
     }
 }
 
+void scn_make_corridor(scn_cloud *out, uint64_t seed, double points_per_m2, double noise_sigma) {
+    const double o[3] = {-15.0, -1.5, SCN_GROUND}, X[3] = {30.0, 0.0, 0.0}, Y[3] = {0.0, 3.0, 0.0};
+    const double Z[3] = {0.0, 0.0, 2.5}, far_wall[3] = {-15.0, 1.5, SCN_GROUND};
+    uint64_t rng;
+    rng = scn_rng_state(seed);
+    scn_cloud_free(out);
+    scn_sample_rect(out, &rng, o, X, Y, points_per_m2, noise_sigma);
+    scn_sample_rect(out, &rng, o, X, Z, points_per_m2, noise_sigma);
+    scn_sample_rect(out, &rng, far_wall, X, Z, points_per_m2, noise_sigma);
+}
+
+void scn_make_pipe(scn_cloud *out, uint64_t seed, size_t n, const double centre[3], const double axis[3], double radius,
+                   double length, double noise_sigma) {
+    const double len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    const double d[3] = {axis[0] / len, axis[1] / len, axis[2] / len};
+    double e1[3], e2[3], norm;
+    uint64_t rng;
+    size_t i;
+    int k;
+    /* e1, e2: an orthonormal pair perpendicular to d */
+    if (fabs(d[0]) < 0.9) {
+        e1[0] = 0.0, e1[1] = d[2], e1[2] = -d[1];
+    } else {
+        e1[0] = -d[2], e1[1] = 0.0, e1[2] = d[0];
+    }
+    norm = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    for (k = 0; k < 3; ++k) e1[k] /= norm;
+    e2[0] = d[1] * e1[2] - d[2] * e1[1];
+    e2[1] = d[2] * e1[0] - d[0] * e1[2];
+    e2[2] = d[0] * e1[1] - d[1] * e1[0];
+    rng = scn_rng_state(seed);
+    scn_cloud_free(out);
+    for (i = 0; i < n; ++i) {
+        const double s = splitmix64_range(&rng, -0.5 * length, 0.5 * length);
+        const double a = splitmix64_range(&rng, 0.0, 2.0 * SCN_PI);
+        double p[3];
+        for (k = 0; k < 3; ++k) p[k] = centre[k] + s * d[k] + radius * (cos(a) * e1[k] + sin(a) * e2[k]);
+        scn_push_noisy(out, &rng, p[0], p[1], p[2], noise_sigma);
+    }
+}
+
 void scn_make_duplicates(scn_cloud *out, size_t n, double x, double y, double z) {
     size_t i;
     scn_cloud_free(out);
@@ -512,7 +571,7 @@ int scn_result_is_reset(const kissm_result *r) {
     size_t k;
     if (r->struct_size != sizeof(*r)) SCN_FAIL("struct_size %u", (unsigned)r->struct_size);
     if (r->valid != 0) SCN_FAIL("valid %d", (int)r->valid);
-    if (r->reason < KISSM_REASON_NONE || r->reason > KISSM_REASON_DEGENERATE) SCN_FAIL("reason %d", (int)r->reason);
+    if (r->reason < KISSM_REASON_NONE || r->reason > KISSM_REASON_NOT_CONVERGED) SCN_FAIL("reason %d", (int)r->reason);
     for (i = 0; i < 16; ++i)
         if (!isnan(r->transform[i])) SCN_FAIL("transform[%d] = %g", i, r->transform[i]);
     for (i = 0; i < 9; ++i)
@@ -524,6 +583,20 @@ int scn_result_is_reset(const kissm_result *r) {
     if (r->time_total_ms < 0 || r->time_voxelize_ms < 0 || r->time_features_ms < 0 || r->time_matching_ms < 0 ||
         r->time_pruning_ms < 0 || r->time_solver_ms < 0)
         SCN_FAIL("negative time");
+    for (i = 0; i < 16; ++i)
+        if (!isnan(r->coarse_transform[i])) SCN_FAIL("coarse_transform[%d] = %g", i, r->coarse_transform[i]);
+    for (i = 0; i < 36; ++i)
+        if (!isnan(r->information[i])) SCN_FAIL("information[%d] = %g", i, r->information[i]);
+    if (!isnan(r->overlap)) SCN_FAIL("overlap %g", r->overlap);
+    if (!isnan(r->refine_rmse)) SCN_FAIL("refine_rmse %g", r->refine_rmse);
+    if (!isnan(r->refine_condition)) SCN_FAIL("refine_condition %g", r->refine_condition);
+    if (!isnan(r->rotation_uncertainty)) SCN_FAIL("rotation_uncertainty %g", r->rotation_uncertainty);
+    if (!isnan(r->inlier_coverage)) SCN_FAIL("inlier_coverage %g", r->inlier_coverage);
+    if (r->time_refine_ms != 0.0) SCN_FAIL("time_refine_ms %g", r->time_refine_ms);
+    if (r->num_refine_correspondences != 0)
+        SCN_FAIL("num_refine_correspondences %llu", (unsigned long long)r->num_refine_correspondences);
+    if (r->refine_iterations != 0) SCN_FAIL("refine_iterations %d", (int)r->refine_iterations);
+    if (r->refine_converged != 0) SCN_FAIL("refine_converged %d", (int)r->refine_converged);
     k = scn_result_poison_left(r);
     if (k != 0) SCN_FAIL("poison left at byte offset %lu", (unsigned long)(k - 1));
     return ok;
@@ -541,16 +614,17 @@ size_t scn_result_poison_left(const kissm_result *r) {
 int scn_result_equal(const kissm_result *a, const kissm_result *b) {
     kissm_result x = *a, y = *b;
     x.time_voxelize_ms = x.time_features_ms = x.time_matching_ms = x.time_pruning_ms = x.time_solver_ms =
-        x.time_total_ms = 0.0;
+        x.time_refine_ms = x.time_total_ms = 0.0;
     y.time_voxelize_ms = y.time_features_ms = y.time_matching_ms = y.time_pruning_ms = y.time_solver_ms =
-        y.time_total_ms = 0.0;
+        y.time_refine_ms = y.time_total_ms = 0.0;
     return memcmp(&x, &y, sizeof(x)) == 0;
 }
 
 void scn_result_print(const char *label, const kissm_result *r) {
     fprintf(stderr,
             "  %s: valid=%d reason=%d (%s) pts=%llu/%llu nonfinite=%llu/%llu voxels=%llu/%llu kp=%llu/%llu "
-            "initial=%llu pruned=%llu (k=%llu) rot_inl=%llu final=%llu rms=%g t=(%.6f %.6f %.6f) total=%.2fms\n",
+            "initial=%llu pruned=%llu (k=%llu) rot_inl=%llu final=%llu rms=%g t=(%.6f %.6f %.6f) total=%.2fms "
+            "refine: corr=%llu it=%d conv=%d overlap=%g rmse=%g cond=%g %.2fms\n",
             label, (int)r->valid, (int)r->reason, kissm_reason_string(r->reason),
             (unsigned long long)r->num_source_points, (unsigned long long)r->num_target_points,
             (unsigned long long)r->num_source_nonfinite, (unsigned long long)r->num_target_nonfinite,
@@ -559,7 +633,9 @@ void scn_result_print(const char *label, const kissm_result *r) {
             (unsigned long long)r->num_initial_correspondences, (unsigned long long)r->num_pruned_correspondences,
             (unsigned long long)r->max_core_number, (unsigned long long)r->num_rotation_inliers,
             (unsigned long long)r->num_final_inliers, r->residual_rms, r->translation[0], r->translation[1],
-            r->translation[2], r->time_total_ms);
+            r->translation[2], r->time_total_ms, (unsigned long long)r->num_refine_correspondences,
+            (int)r->refine_iterations, (int)r->refine_converged, r->overlap, r->refine_rmse, r->refine_condition,
+            r->time_refine_ms);
 }
 
 double scn_now(void) {

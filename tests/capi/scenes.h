@@ -71,6 +71,9 @@ void scn_cloud_apply(scn_cloud *c, const scn_pose *p);
 double scn_rotation_error_deg(const double Ra[9], const double Rb[9]);
 /* |ta - tb| */
 double scn_translation_error(const double ta[3], const double tb[3]);
+/* The 4x4 row-major matrix of a pose (last row 0 0 0 1), as kissm_refine() takes it, and back. */
+void scn_pose_to_matrix(const scn_pose *p, double m[16]);
+void scn_pose_from_matrix(const double m[16], scn_pose *p);
 
 /* ---------------------------------------------------------------------------------------------- */
 /* Scenes                                                                                           */
@@ -100,6 +103,13 @@ void scn_pair_free(scn_pair *pair);
 void scn_make_line(scn_cloud *out, uint64_t seed, size_t n, double noise_sigma);
 /* n noisy points on one tilted 16 m x 16 m plane. */
 void scn_make_plane(scn_cloud *out, uint64_t seed, size_t n, double noise_sigma);
+/* A corridor along x, 30 m long and 3 m wide: floor and two 2.5 m walls, open at both ends (a pose can
+ * slide along it), sampled at points_per_m2 with noise. */
+void scn_make_corridor(scn_cloud *out, uint64_t seed, double points_per_m2, double noise_sigma);
+/* The mantle of a pipe (a tunnel) of the given radius and length: its axis passes through `centre` with
+ * direction `axis` (any length). A pose can slide along the axis and turn about it. */
+void scn_make_pipe(scn_cloud *out, uint64_t seed, size_t n, const double centre[3], const double axis[3], double radius,
+                   double length, double noise_sigma);
 /* n copies of the point (x, y, z). */
 void scn_make_duplicates(scn_cloud *out, size_t n, double x, double y, double z);
 /* n points uniformly inside the axis-aligned cube centred on c with half side h. */
@@ -116,12 +126,13 @@ kissm_config scn_config(double voxel_size);
  * struct_size = sizeof(kissm_result), valid = 1, reason = 0, identity transform. */
 void scn_result_poison(kissm_result *r);
 /* 1 when a registration call overwrote every field of a poisoned result the way a failed call must:
- * struct_size kept, valid = 0, every pose entry NaN, every count 0, no byte pattern of the poison left.
- * Prints what is wrong to stderr otherwise. */
+ * struct_size kept, valid = 0, every pose entry NaN (coarse_transform and information too), every count 0,
+ * overlap, refine_rmse, refine_condition, rotation_uncertainty and inlier_coverage NaN, the refinement's
+ * counts and time 0, no byte pattern of the poison left. Prints what is wrong to stderr otherwise. */
 int scn_result_is_reset(const kissm_result *r);
 /* 0 when no 4-byte run of the poison is left in *r, else 1 + the byte offset of the first one. */
 size_t scn_result_poison_left(const kissm_result *r);
-/* 1 when a and b are bitwise identical in every field except the time_* fields. */
+/* 1 when a and b are bitwise identical in every field except the time_* fields (time_refine_ms included). */
 int scn_result_equal(const kissm_result *a, const kissm_result *b);
 /* Prints the main fields of a result to stderr (diagnostics for failing checks). */
 void scn_result_print(const char *label, const kissm_result *r);

@@ -491,7 +491,19 @@ enum {
     F_MIN_INLIERS,
     F_NONFINITE_POLICY,
     F_VIEWPOINT_MODE,
-    F_LOG_LEVEL
+    F_LOG_LEVEL,
+    F_REFINE_MODE,
+    F_REFINE_MAX_ITERATIONS,
+    F_REFINE_MAX_DISTANCE_GAIN,
+    F_REFINE_KERNEL_GAIN,
+    F_REFINE_ROTATION_EPSILON,
+    F_REFINE_TRANSLATION_EPSILON_GAIN,
+    F_MIN_OVERLAP,
+    F_MAX_ROTATION_UNCERTAINTY,
+    F_MIN_INLIER_COVERAGE,
+    F_REFINE_MIN_INLIERS,
+    F_RESERVED1,
+    F_MIN_REFINE_CONDITION
 };
 
 typedef struct field_case {
@@ -519,6 +531,18 @@ static void set_field(kissm_config *c, int field, double v) {
     case F_NONFINITE_POLICY: c->nonfinite_policy = (int32_t)v; break;
     case F_VIEWPOINT_MODE: c->viewpoint_mode = (int32_t)v; break;
     case F_LOG_LEVEL: c->log_level = (int32_t)v; break;
+    case F_REFINE_MODE: c->refine_mode = (int32_t)v; break;
+    case F_REFINE_MAX_ITERATIONS: c->refine_max_iterations = (int32_t)v; break;
+    case F_REFINE_MAX_DISTANCE_GAIN: c->refine_max_distance_gain = v; break;
+    case F_REFINE_KERNEL_GAIN: c->refine_kernel_gain = v; break;
+    case F_REFINE_ROTATION_EPSILON: c->refine_rotation_epsilon = v; break;
+    case F_REFINE_TRANSLATION_EPSILON_GAIN: c->refine_translation_epsilon_gain = v; break;
+    case F_MIN_OVERLAP: c->min_overlap = v; break;
+    case F_MAX_ROTATION_UNCERTAINTY: c->max_rotation_uncertainty = v; break;
+    case F_MIN_INLIER_COVERAGE: c->min_inlier_coverage = v; break;
+    case F_REFINE_MIN_INLIERS: c->refine_min_inliers = (int32_t)v; break;
+    case F_RESERVED1: c->reserved1 = (int32_t)v; break;
+    case F_MIN_REFINE_CONDITION: c->min_refine_condition = v; break;
     default: break;
     }
 }
@@ -576,6 +600,50 @@ static const field_case k_bad_fields[] = {
     {F_LOG_LEVEL, -1, "log_level"},
     {F_LOG_LEVEL, 5, "log_level"},
     {F_LOG_LEVEL, 99, "log_level"},
+    /* refinement (the message names config.<field>) */
+    {F_REFINE_MODE, -1, "config.refine_mode"},
+    {F_REFINE_MODE, 3, "config.refine_mode"},
+    {F_REFINE_MODE, 99, "config.refine_mode"},
+    {F_REFINE_MAX_ITERATIONS, 0, "config.refine_max_iterations"},
+    {F_REFINE_MAX_ITERATIONS, -1, "config.refine_max_iterations"},
+    {F_REFINE_MAX_ITERATIONS, 1001, "config.refine_max_iterations"},
+    {F_REFINE_MAX_DISTANCE_GAIN, 0.0, "config.refine_max_distance_gain"},
+    {F_REFINE_MAX_DISTANCE_GAIN, -1.0, "config.refine_max_distance_gain"},
+    {F_REFINE_MAX_DISTANCE_GAIN, 100.5, "config.refine_max_distance_gain"},
+    {F_REFINE_MAX_DISTANCE_GAIN, NAN, "config.refine_max_distance_gain"},
+    {F_REFINE_MAX_DISTANCE_GAIN, INFINITY, "config.refine_max_distance_gain"},
+    {F_REFINE_KERNEL_GAIN, 0.0, "config.refine_kernel_gain"},
+    {F_REFINE_KERNEL_GAIN, -0.1, "config.refine_kernel_gain"},
+    {F_REFINE_KERNEL_GAIN, 101.0, "config.refine_kernel_gain"},
+    {F_REFINE_KERNEL_GAIN, NAN, "config.refine_kernel_gain"},
+    {F_REFINE_KERNEL_GAIN, INFINITY, "config.refine_kernel_gain"},
+    {F_REFINE_ROTATION_EPSILON, -1e-9, "config.refine_rotation_epsilon"},
+    {F_REFINE_ROTATION_EPSILON, 1.5, "config.refine_rotation_epsilon"},
+    {F_REFINE_ROTATION_EPSILON, NAN, "config.refine_rotation_epsilon"},
+    {F_REFINE_ROTATION_EPSILON, INFINITY, "config.refine_rotation_epsilon"},
+    {F_REFINE_TRANSLATION_EPSILON_GAIN, -0.1, "config.refine_translation_epsilon_gain"},
+    {F_REFINE_TRANSLATION_EPSILON_GAIN, 1.01, "config.refine_translation_epsilon_gain"},
+    {F_REFINE_TRANSLATION_EPSILON_GAIN, NAN, "config.refine_translation_epsilon_gain"},
+    {F_MIN_OVERLAP, -0.01, "config.min_overlap"},
+    {F_MIN_OVERLAP, 1.01, "config.min_overlap"},
+    {F_MIN_OVERLAP, NAN, "config.min_overlap"},
+    {F_MIN_OVERLAP, -INFINITY, "config.min_overlap"},
+    {F_MAX_ROTATION_UNCERTAINTY, 0.0, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, -0.1, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, 3.16, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, NAN, "config.max_rotation_uncertainty"},
+    {F_MAX_ROTATION_UNCERTAINTY, INFINITY, "config.max_rotation_uncertainty"},
+    {F_MIN_INLIER_COVERAGE, -0.01, "config.min_inlier_coverage"},
+    {F_MIN_INLIER_COVERAGE, 1.01, "config.min_inlier_coverage"},
+    {F_MIN_INLIER_COVERAGE, NAN, "config.min_inlier_coverage"},
+    {F_REFINE_MIN_INLIERS, 2, "config.refine_min_inliers"},
+    {F_REFINE_MIN_INLIERS, -1, "config.refine_min_inliers"},
+    {F_REFINE_MIN_INLIERS, 100001, "config.refine_min_inliers"},
+    {F_RESERVED1, 1, "config.reserved1"},
+    {F_RESERVED1, -1, "config.reserved1"},
+    {F_MIN_REFINE_CONDITION, -1e-9, "config.min_refine_condition"},
+    {F_MIN_REFINE_CONDITION, 1.5, "config.min_refine_condition"},
+    {F_MIN_REFINE_CONDITION, NAN, "config.min_refine_condition"},
 };
 
 /* Documented boundary values that must be accepted. */
@@ -610,6 +678,30 @@ static const field_case k_good_fields[] = {
     {F_LOG_LEVEL, 0, ""},
     {F_LOG_LEVEL, KISSM_LOG_ERROR, ""},
     {F_LOG_LEVEL, KISSM_LOG_DEBUG, ""},
+    {F_REFINE_MODE, KISSM_REFINE_NONE, ""},
+    {F_REFINE_MODE, KISSM_REFINE_GICP, ""},
+    {F_REFINE_MODE, KISSM_REFINE_POINT_TO_PLANE, ""},
+    {F_REFINE_MAX_ITERATIONS, 1, ""},
+    {F_REFINE_MAX_ITERATIONS, 1000, ""},
+    {F_REFINE_MAX_DISTANCE_GAIN, 1e-3, ""},
+    {F_REFINE_MAX_DISTANCE_GAIN, 100.0, ""},
+    {F_REFINE_KERNEL_GAIN, 1e-3, ""},
+    {F_REFINE_KERNEL_GAIN, 100.0, ""},
+    {F_REFINE_ROTATION_EPSILON, 0.0, ""},
+    {F_REFINE_ROTATION_EPSILON, 1.0, ""},
+    {F_REFINE_TRANSLATION_EPSILON_GAIN, 0.0, ""},
+    {F_REFINE_TRANSLATION_EPSILON_GAIN, 1.0, ""},
+    {F_MIN_OVERLAP, 0.0, ""},
+    {F_MIN_OVERLAP, 1.0, ""},
+    {F_MAX_ROTATION_UNCERTAINTY, 1e-6, ""},
+    {F_MAX_ROTATION_UNCERTAINTY, 3.15, ""},
+    {F_MIN_INLIER_COVERAGE, 0.0, ""},
+    {F_MIN_INLIER_COVERAGE, 1.0, ""},
+    {F_REFINE_MIN_INLIERS, 3, ""},
+    {F_REFINE_MIN_INLIERS, 100000, ""},
+    {F_RESERVED1, 0, ""},
+    {F_MIN_REFINE_CONDITION, 0.0, ""},
+    {F_MIN_REFINE_CONDITION, 1.0, ""},
 };
 
 static void test_config_fields(void) {
@@ -804,7 +896,7 @@ static void check_invalid_result(const char *what, kissm_matcher *m, const scn_c
     st = kissm_register(m, &s, &t, &r);
     CHECK_MSG(st == KISSM_OK, "%s: status %d (%s)", what, (int)st, kissm_last_error_message());
     CHECK_MSG(r.valid == 0, "%s: valid", what);
-    CHECK_MSG(r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_DEGENERATE, "%s: reason %d", what,
+    CHECK_MSG(r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED, "%s: reason %d", what,
               (int)r.reason);
     if (expected_reason >= 0) CHECK_MSG(r.reason == expected_reason, "%s: reason %d", what, (int)r.reason);
     CHECK_MSG(scn_result_poison_left(&r) == 0, "%s: poison left", what);
@@ -868,6 +960,377 @@ static void test_degenerate(void) {
     scn_cloud_free(&b);
 }
 
+/* ---------------------------------------------------------------------------------------------- */
+/* kissm_refine and kissm_refine_features                                                          */
+/* ---------------------------------------------------------------------------------------------- */
+
+/* Both entry points on g_pair, from the truth: status, and what the result and the transform hold after. */
+static int32_t call_refine(int features, kissm_matcher *m, const double *initial, kissm_result *r) {
+    static kissm_features *fs = NULL, *ft = NULL;
+    const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    if (m == NULL && initial == NULL && r == NULL) { /* cleanup */
+        kissm_features_destroy(fs);
+        kissm_features_destroy(ft);
+        fs = ft = NULL;
+        return KISSM_OK;
+    }
+    if (!features) return kissm_refine(m, &s, &t, initial, r);
+    if (fs == NULL &&
+        (kissm_features_compute(g_m, &s, &fs) != KISSM_OK || kissm_features_compute(g_m, &t, &ft) != KISSM_OK))
+        return -1000;
+    return kissm_refine_features(m, fs, ft, initial, r);
+}
+
+static const char *const k_refine_names[2] = {"kissm_refine", "kissm_refine_features"};
+
+static void test_refine_null_pointers(void) {
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    kissm_features *fs = NULL, *ft = NULL;
+    double initial[16];
+    kissm_result r;
+    int pass;
+    scn_pose_to_matrix(&g_pair.truth, initial);
+    REQUIRE(kissm_features_compute(g_m, &s, &fs) == KISSM_OK);
+    REQUIRE(kissm_features_compute(g_m, &t, &ft) == KISSM_OK);
+
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine(NULL, &s, &t, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("matcher"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine(g_m, NULL, &t, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("source"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine(g_m, &s, NULL, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("target"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine(g_m, &s, &t, NULL, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("initial_transform"));
+    CHECK(scn_result_is_reset(&r));
+    CHECK_EQ_INT(kissm_refine(g_m, &s, &t, initial, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("result"));
+    CHECK_EQ_INT(kissm_refine(NULL, NULL, NULL, NULL, NULL), KISSM_ERR_NULL_ARGUMENT);
+    {
+        kissm_points no_data = s;
+        no_data.data = NULL;
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine(g_m, &no_data, &t, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(msg_has("source") && msg_has("data"));
+        CHECK(scn_result_is_reset(&r));
+    }
+
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine_features(NULL, fs, ft, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("matcher"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine_features(g_m, NULL, ft, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("source"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine_features(g_m, fs, NULL, initial, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("target"));
+    CHECK(scn_result_is_reset(&r));
+    scn_result_poison(&r);
+    CHECK_EQ_INT(kissm_refine_features(g_m, fs, ft, NULL, &r), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("initial_transform"));
+    CHECK(scn_result_is_reset(&r));
+    CHECK_EQ_INT(kissm_refine_features(g_m, fs, ft, initial, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("result"));
+    CHECK_EQ_INT(kissm_refine_features(NULL, NULL, NULL, NULL, NULL), KISSM_ERR_NULL_ARGUMENT);
+
+    /* and both work afterwards */
+    for (pass = 0; pass < 2; ++pass) {
+        scn_result_poison(&r);
+        CHECK_MSG((pass ? kissm_refine_features(g_m, fs, ft, initial, &r) : kissm_refine(g_m, &s, &t, initial, &r)) ==
+                      KISSM_OK,
+                  "%s: %s", k_refine_names[pass], kissm_last_error_message());
+        CHECK_EQ_INT(r.valid, 1);
+        CHECK(strcmp(kissm_last_error_message(), "") == 0);
+    }
+    kissm_features_destroy(fs);
+    kissm_features_destroy(ft);
+    check_usable(g_m, "refine NULLs");
+}
+
+/* Initial transforms that are not a finite rigid motion: exactly KISSM_ERR_INVALID_ARGUMENT naming
+ * initial_transform, the result reset, the transform itself untouched, the matcher usable. */
+typedef struct transform_case {
+    const char *name;
+    int index;    /* entry changed (-1: see below) */
+    double value; /* its new value */
+    double scale; /* the rotation block times this (1 = unchanged) */
+    int reflect;  /* negate the third column of the rotation block */
+} transform_case;
+
+static const transform_case k_bad_transforms[] = {
+    {"NaN rotation entry", 0, NAN, 1.0, 0},
+    {"NaN rotation entry", 5, NAN, 1.0, 0},
+    {"NaN translation", 3, NAN, 1.0, 0},
+    {"+Inf translation", 7, INFINITY, 1.0, 0},
+    {"-Inf translation", 11, -INFINITY, 1.0, 0},
+    {"+Inf rotation entry", 10, INFINITY, 1.0, 0},
+    {"NaN in the last row", 15, NAN, 1.0, 0},
+    {"-Inf in the last row", 12, -INFINITY, 1.0, 0},
+    {"translation 2e9", 3, 2e9, 1.0, 0},
+    {"translation -1e10", 7, -1e10, 1.0, 0},
+    {"translation 1e300", 11, 1e300, 1.0, 0},
+    {"scaled by 1.01", -1, 0.0, 1.01, 0},
+    {"scaled by 0.5", -1, 0.0, 0.5, 0},
+    {"scaled by 2", -1, 0.0, 2.0, 0},
+    {"scaled by 0", -1, 0.0, 0.0, 0},
+    {"scaled by -1 (a rotation by 180 deg and a reflection)", -1, 0.0, -1.0, 0},
+    {"reflected (det -1)", -1, 0.0, 1.0, 1},
+    {"sheared", 1, 0.05, 1.0, 0},
+    {"sheared slightly beyond 1e-3", 2, 0.0015, 1.0, 0},
+    {"last row (0, 0, 0, 2)", 15, 2.0, 1.0, 0},
+    {"last row (0, 0, 0, 0)", 15, 0.0, 1.0, 0},
+    {"last row (0.1, 0, 0, 1)", 12, 0.1, 1.0, 0},
+    {"last row (0, 0, -1e-12, 1)", 14, -1e-12, 1.0, 0},
+};
+
+static void make_bad_transform(const transform_case *tc, double m[16]) {
+    int i, j;
+    /* identity rotation except where the case says: entries 1 and 2 are off-diagonal */
+    for (i = 0; i < 16; ++i) m[i] = (i % 5 == 0) ? 1.0 : 0.0;
+    m[3] = 0.5, m[7] = -0.25, m[11] = 0.125;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) m[4 * i + j] *= tc->scale;
+    if (tc->reflect)
+        for (i = 0; i < 3; ++i) m[4 * i + 2] = -m[4 * i + 2];
+    if (tc->index >= 0) m[tc->index] = tc->value;
+}
+
+static void test_refine_bad_initial_transform(void) {
+    size_t i;
+    int pass;
+    for (pass = 0; pass < 2; ++pass) {
+        for (i = 0; i < sizeof(k_bad_transforms) / sizeof(k_bad_transforms[0]); ++i) {
+            const transform_case *tc = &k_bad_transforms[i];
+            double m[16], copy[16];
+            kissm_result r;
+            int32_t st;
+            make_bad_transform(tc, m);
+            memcpy(copy, m, sizeof(m));
+            scn_result_poison(&r);
+            st = call_refine(pass, g_m, m, &r);
+            CHECK_MSG(st == KISSM_ERR_INVALID_ARGUMENT, "%s, %s: status %d (%s)", k_refine_names[pass], tc->name,
+                      (int)st, kissm_last_error_message());
+            CHECK_MSG(msg_has("initial_transform"), "%s, %s", k_refine_names[pass], tc->name);
+            CHECK_MSG(scn_result_is_reset(&r), "%s, %s", k_refine_names[pass], tc->name);
+            CHECK(memcmp(m, copy, sizeof(m)) == 0);
+        }
+        /* every entry in turn NaN: each refused */
+        {
+            int k, refused = 0;
+            for (k = 0; k < 16; ++k) {
+                double m[16];
+                kissm_result r;
+                scn_pose_to_matrix(&g_pair.truth, m);
+                m[k] = NAN;
+                scn_result_poison(&r);
+                refused += call_refine(pass, g_m, m, &r) == KISSM_ERR_INVALID_ARGUMENT && scn_result_is_reset(&r) &&
+                           strstr(kissm_last_error_message(), "initial_transform") != NULL;
+            }
+            CHECK_EQ_INT(refused, 16);
+        }
+        /* the boundaries: a translation of exactly 1e9 and a rotation off by less than 1e-3 are accepted (and
+         * refine nothing: the clouds are 1e9 m apart) */
+        {
+            double m[16];
+            kissm_result r;
+            int32_t st;
+            scn_pose_to_matrix(&g_pair.truth, m);
+            m[3] = 1e9;
+            m[7] = -1e9;
+            scn_result_poison(&r);
+            st = call_refine(pass, g_m, m, &r);
+            CHECK_MSG(st == KISSM_OK, "%s, translation 1e9: %d (%s)", k_refine_names[pass], (int)st,
+                      kissm_last_error_message());
+            CHECK_EQ_INT(r.valid, 0);
+            CHECK_EQ_INT(r.reason, KISSM_REASON_LOW_OVERLAP);
+            CHECK(scn_result_poison_left(&r) == 0);
+            scn_pose_to_matrix(&g_pair.truth, m);
+            m[0] += 4e-4;
+            scn_result_poison(&r);
+            CHECK_EQ_INT(call_refine(pass, g_m, m, &r), KISSM_OK);
+            CHECK_EQ_INT(r.valid, 1);
+        }
+        check_usable(g_m, k_refine_names[pass]);
+    }
+}
+
+static void test_refine_struct_sizes_and_mismatch(void) {
+    const uint32_t bad_sizes[] = {0u, 4u, 16u, 436u, 444u, (uint32_t)sizeof(kissm_result) - 8u, 65537u, 0x5A5A5A5Au};
+    double initial[16];
+    size_t i;
+    int pass;
+    scn_pose_to_matrix(&g_pair.truth, initial);
+    for (pass = 0; pass < 2; ++pass) {
+        for (i = 0; i < sizeof(bad_sizes) / sizeof(bad_sizes[0]); ++i) {
+            unsigned char before[sizeof(kissm_result)];
+            kissm_result r;
+            int32_t st;
+            memset(&r, 0x5A, sizeof(r));
+            r.struct_size = bad_sizes[i];
+            memcpy(before, &r, sizeof(r));
+            st = call_refine(pass, g_m, initial, &r);
+            CHECK_MSG(st == KISSM_ERR_STRUCT_SIZE, "%s, result struct_size %u: %d", k_refine_names[pass],
+                      (unsigned)bad_sizes[i], (int)st);
+            CHECK(msg_has("struct_size"));
+            CHECK_EQ_INT(r.struct_size, bad_sizes[i]);
+            /* nothing written at all (sizes the library refuses are never written into) */
+            CHECK(memcmp(&r, before, sizeof(r)) == 0);
+        }
+        /* a bad result size wins over a bad transform: the result is never touched */
+        {
+            double nan_m[16];
+            kissm_result r;
+            memcpy(nan_m, initial, sizeof(nan_m));
+            nan_m[0] = NAN;
+            memset(&r, 0x5A, sizeof(r));
+            r.struct_size = 8;
+            CHECK_EQ_INT(call_refine(pass, g_m, nan_m, &r), KISSM_ERR_STRUCT_SIZE);
+        }
+    }
+    /* features computed under other descriptor settings */
+    {
+        kissm_config c = scn_config(GOOD_VOXEL * 1.25);
+        kissm_matcher *other = NULL;
+        kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+        kissm_features *fs = NULL, *ft = NULL, *gs = NULL;
+        kissm_result r;
+        REQUIRE(kissm_create(&c, &other) == KISSM_OK);
+        REQUIRE(kissm_features_compute(g_m, &s, &fs) == KISSM_OK);
+        REQUIRE(kissm_features_compute(g_m, &t, &ft) == KISSM_OK);
+        REQUIRE(kissm_features_compute(other, &s, &gs) == KISSM_OK);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine_features(g_m, gs, ft, initial, &r), KISSM_ERR_FEATURES_MISMATCH);
+        CHECK(msg_has("source"));
+        CHECK(scn_result_is_reset(&r));
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine_features(g_m, fs, gs, initial, &r), KISSM_ERR_FEATURES_MISMATCH);
+        CHECK(msg_has("target"));
+        CHECK(scn_result_is_reset(&r));
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine_features(other, fs, ft, initial, &r), KISSM_ERR_FEATURES_MISMATCH);
+        CHECK(scn_result_is_reset(&r));
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine_features(g_m, fs, ft, initial, &r), KISSM_OK);
+        CHECK_EQ_INT(r.valid, 1);
+        kissm_features_destroy(fs);
+        kissm_features_destroy(ft);
+        kissm_features_destroy(gs);
+        kissm_destroy(other);
+    }
+    /* the other argument checks of kissm_refine: the points tables, as kissm_register's */
+    {
+        size_t k;
+        float *src32 = scn_cloud_to_float(&g_pair.source);
+        const kissm_points good_t = scn_points(&g_pair.target);
+        for (k = 0; k < sizeof(k_points_cases) / sizeof(k_points_cases[0]); ++k) {
+            const points_case *pc = &k_points_cases[k];
+            const kissm_points bad = make_case_points(pc, g_pair.source.xyz, src32);
+            kissm_result r;
+            int32_t st;
+            scn_result_poison(&r);
+            st = kissm_refine(g_m, &bad, &good_t, initial, &r);
+            CHECK_MSG(st == pc->status, "kissm_refine, %s as source: %d (%s)", pc->name, (int)st,
+                      kissm_last_error_message());
+            CHECK_MSG(msg_has("source") && msg_has(pc->word), "kissm_refine, %s", pc->name);
+            CHECK(scn_result_is_reset(&r));
+            scn_result_poison(&r);
+            st = kissm_refine(g_m, &good_t, &bad, initial, &r);
+            CHECK_MSG(st == pc->status, "kissm_refine, %s as target: %d", pc->name, (int)st);
+            CHECK(scn_result_is_reset(&r));
+        }
+        free(src32);
+    }
+    /* non-finite points: REJECT refuses them, as kissm_register does */
+    {
+        scn_cloud cloud;
+        kissm_points p, good_t = scn_points(&g_pair.target);
+        kissm_result r;
+        scn_cloud_init(&cloud);
+        scn_cloud_copy(&cloud, &g_pair.source);
+        cloud.xyz[3 * 17 + 1] = NAN;
+        p = scn_points(&cloud);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine(g_m, &p, &good_t, initial, &r), KISSM_ERR_NONFINITE);
+        CHECK(msg_has("source"));
+        CHECK(scn_result_is_reset(&r));
+        scn_cloud_free(&cloud);
+    }
+    call_refine(0, NULL, NULL, NULL);
+    check_usable(g_m, "refine sizes");
+}
+
+/* Degenerate clouds through the new entry points and with refinement on: KISSM_OK, valid = 0, a reason. */
+static void check_invalid_refine(const char *what, kissm_matcher *m, const scn_cloud *a, const scn_cloud *b,
+                                 const double initial[16], int32_t expected_reason) {
+    kissm_points s = scn_points(a), t = scn_points(b);
+    kissm_result r;
+    int32_t st;
+    scn_result_poison(&r);
+    st = kissm_refine(m, &s, &t, initial, &r);
+    CHECK_MSG(st == KISSM_OK, "%s: status %d (%s)", what, (int)st, kissm_last_error_message());
+    CHECK_MSG(r.valid == 0 && r.reason > KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED,
+              "%s: valid %d reason %d", what, (int)r.valid, (int)r.reason);
+    if (expected_reason >= 0) CHECK_MSG(r.reason == expected_reason, "%s: reason %d", what, (int)r.reason);
+    CHECK_MSG(scn_result_poison_left(&r) == 0, "%s: poison left", what);
+    CHECK(r.transform[15] == 1.0 && !isnan(r.overlap));
+}
+
+static void test_refine_degenerate(void) {
+    kissm_config c = scn_config(0.3);
+    kissm_matcher *m = NULL;
+    scn_cloud a, b;
+    const double axis[3] = {0.3, 1.0, -0.2}, shift[3] = {1.0, -2.0, 0.5};
+    double initial[16];
+    scn_pose pose;
+    scn_cloud_init(&a);
+    scn_cloud_init(&b);
+    scn_pose_axis_angle(&pose, axis, 1.2, shift);
+    scn_pose_to_matrix(&pose, initial);
+    c.refine_mode = KISSM_REFINE_GICP;
+    REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+
+    /* a line has no normals: nothing to match */
+    scn_make_line(&a, 11, 6000, 0.003);
+    scn_make_line(&b, 12, 6000, 0.003);
+    scn_cloud_apply(&b, &pose);
+    check_invalid_refine("collinear", m, &a, &b, initial, KISSM_REASON_LOW_OVERLAP);
+    check_invalid_result("collinear, register + GICP", m, &a, &b, -1);
+    /* a plane slides */
+    scn_make_plane(&a, 21, 12000, 0.01);
+    scn_make_plane(&b, 22, 12000, 0.01);
+    scn_cloud_apply(&b, &pose);
+    check_invalid_refine("planar", m, &a, &b, initial, KISSM_REASON_UNCONSTRAINED);
+    check_invalid_result("planar, register + GICP", m, &a, &b, -1);
+    /* duplicates: one voxel, no normal */
+    scn_make_duplicates(&a, 4, 1.0, 2.0, 3.0);
+    scn_make_duplicates(&b, 5000, -1.0, 0.5, 7.0);
+    check_invalid_refine("duplicates", m, &a, &b, initial, KISSM_REASON_LOW_OVERLAP);
+    check_invalid_refine("duplicates vs a scene", m, &a, &g_pair.target, initial, KISSM_REASON_LOW_OVERLAP);
+    check_invalid_refine("a scene vs duplicates", m, &g_pair.source, &b, initial, KISSM_REASON_LOW_OVERLAP);
+    check_invalid_result("duplicates, register + GICP", m, &a, &b, KISSM_REASON_TOO_FEW_VOXELS);
+    /* unrelated: a scene and a random volume 10 km away, and the scene against that volume moved onto it */
+    {
+        const double far[3] = {1e4, -1e4, 50.0}, near[3] = {0.0, 0.0, 0.0};
+        scn_make_blob(&b, 31, 12000, far, 6.0);
+        check_invalid_refine("scene vs far random blob", m, &g_pair.source, &b, initial, KISSM_REASON_LOW_OVERLAP);
+        check_invalid_result("scene vs far random blob, register + GICP", m, &g_pair.source, &b, -1);
+        scn_make_blob(&b, 32, 12000, near, 6.0);
+        check_invalid_refine("scene in a random blob", m, &g_pair.source, &b, initial, -1);
+    }
+    check_usable(g_m, "degenerate refinement");
+    kissm_destroy(m);
+    scn_cloud_free(&a);
+    scn_cloud_free(&b);
+}
+
 int main(void) {
     scn_make_pair(&g_pair, 7, 6.0, 0.01);
     {
@@ -885,6 +1348,10 @@ int main(void) {
     RUN_TEST(test_config_fields);
     RUN_TEST(test_struct_sizes);
     RUN_TEST(test_degenerate);
+    RUN_TEST(test_refine_null_pointers);
+    RUN_TEST(test_refine_bad_initial_transform);
+    RUN_TEST(test_refine_struct_sizes_and_mismatch);
+    RUN_TEST(test_refine_degenerate);
     kissm_destroy(g_m);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();

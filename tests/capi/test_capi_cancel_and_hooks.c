@@ -157,14 +157,14 @@ static void print_events(const progress_record *rec) {
     fprintf(stderr, "\n");
 }
 
-/* Stages 1..5, fractions in [0, 1], (stage, fraction) never going back. */
+/* Stages 1..6, fractions in [0, 1], (stage, fraction) never going back. */
 static int check_events(const char *what, const progress_record *rec, int32_t first_stage, int32_t last_stage) {
     int i, ok = 1;
     const int n = rec->calls < MAX_EVENTS ? rec->calls : MAX_EVENTS;
     CHECK_MSG(rec->calls > 0, "%s: no progress call", what);
     CHECK_EQ_INT(rec->off_thread, 0);
     for (i = 0; i < n; ++i) {
-        if (rec->stage[i] < KISSM_STAGE_VOXELIZE || rec->stage[i] > KISSM_STAGE_SOLVER) ok = 0;
+        if (rec->stage[i] < KISSM_STAGE_VOXELIZE || rec->stage[i] > KISSM_STAGE_REFINE) ok = 0;
         if (!(rec->fraction[i] >= 0.0 && rec->fraction[i] <= 1.0)) ok = 0;
     }
     CHECK_MSG(ok, "%s: a stage or fraction out of range", what);
@@ -481,11 +481,146 @@ static void test_cancel_from_thread(void) {
     CHECK_MSG(observed[2], "kissm_cancel during matching never stopped a running call");
 }
 
+/* ---------------------------------------------------------------------------------------------- */
+/* Progress and cancellation with refinement                                                       */
+/* ---------------------------------------------------------------------------------------------- */
+
+/* Which stages were reported (bit per stage), and whether the last call was (stage, 1.0). */
+static int stages_seen(const progress_record *rec) {
+    int i, seen = 0;
+    for (i = 0; i < rec->calls && i < MAX_EVENTS; ++i) seen |= 1 << rec->stage[i];
+    return seen;
+}
+
+static int ends_with(const progress_record *rec, int32_t stage) {
+    const int n = rec->calls < MAX_EVENTS ? rec->calls : MAX_EVENTS;
+    return n > 0 && rec->stage[n - 1] == stage && rec->fraction[n - 1] == 1.0;
+}
+
+/* One of the three calls that refine: 0 kissm_register with refine_mode set, 1 kissm_refine,
+ * 2 kissm_refine_features. */
+static int32_t refine_call(int which, kissm_matcher *m, kissm_features *fs, kissm_features *ft, const double *initial,
+                           kissm_result *r) {
+    const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    scn_result_poison(r);
+    if (which == 0) return kissm_register(m, &s, &t, r);
+    if (which == 1) return kissm_refine(m, &s, &t, initial, r);
+    return kissm_refine_features(m, fs, ft, initial, r);
+}
+
+static void test_progress_and_cancel_with_refine(void) {
+    static const char *const names[3] = {"register + GICP", "kissm_refine", "kissm_refine_features"};
+    /* the stages each call reports: all six; voxelise, features and refine; refine only */
+    const int expected_stages[3] = {
+        0x7E, (1 << KISSM_STAGE_VOXELIZE) | (1 << KISSM_STAGE_FEATURES) | (1 << KISSM_STAGE_REFINE),
+        1 << KISSM_STAGE_REFINE};
+    const int32_t first_stage[3] = {KISSM_STAGE_VOXELIZE, KISSM_STAGE_VOXELIZE, KISSM_STAGE_REFINE};
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    progress_record *rec = (progress_record *)calloc(1, sizeof(progress_record));
+    kissm_features *fs = NULL, *ft = NULL;
+    kissm_result reference[3], r;
+    double initial[16];
+    int which;
+    REQUIRE(rec != NULL);
+    scn_pose_to_matrix(&g_pair.truth, initial);
+    initial[3] += 0.2; /* a prior 20 cm off: refinement has work to do */
+    c.refine_mode = KISSM_REFINE_GICP;
+    c.progress_fn = on_progress;
+    c.progress_user_data = rec;
+    REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+    REQUIRE(kissm_features_compute(m, &s, &fs) == KISSM_OK);
+    REQUIRE(kissm_features_compute(m, &t, &ft) == KISSM_OK);
+
+    for (which = 0; which < 3; ++which) {
+        int stage, k;
+        memset(rec, 0, sizeof(*rec));
+        CHECK_MSG(refine_call(which, m, fs, ft, initial, &reference[which]) == KISSM_OK, "%s: %s", names[which],
+                  kissm_last_error_message());
+        CHECK_EQ_INT(reference[which].valid, 1);
+        CHECK(reference[which].refine_iterations >= 1);
+        check_events(names[which], rec, first_stage[which], KISSM_STAGE_REFINE);
+        CHECK_MSG(stages_seen(rec) == expected_stages[which], "%s: stages 0x%x", names[which], stages_seen(rec));
+        CHECK_MSG(ends_with(rec, KISSM_STAGE_REFINE), "%s: the last progress call is not (REFINE, 1.0)", names[which]);
+        if (!ends_with(rec, KISSM_STAGE_REFINE) || stages_seen(rec) != expected_stages[which]) print_events(rec);
+
+        /* cancelled at each stage it reports, on its first progress call, and on its second call at the refine
+         * stage (inside the iterations) */
+        for (stage = 0; stage <= KISSM_STAGE_REFINE + 1; ++stage) {
+            const int in_iterations = stage == KISSM_STAGE_REFINE + 1;
+            int asked = -1, i;
+            if (stage != 0 && !in_iterations && !(expected_stages[which] & (1 << stage))) continue;
+            memset(rec, 0, sizeof(*rec));
+            if (stage == 0) {
+                rec->cancel_after = 1;
+            } else if (!in_iterations) {
+                rec->cancel_stage = stage;
+            } else {
+                /* where that call is, from an uncancelled run of the same call with the same config */
+                progress_record *probe = (progress_record *)calloc(1, sizeof(progress_record));
+                kissm_matcher *pm = NULL;
+                kissm_result pr;
+                int seen = 0;
+                REQUIRE(probe != NULL);
+                c.progress_user_data = probe;
+                REQUIRE(kissm_create(&c, &pm) == KISSM_OK);
+                c.progress_user_data = rec;
+                CHECK_EQ_INT(refine_call(which, pm, fs, ft, initial, &pr), KISSM_OK);
+                kissm_destroy(pm);
+                for (i = 0; i < probe->calls && i < MAX_EVENTS; ++i)
+                    if (probe->stage[i] == KISSM_STAGE_REFINE && ++seen == 2) break;
+                free(probe);
+                REQUIRE(seen == 2);
+                rec->cancel_after = i + 1;
+                asked = i;
+            }
+            CHECK_MSG(refine_call(which, m, fs, ft, initial, &r) == KISSM_ERR_CANCELLED, "%s, cancel at stage %d",
+                      names[which], stage);
+            CHECK_EQ_INT(rec->cancels_returned, 1);
+            CHECK_MSG(scn_result_is_reset(&r), "%s, cancel at stage %d", names[which], stage);
+            CHECK(strstr(kissm_last_error_message(), "cancel") != NULL);
+            /* stopped promptly: no progress call after the one that asked to stop */
+            if (stage == 0) asked = 0;
+            for (i = 0; asked < 0 && i < rec->calls && i < MAX_EVENTS; ++i)
+                if (rec->stage[i] == stage) asked = i;
+            CHECK_MSG(asked >= 0 && rec->calls == asked + 1, "%s, stage %d: %d calls after cancelling", names[which],
+                      stage, rec->calls - asked - 1);
+            /* the next call gives the reference result */
+            memset(rec, 0, sizeof(*rec));
+            CHECK_EQ_INT(refine_call(which, m, fs, ft, initial, &r), KISSM_OK);
+            CHECK_MSG(scn_result_equal(&reference[which], &r), "%s after a cancel at stage %d", names[which], stage);
+        }
+        /* a kissm_cancel made between calls does not cancel the next one */
+        for (k = 0; k < 2; ++k) kissm_cancel(m);
+        memset(rec, 0, sizeof(*rec));
+        CHECK_EQ_INT(refine_call(which, m, fs, ft, initial, &r), KISSM_OK);
+        CHECK(scn_result_equal(&reference[which], &r));
+    }
+    /* the callback changes nothing: the same calls without it */
+    {
+        kissm_config q = scn_config(VOXEL);
+        kissm_matcher *qm = NULL;
+        q.refine_mode = KISSM_REFINE_GICP;
+        REQUIRE(kissm_create(&q, &qm) == KISSM_OK);
+        for (which = 0; which < 3; ++which) {
+            CHECK_EQ_INT(refine_call(which, qm, fs, ft, initial, &r), KISSM_OK);
+            CHECK_MSG(scn_result_equal(&reference[which], &r), "%s without a callback", names[which]);
+        }
+        kissm_destroy(qm);
+    }
+    kissm_features_destroy(fs);
+    kissm_features_destroy(ft);
+    kissm_destroy(m);
+    free(rec);
+}
+
 int main(void) {
     g_main_thread = pthread_self();
     scn_make_pair(&g_pair, 9, 15.0, 0.01);
     RUN_TEST(test_log);
     RUN_TEST(test_progress);
+    RUN_TEST(test_progress_and_cancel_with_refine);
     RUN_TEST(test_cancel_idle);
     RUN_TEST(test_cancel_from_thread);
     scn_pair_free(&g_pair);

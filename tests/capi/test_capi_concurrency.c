@@ -123,6 +123,105 @@ static void test_fork_after_register(void) {
     CHECK(scn_result_equal(&g_serial[3], &parent));
 }
 
+/* Refinement side by side: each worker its own matcher (GICP or point-to-plane, 1-3 threads), kissm_refine
+ * from a prior, kissm_refine_features and kissm_register_features on features shared by all (computed with
+ * refinement on, so their point index is shared too), kissm_register with refinement; all equal the serial
+ * run. */
+static kissm_features *g_refine_source[NUM_PAIRS], *g_refine_target[NUM_PAIRS];
+static kissm_result g_serial_refine[2][NUM_PAIRS][3]; /* [mode][pair][call] */
+static double g_initial[NUM_PAIRS][16];
+
+static int32_t refine_mode_of(int k) { return k % 2 ? KISSM_REFINE_POINT_TO_PLANE : KISSM_REFINE_GICP; }
+
+static int refine_calls(kissm_matcher *m, int pair, kissm_result out[3]) {
+    kissm_points s = scn_points(&g_pairs[pair].source), t = scn_points(&g_pairs[pair].target);
+    int ok = 0;
+    scn_result_poison(&out[0]);
+    ok += kissm_refine(m, &s, &t, g_initial[pair], &out[0]) == KISSM_OK;
+    scn_result_poison(&out[1]);
+    ok += kissm_refine_features(m, g_refine_source[pair], g_refine_target[pair], g_initial[pair], &out[1]) == KISSM_OK;
+    scn_result_poison(&out[2]);
+    ok += kissm_register(m, &s, &t, &out[2]) == KISSM_OK;
+    return ok;
+}
+
+static void *refine_work(void *arg) {
+    worker *w = (worker *)arg;
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    const int mode = w->num_threads % 2; /* see test_parallel_refine: mode from the worker's number */
+    int round, k;
+    c.num_threads = w->num_threads;
+    c.refine_mode = refine_mode_of(mode);
+    if (kissm_create(&c, &m) != KISSM_OK) return NULL;
+    for (round = 0; round < ROUNDS; ++round) {
+        kissm_result r[3];
+        w->calls_ok += refine_calls(m, w->pair, r);
+        for (k = 0; k < 3; ++k) w->equal += scn_result_equal(&g_serial_refine[mode][w->pair][k], &r[k]);
+    }
+    kissm_destroy(m);
+    return NULL;
+}
+
+static void test_parallel_refine(void) {
+    worker workers[NUM_WORKERS];
+    int i, mode, started = 0;
+    for (i = 0; i < NUM_PAIRS; ++i) {
+        const double axis[3] = {0.0, 1.0, 1.0}, shift[3] = {0.2, 0.1, -0.1};
+        scn_pose p, start;
+        scn_pose_axis_angle(&p, axis, 0.04, shift);
+        scn_pose_compose(&g_pairs[i].truth, &p, &start);
+        scn_pose_to_matrix(&start, g_initial[i]);
+    }
+    {
+        kissm_config c = scn_config(VOXEL);
+        kissm_matcher *m = NULL;
+        c.refine_mode = KISSM_REFINE_GICP;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        for (i = 0; i < NUM_PAIRS; ++i) {
+            kissm_points s = scn_points(&g_pairs[i].source), t = scn_points(&g_pairs[i].target);
+            REQUIRE(kissm_features_compute(m, &s, &g_refine_source[i]) == KISSM_OK);
+            REQUIRE(kissm_features_compute(m, &t, &g_refine_target[i]) == KISSM_OK);
+        }
+        kissm_destroy(m);
+    }
+    for (mode = 0; mode < 2; ++mode) {
+        kissm_config c = scn_config(VOXEL);
+        kissm_matcher *m = NULL;
+        c.num_threads = 1;
+        c.refine_mode = refine_mode_of(mode);
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        for (i = 0; i < NUM_PAIRS; ++i) {
+            REQUIRE(refine_calls(m, i, g_serial_refine[mode][i]) == 3);
+            CHECK(g_serial_refine[mode][i][0].refine_iterations >= 1 &&
+                  g_serial_refine[mode][i][2].refine_iterations >= 1);
+        }
+        kissm_destroy(m);
+    }
+    memset(workers, 0, sizeof(workers));
+    for (i = 0; i < NUM_WORKERS; ++i) {
+        workers[i].pair = i % NUM_PAIRS;
+        workers[i].num_threads = 1 + i % 3; /* odd: point-to-plane, even: GICP */
+        if (pthread_create(&workers[i].thread, NULL, refine_work, &workers[i]) == 0)
+            started++;
+        else
+            break;
+    }
+    CHECK_EQ_INT(started, NUM_WORKERS);
+    for (i = 0; i < started; ++i) pthread_join(workers[i].thread, NULL);
+    for (i = 0; i < started; ++i) {
+        CHECK_MSG(workers[i].calls_ok == 3 * ROUNDS, "refine worker %d: %d of %d calls OK", i, workers[i].calls_ok,
+                  3 * ROUNDS);
+        CHECK_MSG(workers[i].equal == 3 * ROUNDS,
+                  "refine worker %d (pair %d, %d threads): %d of %d equal the serial run", i, workers[i].pair,
+                  (int)workers[i].num_threads, workers[i].equal, 3 * ROUNDS);
+    }
+    for (i = 0; i < NUM_PAIRS; ++i) {
+        kissm_features_destroy(g_refine_source[i]);
+        kissm_features_destroy(g_refine_target[i]);
+    }
+}
+
 int main(void) {
     int i;
     kissm_config c = scn_config(VOXEL);
@@ -138,6 +237,7 @@ int main(void) {
     kissm_destroy(m); /* features outlive the matcher that computed them */
     RUN_TEST(test_parallel_matchers_equal_serial);
     RUN_TEST(test_fork_after_register);
+    RUN_TEST(test_parallel_refine);
     for (i = 0; i < NUM_PAIRS; ++i) {
         kissm_features_destroy(g_source_features[i]);
         kissm_features_destroy(g_target_features[i]);

@@ -239,6 +239,119 @@ static void test_separate_processes(void) {
 }
 #endif
 
+/* Refinement: kissm_register with refine_mode set, kissm_refine and kissm_refine_features give the same bits
+ * at every thread count, on fresh and reused handles, for permuted input, and the features path equals the
+ * points path. */
+static int run_refine(int which, int32_t mode, int32_t num_threads, kissm_matcher *reuse, const kissm_points *s,
+                      const kissm_points *t, const double initial[16], kissm_result *r) {
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = reuse;
+    int32_t st;
+    c.num_threads = num_threads;
+    c.refine_mode = mode;
+    if (m == NULL && kissm_create(&c, &m) != KISSM_OK) return 0;
+    scn_result_poison(r);
+    st = which == 0 ? kissm_register(m, s, t, r) : kissm_refine(m, s, t, initial, r);
+    if (reuse == NULL) kissm_destroy(m);
+    return st == KISSM_OK;
+}
+
+static void test_refine_determinism(void) {
+    const int32_t counts[] = {2, 3, 8, 0}; /* 4: the features path below */
+    const int32_t modes[2] = {KISSM_REFINE_GICP, KISSM_REFINE_POINT_TO_PLANE};
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    double initial[16];
+    scn_pose start;
+    const double axis[3] = {1.0, 1.0, 0.0}, shift[3] = {0.3, -0.2, 0.1};
+    int mi, which;
+    scn_pose_axis_angle(&start, axis, 0.05, shift);
+    {
+        scn_pose composed;
+        scn_pose_compose(&g_pair.truth, &start, &composed);
+        scn_pose_to_matrix(&composed, initial);
+    }
+    for (mi = 0; mi < 2; ++mi) {
+        for (which = 0; which < 2; ++which) {
+            const char *what = which == 0 ? "register + refine" : "kissm_refine";
+            kissm_result ref, r;
+            kissm_matcher *reused = NULL;
+            size_t i;
+            int k;
+            REQUIRE(run_refine(which, modes[mi], 1, NULL, &s, &t, initial, &ref));
+            CHECK_MSG(ref.valid == 1 && ref.refine_iterations >= 1, "%s mode %d: valid %d", what, (int)modes[mi],
+                      (int)ref.valid);
+            for (i = 0; i < sizeof(counts) / sizeof(counts[0]); ++i) {
+                CHECK(run_refine(which, modes[mi], counts[i], NULL, &s, &t, initial, &r));
+                CHECK_MSG(scn_result_equal(&ref, &r), "%s mode %d: %d threads differ from 1", what, (int)modes[mi],
+                          (int)counts[i]);
+                report_difference(what, &ref, &r);
+            }
+            /* a reused handle, with other calls in between */
+            {
+                kissm_config c = scn_config(VOXEL);
+                c.num_threads = 2;
+                c.refine_mode = modes[mi];
+                REQUIRE(kissm_create(&c, &reused) == KISSM_OK);
+            }
+            for (k = 0; k < 2; ++k) {
+                kissm_result other;
+                CHECK(run_refine(which, modes[mi], 0, reused, &s, &t, initial, &r));
+                CHECK_MSG(scn_result_equal(&ref, &r), "%s mode %d: reused handle, run %d", what, (int)modes[mi], k);
+                CHECK(run_refine(1 - which, modes[mi], 0, reused, &t, &s, initial, &other));
+            }
+            kissm_destroy(reused);
+            /* permuted input */
+            {
+                scn_cloud s2, t2;
+                kissm_points ps, pt;
+                scn_cloud_init(&s2);
+                scn_cloud_init(&t2);
+                scn_cloud_copy(&s2, &g_pair.source);
+                scn_cloud_copy(&t2, &g_pair.target);
+                scn_cloud_shuffle(&s2, 7);
+                scn_cloud_shuffle(&t2, 8);
+                ps = scn_points(&s2);
+                pt = scn_points(&t2);
+                CHECK(run_refine(which, modes[mi], 3, NULL, &ps, &pt, initial, &r));
+                CHECK_MSG(scn_result_equal(&ref, &r), "%s mode %d: permuted input", what, (int)modes[mi]);
+                scn_cloud_free(&s2);
+                scn_cloud_free(&t2);
+            }
+        }
+        /* the features path, features made at other thread counts than the call */
+        {
+            kissm_config c1 = scn_config(VOXEL), c4 = scn_config(VOXEL);
+            kissm_matcher *m1 = NULL, *m4 = NULL;
+            kissm_features *fs = NULL, *ft = NULL;
+            kissm_result direct, via_register, via_refine, r;
+            c1.num_threads = 1;
+            c4.num_threads = 4;
+            c1.refine_mode = c4.refine_mode = modes[mi];
+            REQUIRE(kissm_create(&c1, &m1) == KISSM_OK);
+            REQUIRE(kissm_create(&c4, &m4) == KISSM_OK);
+            REQUIRE(kissm_features_compute(m4, &s, &fs) == KISSM_OK);
+            REQUIRE(kissm_features_compute(m1, &t, &ft) == KISSM_OK);
+            REQUIRE(run_refine(0, modes[mi], 1, NULL, &s, &t, initial, &via_register));
+            REQUIRE(run_refine(1, modes[mi], 1, NULL, &s, &t, initial, &direct));
+            scn_result_poison(&r);
+            CHECK_EQ_INT(kissm_register_features(m1, fs, ft, &r), KISSM_OK);
+            CHECK_MSG(scn_result_equal(&via_register, &r), "mode %d: register_features differs", (int)modes[mi]);
+            scn_result_poison(&via_refine);
+            CHECK_EQ_INT(kissm_refine_features(m4, fs, ft, initial, &via_refine), KISSM_OK);
+            CHECK_MSG(scn_result_equal(&direct, &via_refine), "mode %d: refine_features differs from refine",
+                      (int)modes[mi]);
+            report_difference("refine_features", &direct, &via_refine);
+            scn_result_poison(&r);
+            CHECK_EQ_INT(kissm_refine_features(m1, fs, ft, initial, &r), KISSM_OK);
+            CHECK(scn_result_equal(&via_refine, &r));
+            kissm_features_destroy(fs);
+            kissm_features_destroy(ft);
+            kissm_destroy(m1);
+            kissm_destroy(m4);
+        }
+    }
+}
+
 int main(void) {
     scn_make_pair(&g_pair, 5, 15.0, 0.01);
     RUN_TEST(test_thread_counts);
@@ -249,6 +362,7 @@ int main(void) {
 #endif
     RUN_TEST(test_permutation);
     RUN_TEST(test_features_thread_counts);
+    RUN_TEST(test_refine_determinism);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();
 }

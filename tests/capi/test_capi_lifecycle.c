@@ -59,6 +59,15 @@ static void check_defaults(const kissm_config *c, uint32_t expected_size) {
     CHECK(c->log_user_data == NULL);
     CHECK(c->progress_fn == NULL);
     CHECK(c->progress_user_data == NULL);
+    /* Refinement is off by default (the solver's pose as before); its settings are the library's to tune, so
+     * only their documented ranges are checked here. */
+    CHECK_EQ_INT(c->refine_mode, KISSM_REFINE_NONE);
+    CHECK(c->refine_max_iterations >= 1 && c->refine_max_iterations <= 1000);
+    CHECK(c->refine_max_distance_gain > 0.0 && c->refine_max_distance_gain <= 100.0);
+    CHECK(c->refine_kernel_gain > 0.0 && c->refine_kernel_gain <= 100.0);
+    CHECK(c->refine_rotation_epsilon >= 0.0 && c->refine_rotation_epsilon <= 1.0);
+    CHECK(c->refine_translation_epsilon_gain >= 0.0 && c->refine_translation_epsilon_gain <= 1.0);
+    CHECK(c->min_overlap >= 0.0 && c->min_overlap <= 1.0);
 }
 
 /* A caller compiled against a newer header: kissm_config followed by fields this kissm does not know. */
@@ -391,6 +400,7 @@ static void test_result_init(void) {
     CHECK(isnan(r->residual_rms));
     CHECK(r->num_source_points == 0 && r->num_final_inliers == 0 && r->max_core_number == 0);
     CHECK(r->inlier_ratio == 0.0 && r->time_total_ms == 0.0);
+    CHECK(scn_result_is_reset(r));            /* the refinement's fields too: NaN, 0 */
     CHECK(buf[sizeof(kissm_result)] == 0x5a); /* nothing written past the size given */
 
     /* A newer caller's larger struct: its unknown tail is zeroed. */

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* kissm_register on a synthetic scene moved by a large known transform: accuracy, result consistency,
- * input representations (float32, float64, strided), georeferenced coordinates and the inverse pair. C99. */
+ * input representations (float32, float64, strided), georeferenced coordinates and the inverse pair; with the
+ * default refine_mode the refinement's fields read "not run" (refinement itself: test_capi_refine.c). C99. */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -73,6 +74,15 @@ static void check_consistency(const char *label, const kissm_result *r) {
     CHECK_MSG(fabs(r->time_total_ms - sum) <= 1e-9 * (sum > 1.0 ? sum : 1.0), "%s: total %.17g sum %.17g", label,
               r->time_total_ms, sum);
     CHECK(r->time_total_ms > 0.0);
+    /* no refinement asked for (refine_mode defaults to NONE): the solver's pose is the pose, and the
+     * refinement's fields say "not run" */
+    CHECK(memcmp(r->coarse_transform, r->transform, sizeof(r->transform)) == 0);
+    for (i = 0; i < 36; ++i) CHECK(isnan(r->information[i]));
+    CHECK(isnan(r->overlap) && isnan(r->refine_rmse) && isnan(r->refine_condition));
+    CHECK(r->time_refine_ms == 0.0);
+    CHECK_EQ_INT(r->num_refine_correspondences, 0);
+    CHECK_EQ_INT(r->refine_iterations, 0);
+    CHECK_EQ_INT(r->refine_converged, 0);
 }
 
 static void register_pair(kissm_matcher *m, const kissm_points *s, const kissm_points *t, kissm_result *r) {

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Turning fuzz bytes into a config and clouds. The first bytes pick the config, the rest become points as
+// Turning fuzz bytes into a config, clouds and rigid (or deliberately not rigid) transforms. The first bytes
+// pick the config, the rest become points as
 // 16-bit integers scaled to a few tens of metres (so that most inputs reach the later stages instead of
 // stopping at the voxel range check), with some bytes turned into NaN, infinities, huge values and
 // duplicates. Every input maps to something; nothing here can fail.
@@ -33,6 +34,29 @@ private:
     std::size_t size_, pos_ = 0;
 };
 
+// The refinement and validity settings come from the voxel byte's tens (v / 10): the mode (none, GICP,
+// point-to-plane) and one of nine variants, one of them out of range. A voxel byte below 10 (every seed written before
+// refinement existed) keeps the defaults, so old seeds decode as they always did.
+inline void set_refinement(kissm_config &c, unsigned tens) {
+    c.refine_mode = static_cast<int32_t>(tens % 3);
+    switch ((tens / 3) % 9) {
+    case 1: c.refine_max_iterations = 1; break;
+    case 2: c.refine_max_distance_gain = 100.0; break; // every voxel within reach
+    case 3: c.refine_kernel_gain = 1e-3; break;        // every residual an outlier
+    case 4:                                            // never converged by the test, only by the cap
+        c.refine_rotation_epsilon = 0.0, c.refine_translation_epsilon_gain = 0.0, c.refine_max_iterations = 50;
+        break;
+    case 5: c.min_overlap = 1.0; break;
+    case 6: c.refine_max_distance_gain = 0.05; break; // hardly anything within reach
+    case 7: c.refine_max_iterations = 0; break;       // out of range: kissm_create refuses it
+    case 8:                                           // the validity rules at their loosest
+        c.max_rotation_uncertainty = 3.15, c.min_inlier_coverage = 0.0, c.refine_min_inliers = 3;
+        c.min_overlap = 0.0, c.min_refine_condition = 0.0;
+        break;
+    default: break;
+    }
+}
+
 inline kissm_config make_config(Bytes &in) {
     kissm_config c;
     kissm_config_init(&c, sizeof c);
@@ -40,6 +64,7 @@ inline kissm_config make_config(Bytes &in) {
     const std::uint8_t v = in.u8(), flags = in.u8(), gains = in.u8();
     c.voxel_size = voxels[v % 10];
     if (v >= 250) c.voxel_size = std::numeric_limits<double>::quiet_NaN();
+    set_refinement(c, v / 10u);
     c.num_threads = 1 + (flags & 1);
     c.nonfinite_policy = (flags & 2) ? KISSM_NONFINITE_DROP : KISSM_NONFINITE_REJECT;
     c.viewpoint_mode = (flags & 4) ? KISSM_VIEWPOINT_CLOUD_CENTER : KISSM_VIEWPOINT_FIXED;
@@ -99,6 +124,50 @@ inline Cloud make_cloud(Bytes &in, std::size_t max_points) {
     return c;
 }
 
+// A 4x4 row-major transform for kissm_refine: a kind byte, then what the kind needs. Kinds 0-5 are rigid
+// (the identity; a rotation vector of three u16 at 1e-4 rad and a translation of three u16 at 1 mm; the same
+// rounded to float and nudged by 3e-4, within the documented 1e-3); the others are what kissm_refine must
+// refuse with KISSM_ERR_INVALID_ARGUMENT: NaN or an infinity at a chosen entry, a scaled, sheared or reflected
+// rotation block, a wrong last row, a translation beyond 1e9. Returns whether the transform is acceptable.
+inline bool make_transform(Bytes &in, double m[16]) {
+    for (int i = 0; i < 16; ++i) m[i] = (i % 5 == 0) ? 1.0 : 0.0;
+    const std::uint8_t kind = in.u8() % 13;
+    if (kind == 0) return true;
+    double w[3], t[3];
+    for (double &x : w) x = (static_cast<double>(in.u16()) - 32768.0) * 1e-4;
+    for (double &x : t) x = (static_cast<double>(in.u16()) - 32768.0) * 1e-3;
+    const double angle = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (angle > 0.0) { // Rodrigues
+        const double k[3] = {w[0] / angle, w[1] / angle, w[2] / angle}, c = std::cos(angle), s = std::sin(angle);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                const double cross = (i == j) ? 0.0 : (((j - i + 3) % 3 == 1) ? -k[3 - i - j] : k[3 - i - j]);
+                m[4 * i + j] = (i == j ? c : 0.0) + (1.0 - c) * k[i] * k[j] + s * cross;
+            }
+    }
+    for (int i = 0; i < 3; ++i) m[4 * i + 3] = t[i];
+    const int at = in.u8() % 16;
+    switch (kind) {
+    case 5: // as a text file would give it: float digits and a small error
+        for (int i = 0; i < 12; ++i) m[i] = static_cast<double>(static_cast<float>(m[i]));
+        m[4 * (at % 3) + (at / 3) % 3] += 3e-4 * (static_cast<double>(at % 2) * 2.0 - 1.0);
+        return true;
+    case 6: m[at] = std::numeric_limits<double>::quiet_NaN(); return false;
+    case 7: m[at] = (at % 2 ? -1.0 : 1.0) * std::numeric_limits<double>::infinity(); return false;
+    case 8: // scaled
+        for (int i = 0; i < 12; ++i)
+            if (i % 4 != 3) m[i] *= 1.0 + 0.01 * (1 + at);
+        return false;
+    case 9: m[4 * (at % 3) + (at / 3 + 1) % 3] += 0.05; return false; // sheared
+    case 10:                                                          // reflected: one column negated
+        for (int i = 0; i < 3; ++i) m[4 * i + at % 3] = -m[4 * i + at % 3];
+        return false;
+    case 11: m[12 + at % 4] += 0.5; return false;                       // last row
+    case 12: m[4 * (at % 3) + 3] = (at % 2 ? -2e9 : 2e9); return false; // beyond 1e9
+    default: return true;
+    }
+}
+
 // Statuses a registration may return for these inputs (never NULL_ARGUMENT, STRUCT_SIZE, IO, PARSE,
 // UNSUPPORTED_FORMAT, FEATURES_MISMATCH (unless the caller mixes configs) or INTERNAL).
 inline bool expected_status(int32_t st) {
@@ -107,9 +176,7 @@ inline bool expected_status(int32_t st) {
            st == KISSM_ERR_OUT_OF_MEMORY || st == KISSM_ERR_CANCELLED;
 }
 
-// A valid result has a finite transform whose rotation is orthonormal with det +1; an invalid one reports why.
-inline bool result_sane(const kissm_result &r) {
-    if (!r.valid) return r.reason != KISSM_REASON_NONE;
+inline bool rigid_pose(const kissm_result &r) {
     for (double v : r.transform)
         if (!std::isfinite(v)) return false;
     const double *R = r.rotation;
@@ -121,14 +188,91 @@ inline bool result_sane(const kissm_result &r) {
         }
     const double det =
         R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
-    return std::fabs(det - 1.0) < 1e-9 && r.num_final_inliers >= 3;
+    return std::fabs(det - 1.0) < 1e-9 && r.transform[12] == 0.0 && r.transform[13] == 0.0 && r.transform[14] == 0.0 &&
+           r.transform[15] == 1.0;
 }
+
+// The refinement's fields: "not run" (NaN, 0) or in range (information finite and symmetric with a
+// non-negative diagonal, overlap and condition in [0, 1], iterations within the cap, the time in the total).
+inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
+    if (std::isnan(r.overlap)) {
+        for (double v : r.information)
+            if (!std::isnan(v)) return false;
+        return std::isnan(r.refine_rmse) && std::isnan(r.refine_condition) && r.time_refine_ms == 0.0 &&
+               r.num_refine_correspondences == 0 && r.refine_iterations == 0 && r.refine_converged == 0;
+    }
+    for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j)
+            if (!std::isfinite(r.information[6 * i + j]) || r.information[6 * i + j] != r.information[6 * j + i])
+                return false;
+    for (int i = 0; i < 6; ++i)
+        if (r.information[7 * i] < 0.0) return false;
+    if (!(r.overlap >= 0.0 && r.overlap <= 1.0 && r.refine_condition >= 0.0 && r.refine_condition <= 1.0)) return false;
+    if (r.num_refine_correspondences > 0 ? !(r.refine_rmse >= 0.0 && std::isfinite(r.refine_rmse))
+                                         : !std::isnan(r.refine_rmse))
+        return false;
+    if (r.refine_iterations < 0 || r.refine_iterations > c.refine_max_iterations) return false;
+    if (r.refine_converged != 0 && r.refine_converged != 1) return false;
+    if (r.num_refine_correspondences > r.num_source_voxels) return false;
+    // A valid refined pose passed the refined rule's dense part (docs/refinement.md).
+    if (r.valid && (r.num_refine_correspondences < 6 || !(r.overlap >= c.min_overlap) ||
+                    !(r.refine_condition >= c.min_refine_condition) || r.refine_converged != 1))
+        return false;
+    return r.time_refine_ms >= 0.0 && r.time_total_ms >= r.time_refine_ms;
+}
+
+// A valid registration has a finite transform whose rotation is orthonormal with det +1 and at least 3
+// final inliers; an invalid one reports why; either way the refinement's fields are sane.
+inline bool result_sane(const kissm_result &r, const kissm_config &c) {
+    if (!refine_fields_sane(r, c)) return false;
+    if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED;
+    if (!rigid_pose(r) || r.num_final_inliers < 3) return false;
+    // Valid with refinement: its inliers' part of the rule too; without: the rotation pinned down.
+    if (!std::isnan(r.overlap))
+        return r.num_final_inliers >= static_cast<std::uint64_t>(c.refine_min_inliers) &&
+               r.inlier_coverage >= c.min_inlier_coverage;
+    return r.num_final_inliers >= static_cast<std::uint64_t>(c.min_inliers) &&
+           r.rotation_uncertainty <= c.max_rotation_uncertainty;
+}
+
+// A refinement from the caller's pose (kissm_refine, kissm_refine_features) always ran: valid, or
+// LOW_OVERLAP / UNCONSTRAINED / NOT_CONVERGED, with a rigid pose either way and no solver numbers;
+// coarse_transform is the initial transform made rigid, so within 1e-3 of it.
+inline bool refine_result_sane(const kissm_result &r, const kissm_config &c, const double initial[16]) {
+    if (!refine_fields_sane(r, c) || std::isnan(r.overlap) || !rigid_pose(r)) return false;
+    if (!r.valid && r.reason != KISSM_REASON_LOW_OVERLAP && r.reason != KISSM_REASON_UNCONSTRAINED &&
+        r.reason != KISSM_REASON_NOT_CONVERGED)
+        return false;
+    if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage)) return false;
+    if (r.valid && r.reason != KISSM_REASON_NONE) return false;
+    for (int i = 0; i < 16; ++i)
+        if (!(std::fabs(r.coarse_transform[i] - initial[i]) <= 1e-3 * (1.0 + std::fabs(initial[i])))) return false;
+    return r.num_final_inliers == 0 && r.num_initial_correspondences == 0;
+}
+
+// What a failed call leaves: no pose, nothing refined.
+inline bool result_reset(const kissm_result &r) {
+    if (r.valid != 0) return false;
+    for (double v : r.transform)
+        if (!std::isnan(v)) return false;
+    for (double v : r.coarse_transform)
+        if (!std::isnan(v)) return false;
+    return std::isnan(r.overlap) && std::isnan(r.rotation_uncertainty) && std::isnan(r.inlier_coverage) &&
+           r.num_refine_correspondences == 0 && r.refine_iterations == 0;
+}
+
+inline bool same_bits(const double *a, const double *b, std::size_t n) { return std::memcmp(a, b, n * sizeof *a) == 0; }
 
 inline bool same_result(const kissm_result &a, const kissm_result &b) {
     // Everything but the timings.
-    return a.valid == b.valid && a.reason == b.reason &&
-           std::memcmp(a.transform, b.transform, sizeof a.transform) == 0 &&
-           a.num_final_inliers == b.num_final_inliers &&
+    return a.valid == b.valid && a.reason == b.reason && same_bits(a.transform, b.transform, 16) &&
+           same_bits(a.coarse_transform, b.coarse_transform, 16) && same_bits(a.information, b.information, 36) &&
+           same_bits(&a.overlap, &b.overlap, 1) && same_bits(&a.refine_rmse, &b.refine_rmse, 1) &&
+           same_bits(&a.refine_condition, &b.refine_condition, 1) &&
+           same_bits(&a.rotation_uncertainty, &b.rotation_uncertainty, 1) &&
+           same_bits(&a.inlier_coverage, &b.inlier_coverage, 1) &&
+           a.num_refine_correspondences == b.num_refine_correspondences && a.refine_iterations == b.refine_iterations &&
+           a.refine_converged == b.refine_converged && a.num_final_inliers == b.num_final_inliers &&
            a.num_initial_correspondences == b.num_initial_correspondences &&
            a.num_source_voxels == b.num_source_voxels && a.num_target_voxels == b.num_target_voxels;
 }

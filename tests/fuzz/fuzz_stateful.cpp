@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // libFuzzer target for one matcher used for a sequence of calls: registrations, features computed and
-// reused, a cancellation request between calls, configs read back. Invariants on top of fuzz_register's:
-// repeating a call on the reused handle gives the identical result, features give the same pose as the
-// direct call, and a cancel request made between calls does not leak into the next one.
+// reused, refinements from decoded transforms (kissm_refine, kissm_refine_features), a cancellation request
+// between calls, configs read back. Invariants on top of fuzz_register's: repeating a call on the reused
+// handle gives the identical result, features give the same result as the direct call (a refinement from
+// features differs only in the descriptor counts it reports), and a cancel request made between calls does
+// not leak into the next one.
 #include <cstdlib>
 #include <cstring>
 
@@ -26,19 +28,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
     kissm_features *features[3] = {nullptr, nullptr, nullptr};
     kissm_result first[9];
     bool have_first[9] = {};
-    // Up to 12 operations, each byte picks one and its clouds.
+    // Up to 12 operations, each byte picks one and its clouds: the high nibble 0-4 as before refinement existed
+    // (so old seeds replay the same calls), 5 and 6 the refinements, 7-15 the first five again.
     for (int step = 0; step < 12 && in.left() > 0; ++step) {
         const std::uint8_t op = in.u8();
         const int a = op % 3, b = (op / 3) % 3;
         const kissm_points pa = clouds[a].view(), pb = clouds[b].view();
         kissm_result r;
         require(kissm_result_init(&r, sizeof r) == KISSM_OK);
-        switch ((op >> 4) % 5) {
+        const int kind = (op >> 4) < 7 ? (op >> 4) : (op >> 4) % 5;
+        switch (kind) {
         case 0: { // register; again later must be identical
             const int32_t st = kissm_register(m, &pa, &pb, &r);
             require(kissm_fuzz::expected_status(st) && st != KISSM_ERR_CANCELLED);
             if (st != KISSM_OK) break;
-            require(kissm_fuzz::result_sane(r));
+            require(kissm_fuzz::result_sane(r, config));
             const int slot = 3 * a + b;
             if (have_first[slot]) require(kissm_fuzz::same_result(first[slot], r));
             first[slot] = r, have_first[slot] = true;
@@ -56,9 +60,35 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             const int32_t st = kissm_register_features(m, features[a], features[b], &r);
             require(st == KISSM_OK || st == KISSM_ERR_OUT_OF_MEMORY);
             if (st != KISSM_OK) break;
-            require(kissm_fuzz::result_sane(r));
+            require(kissm_fuzz::result_sane(r, config));
             const int slot = 3 * a + b;
             if (have_first[slot]) require(kissm_fuzz::same_result(first[slot], r));
+            break;
+        }
+        case 5:   // refine from a decoded transform, twice: the same bits
+        case 6: { // ... and from features too, when both exist: the same but for the descriptor counts
+            double initial[16];
+            const bool rigid = kissm_fuzz::make_transform(in, initial);
+            const int32_t st = kissm_refine(m, &pa, &pb, initial, &r);
+            require(kissm_fuzz::expected_status(st) && st != KISSM_ERR_CANCELLED);
+            if (!rigid)
+                require(st == KISSM_ERR_INVALID_ARGUMENT || st == KISSM_ERR_EMPTY_INPUT ||
+                        st == KISSM_ERR_TOO_FEW_POINTS);
+            if (st != KISSM_OK) {
+                require(kissm_fuzz::result_reset(r));
+                break;
+            }
+            require(kissm_fuzz::refine_result_sane(r, config, initial));
+            kissm_result again;
+            require(kissm_result_init(&again, sizeof again) == KISSM_OK);
+            if (kind == 5) {
+                require(kissm_refine(m, &pa, &pb, initial, &again) == KISSM_OK);
+                require(kissm_fuzz::same_result(r, again));
+            } else if (features[a] && features[b]) {
+                const int32_t fst = kissm_refine_features(m, features[a], features[b], initial, &again);
+                require(fst == KISSM_OK || fst == KISSM_ERR_OUT_OF_MEMORY);
+                if (fst == KISSM_OK) require(kissm_fuzz::same_result(r, again));
+            }
             break;
         }
         case 3: // a cancel request while no call runs: cleared when the next call starts

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Allocation failure: the k-th allocation of a call fails, for every k the call makes. Each such call must
+// Allocation failure: the k-th allocation of a call fails, for every k the call makes (registration, features,
+// refinement, file reading). Each such call must
 // return KISSM_ERR_OUT_OF_MEMORY (or KISSM_OK when the library could do without that memory), leave no
 // allocation behind, and the next call must give exactly the reference result.
 //
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
 
 #include "alloc_hook.hpp"
 #include "capi/scenes.h"
@@ -155,6 +157,70 @@ void test_create_and_features() {
     kissm_destroy(m);
 }
 
+// Refinement: kissm_refine (from the truth, 1 thread, every allocation; 2 threads, every 3rd),
+// kissm_features_compute with refinement on (it also builds the point index), kissm_refine_features and
+// kissm_register with refinement (every 2nd: two registrations per allocation).
+void test_refine() {
+    double initial[16];
+    scn_pose_to_matrix(&g_pair.truth, initial);
+    const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    for (const int32_t threads : {1, 2}) {
+        kissm_config c = scn_config(kVoxel);
+        c.num_threads = threads;
+        c.refine_mode = threads == 1 ? KISSM_REFINE_GICP : KISSM_REFINE_POINT_TO_PLANE;
+        kissm_matcher *m = nullptr;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        kissm_result reference, r;
+        scn_result_poison(&reference);
+        REQUIRE(kissm_refine(m, &s, &t, initial, &reference) == KISSM_OK);
+        CHECK(reference.valid == 1 && reference.refine_iterations >= 1);
+        check_sweep(sweep(
+            threads == 1 ? "kissm_refine, GICP, 1 thread" : "kissm_refine, point-to-plane, 2 threads",
+            threads == 1 ? sweep_step() : 3 * sweep_step(),
+            [&] {
+                scn_result_poison(&r);
+                return kissm_refine(m, &s, &t, initial, &r);
+            },
+            [] {}, [&] { return scn_result_equal(&reference, &r) != 0; }));
+        if (threads == 1) {
+            kissm_features *fs = nullptr, *ft = nullptr, *f = nullptr;
+            REQUIRE(kissm_features_compute(m, &s, &fs) == KISSM_OK);
+            REQUIRE(kissm_features_compute(m, &t, &ft) == KISSM_OK);
+            check_sweep(sweep(
+                "kissm_features_compute with refinement", sweep_step(),
+                [&] { return kissm_features_compute(m, &t, &f); },
+                [&] {
+                    kissm_features_destroy(f);
+                    f = nullptr;
+                },
+                [&] { return f != nullptr && kissm_features_num_voxels(f) == kissm_features_num_voxels(ft); }));
+            kissm_result via;
+            scn_result_poison(&via);
+            REQUIRE(kissm_refine_features(m, fs, ft, initial, &via) == KISSM_OK);
+            check_sweep(sweep(
+                "kissm_refine_features", sweep_step(),
+                [&] {
+                    scn_result_poison(&r);
+                    return kissm_refine_features(m, fs, ft, initial, &r);
+                },
+                [] {}, [&] { return scn_result_equal(&via, &r) != 0; }));
+            scn_result_poison(&via);
+            REQUIRE(kissm_register(m, &s, &t, &via) == KISSM_OK);
+            CHECK(via.refine_iterations >= 1);
+            check_sweep(sweep(
+                "kissm_register with refinement", 2 * sweep_step(),
+                [&] {
+                    scn_result_poison(&r);
+                    return kissm_register(m, &s, &t, &r);
+                },
+                [] {}, [&] { return scn_result_equal(&via, &r) != 0; }));
+            kissm_features_destroy(fs);
+            kissm_features_destroy(ft);
+        }
+        kissm_destroy(m);
+    }
+}
+
 const char *g_file = nullptr;
 
 void test_read_points() {
@@ -188,6 +254,7 @@ int main(int argc, char **argv) {
     RUN_TEST(test_read_points);
     RUN_TEST(test_register_one_thread);
     RUN_TEST(test_register_two_threads);
+    RUN_TEST(test_refine);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();
 }

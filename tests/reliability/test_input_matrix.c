@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: MIT */
-/* The input-validation matrix: every entry point that takes a cloud (kissm_register as source and as target,
- * kissm_features_compute, kissm_register_features) x cloud contents (NULL, empty, 1-3 points, NaN, Inf,
- * duplicates, collinear, planar, 1e7 m extents, a scene 1e7 m from the origin) x voxel sizes (1e-9, 0.5,
- * 1e9). Every cell must return the status the documentation gives for that combination, or KISSM_OK with
+/* The input-validation matrix: every entry point that takes a cloud (kissm_register and kissm_refine as source
+ * and as target, kissm_features_compute, kissm_register_features, kissm_refine_features) x cloud contents (NULL, empty,
+ * 1-3 points, NaN, Inf, duplicates, collinear, planar, 1e7 m extents, a scene 1e7 m from the origin) x voxel sizes
+ * (1e-9, 0.5, 1e9). Every cell must return the status the documentation gives for that combination, or KISSM_OK with
  * valid = 0 and a reason, and the handle must give the identical result on a good pair afterwards.
  * Bad configs (voxel 0, negative, NaN, absurd fields) and wrong struct sizes are covered cell by cell in
  * tests/capi/test_capi_bad_input.c. C99. */
@@ -85,8 +85,21 @@ static outcome expected(enum content c, enum voxel v, enum role role) {
     return o;
 }
 
+/* kissm_refine (from the good pair's true pose) and kissm_refine_features check and voxelise as kissm_register
+ * does, so their statuses are the same; then refinement judges the pose: clouds without normals (duplicates,
+ * a line, one huge voxel) or out of reach (1e7 m away) give nothing to match, LOW_OVERLAP; a plane against
+ * the scene is never valid (LOW_OVERLAP or UNCONSTRAINED); nothing here may be valid. */
+static outcome expected_refine(enum content c, enum voxel v, enum role role) {
+    outcome o = expected(c, v, role);
+    if (o.status != KISSM_OK) return o;
+    o.may_be_valid = 0;
+    o.reason = c == C_PLANAR ? -1 : KISSM_REASON_LOW_OVERLAP;
+    return o;
+}
+
 static scn_pair g_pair;
 static scn_cloud g_clouds[C_COUNT];
+static double g_truth[16];
 
 static void make_contents(void) {
     int i;
@@ -115,18 +128,24 @@ static kissm_points view(enum content c) {
     return p;
 }
 
-/* The handle still works: the good pair gives exactly the reference result (or the reference status). */
-static int usable(kissm_matcher *m, int32_t ref_status, const kissm_result *ref) {
+/* The handle still works: the good pair gives exactly the reference results (or the reference statuses) of
+ * kissm_register and kissm_refine. */
+static int usable(kissm_matcher *m, const int32_t ref_status[2], const kissm_result ref[2]) {
     const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
     kissm_result r;
     int32_t st;
+    int ok;
     scn_result_poison(&r);
     st = kissm_register(m, &s, &t, &r);
-    return st == ref_status && (st != KISSM_OK || scn_result_equal(ref, &r));
+    ok = st == ref_status[0] && (st != KISSM_OK || scn_result_equal(&ref[0], &r));
+    scn_result_poison(&r);
+    st = kissm_refine(m, &s, &t, g_truth, &r);
+    return ok && st == ref_status[1] && (st != KISSM_OK || scn_result_equal(&ref[1], &r));
 }
 
-static int cell_ok(const char *where, enum role role, enum content c, enum voxel v, int32_t st, const kissm_result *r) {
-    const outcome o = expected(c, v, role);
+static int cell_ok(const char *where, enum role role, enum content c, enum voxel v, int refine, int32_t st,
+                   const kissm_result *r) {
+    const outcome o = refine ? expected_refine(c, v, role) : expected(c, v, role);
     if (st != o.status) {
         fprintf(stderr, "  %s, %s, voxel %g: status %d, expected %d (%s)\n", where, k_content_names[c], k_voxels[v],
                 (int)st, (int)o.status, kissm_last_error_message());
@@ -153,12 +172,15 @@ static void test_matrix(void) {
         kissm_matcher *m = NULL;
         const kissm_points good_s = scn_points(&g_pair.source), good_t = scn_points(&g_pair.target);
         kissm_features *good_f = NULL;
-        kissm_result ref;
-        int32_t ref_status;
+        kissm_result ref[2];
+        int32_t ref_status[2];
         REQUIRE(kissm_create(&config, &m) == KISSM_OK);
-        scn_result_poison(&ref);
-        ref_status = kissm_register(m, &good_s, &good_t, &ref);
-        if (v == V_GOOD) CHECK(ref_status == KISSM_OK && ref.valid == 1); /* the good pair is good */
+        scn_result_poison(&ref[0]);
+        ref_status[0] = kissm_register(m, &good_s, &good_t, &ref[0]);
+        scn_result_poison(&ref[1]);
+        ref_status[1] = kissm_refine(m, &good_s, &good_t, g_truth, &ref[1]);
+        if (v == V_GOOD) CHECK(ref_status[0] == KISSM_OK && ref[0].valid == 1); /* the good pair is good */
+        if (v == V_GOOD) CHECK(ref_status[1] == KISSM_OK && ref[1].valid == 1);
         if (kissm_features_compute(m, &good_t, &good_f) != KISSM_OK) good_f = NULL;
         for (c = 0; c < C_COUNT; ++c) {
             const kissm_points p = view((enum content)c);
@@ -169,22 +191,31 @@ static void test_matrix(void) {
 
             scn_result_poison(&r);
             st = kissm_register(m, &p, &good_t, &r);
-            ok &= cell_ok("source", R_SOURCE, (enum content)c, (enum voxel)v, st, &r);
+            ok &= cell_ok("source", R_SOURCE, (enum content)c, (enum voxel)v, 0, st, &r);
             scn_result_poison(&r);
             st = kissm_register(m, &good_s, &p, &r);
-            ok &= cell_ok("target", R_TARGET, (enum content)c, (enum voxel)v, st, &r);
+            ok &= cell_ok("target", R_TARGET, (enum content)c, (enum voxel)v, 0, st, &r);
+            scn_result_poison(&r);
+            st = kissm_refine(m, &p, &good_t, g_truth, &r);
+            ok &= cell_ok("refine source", R_SOURCE, (enum content)c, (enum voxel)v, 1, st, &r);
+            scn_result_poison(&r);
+            st = kissm_refine(m, &good_s, &p, g_truth, &r);
+            ok &= cell_ok("refine target", R_TARGET, (enum content)c, (enum voxel)v, 1, st, &r);
             st = kissm_features_compute(m, &p, &f);
-            ok &= cell_ok("features", R_FEATURES, (enum content)c, (enum voxel)v, st, NULL);
+            ok &= cell_ok("features", R_FEATURES, (enum content)c, (enum voxel)v, 0, st, NULL);
             ok &= (st == KISSM_OK) == (f != NULL);
-            if (f != NULL && good_f != NULL) { /* from features: same rules as the direct call */
+            if (f != NULL && good_f != NULL) { /* from features: same rules as the direct calls */
                 scn_result_poison(&r);
                 st = kissm_register_features(m, f, good_f, &r);
-                ok &= cell_ok("source features", R_SOURCE, (enum content)c, (enum voxel)v, st, &r);
+                ok &= cell_ok("source features", R_SOURCE, (enum content)c, (enum voxel)v, 0, st, &r);
+                scn_result_poison(&r);
+                st = kissm_refine_features(m, f, good_f, g_truth, &r);
+                ok &= cell_ok("refine source features", R_SOURCE, (enum content)c, (enum voxel)v, 1, st, &r);
             }
             kissm_features_destroy(f);
             cells++;
             good_cells += ok;
-            if (usable(m, ref_status, &ref))
+            if (usable(m, ref_status, ref))
                 still_usable++;
             else
                 fprintf(stderr, "  after %s at voxel %g the handle changed\n", k_content_names[c], k_voxels[v]);
@@ -200,6 +231,7 @@ static void test_matrix(void) {
 int main(void) {
     int i;
     scn_make_pair(&g_pair, 11, 6.0, 0.01);
+    scn_pose_to_matrix(&g_pair.truth, g_truth);
     make_contents();
     RUN_TEST(test_matrix);
     for (i = 0; i < C_COUNT; ++i) scn_cloud_free(&g_clouds[i]);

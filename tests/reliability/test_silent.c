@@ -42,6 +42,35 @@ static void exercise(const scn_pair *pair) {
         (void)kissm_register_features(m, f, g, &r); /* features mismatch */
         kissm_features_destroy(g);
     }
+    /* refinement: good (4 threads, from the truth), registered with refinement, a transform that is not
+     * rigid, a prior far off, from features (one of another voxel size: a mismatch) */
+    {
+        kissm_config rc = scn_config(0.5);
+        kissm_matcher *rm = NULL;
+        double initial[16];
+        scn_pose_to_matrix(&pair->truth, initial);
+        ((double *)pair->source.xyz)[7] = 1.0;
+        rc.num_threads = 4;
+        rc.refine_mode = KISSM_REFINE_GICP;
+        if (kissm_create(&rc, &rm) == KISSM_OK) {
+            kissm_features *g = NULL;
+            (void)kissm_refine(rm, &s, &t, initial, &r);
+            (void)kissm_register(rm, &s, &t, &r);
+            (void)kissm_refine(rm, &s, &t, NULL, &r);
+            initial[15] = 2.0;
+            (void)kissm_refine(rm, &s, &t, initial, &r);
+            initial[15] = 1.0;
+            initial[3] += 1e4;
+            (void)kissm_refine(rm, &s, &t, initial, &r);
+            initial[3] -= 1e4;
+            if (kissm_features_compute(rm, &t, &g) == KISSM_OK) {
+                (void)kissm_refine_features(rm, g, g, initial, &r);
+                (void)kissm_refine_features(m, f, g, initial, &r); /* features mismatch */
+            }
+            kissm_features_destroy(g);
+        }
+        kissm_destroy(rm);
+    }
     (void)kissm_read_points("/nonexistent/kissm/cloud.ply", KISSM_FORMAT_AUTO, &cloud); /* I/O error */
     (void)kissm_read_points("/dev/null", KISSM_FORMAT_PLY, &cloud);                     /* parse error */
     kissm_cancel(m);
