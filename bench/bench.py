@@ -913,6 +913,8 @@ def run_real(args, cases, methods, threads_list, log, results) -> None:
                     try:
                         rec = workers[m].call({"cmd": "run"}, timeout=args.timeout)
                         judge(rec, case["gt"], case["category"])
+                        if m in KISSM_REFINE_MODE and "coarse" in case:  # the peers' start, bit for bit?
+                            rec["same_start"] = rec["coarse_transform"] == case["coarse"]["transform"]
                         rec["status"] = "ok"
                     except WorkerTimeout as exc:
                         failed[m] = "timeout"
@@ -1164,8 +1166,8 @@ def main(argv=None) -> int:
         if "--scaling-sizes" not in explicit:
             args.scaling_sizes = [10_000, 30_000, 100_000]
     if args.refine_only:
-        if "--methods" not in explicit:
-            args.methods = ["kissm", *REFINE_METHODS]
+        if "--methods" not in explicit:  # the coarse ones for the coarse errors, times and success to compare
+            args.methods = ["kissm", "reference", *REFINE_METHODS]
         args.no_scaling = True
     if args.smoke:
         if "--out" not in explicit:
