@@ -31,6 +31,9 @@ COUNTS = {
     "rotation_inliers": "num_rotation_inliers",
     "final_inliers": "num_final_inliers",
 }
+#: The refinement's keys of the JSON (kissm >= the refinement release): doubles and ints by Result field.
+REFINE_DOUBLES = ("overlap", "refine_rmse", "refine_condition")
+REFINE_INTS = ("refine_iterations",)
 
 
 def _parse_int(text: str) -> Any:
@@ -38,12 +41,19 @@ def _parse_int(text: str) -> Any:
 
 
 def run_cli(
-    cli: Path, source: Path, target: Path, voxel: float, extra: list[str] | None = None, threads: int = 1
+    cli: Path,
+    source: Path,
+    target: Path,
+    voxel: float,
+    extra: list[str] | None = None,
+    threads: int = 1,
+    command_name: str = "register",
 ) -> dict[str, Any]:
-    """`kissm register SOURCE TARGET --voxel V --threads 1 --json` as a dict (exact doubles, null = NaN)."""
+    """`kissm register SOURCE TARGET --voxel V --threads 1 --json` (or `kissm refine ...` with
+    ``command_name="refine"``) as a dict (exact doubles, null = NaN)."""
     command = [
         str(cli),
-        "register",
+        command_name,
         str(source),
         str(target),
         "--voxel",
@@ -62,15 +72,52 @@ def _doubles(value: Any) -> np.ndarray:
     return np.array(value, dtype=object).astype(float)  # None -> nan
 
 
-def assert_matches_cli(result: kissm.Result, cli: dict[str, Any]) -> None:
+def cli_knows_refinement(cli: Path) -> bool:
+    """Whether this kissm CLI has the refinement options (`register --refine`, the `refine` command)."""
+    done = subprocess.run([str(cli), "register", "--help"], capture_output=True, text=True, timeout=60)
+    return done.returncode == 0 and "--refine" in done.stdout
+
+
+def write_transform(path: Path, transform: np.ndarray) -> None:
+    """A 4x4 transform as the CLI reads it (`--initial`) and writes it (`--out-transform`): 4 lines of 4
+    numbers, here Python's shortest round-trip repr, so the CLI reads back the exact doubles."""
+    path.write_text(
+        "# p_target = T p_source\n" + "".join(" ".join(map(repr, row)) + "\n" for row in transform.tolist())
+    )
+
+
+def _assert_same_bits(name: str, got: Any, expected: Any) -> None:
+    expected = _doubles(expected).reshape(np.shape(got))
+    assert bits(np.asarray(got, dtype=np.float64)) == bits(expected), f"{name}:\n{got!r}\n!=\n{expected!r}"
+
+
+def assert_matches_cli(result: kissm.Result, cli: dict[str, Any], refine_mode: str | None = None) -> None:
+    """Every field the CLI prints equals the Result's, bit for bit; ``refine_mode`` (a Config name) is checked
+    against the JSON's "refine" when given."""
     assert result.valid == cli["valid"]
     assert (result.reason, result.reason_code) == (cli["reason"], cli["reason_code"])
     for name in ("transform", "rotation", "translation", "inlier_extent"):
-        expected = _doubles(cli[name]).reshape(getattr(result, name).shape)
-        assert bits(getattr(result, name)) == bits(expected), f"{name}:\n{getattr(result, name)!r}\n!=\n{expected!r}"
+        _assert_same_bits(name, getattr(result, name), cli[name])
     assert result.num_final_inliers == cli["final_inliers"]
     for key, field in COUNTS.items():
         assert getattr(result, field) == cli["counts"][key], field
     for name in ("inlier_ratio", "residual_rms", "noise_bound"):
-        value = math.nan if cli[name] is None else float(cli[name])
-        assert bits(getattr(result, name)) == bits(value), f"{name}: {getattr(result, name)!r} != {value!r}"
+        _assert_same_bits(name, getattr(result, name), cli[name])
+    if "coarse_transform" not in cli:
+        # A CLI from before refinement: it has nothing more to compare, and cannot have refined.
+        assert not result.refined and refine_mode is None, "this kissm CLI prints no refinement fields"
+        return
+    if refine_mode is not None:
+        assert cli["refine"] == refine_mode.replace("_", "-")  # the CLI spells it point-to-plane
+    _assert_same_bits("coarse_transform", result.coarse_transform, cli["coarse_transform"])
+    information = cli["information"]
+    assert (information is not None) == result.refined
+    _assert_same_bits("information", result.information, information if information is not None else [math.nan] * 36)
+    for name in REFINE_DOUBLES:
+        _assert_same_bits(name, getattr(result, name), cli[name])
+    for name in REFINE_INTS:
+        assert getattr(result, name) == cli[name], name
+    assert result.refine_converged is cli["refine_converged"]
+    assert result.num_refine_correspondences == cli["counts"]["refine_correspondences"]
+    assert list(cli["counts"]).index("refine_correspondences") == list(cli["counts"]).index("final_inliers") + 1
+    assert list(cli["time_ms"])[-2:] == ["refine", "total"]

@@ -16,6 +16,7 @@ TIME_FIELDS = {
     "time_pruning_ms",
     "time_solver_ms",
     "time_total_ms",
+    "time_refine_ms",
 }
 
 

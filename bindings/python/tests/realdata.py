@@ -36,6 +36,11 @@ class RealPair:
     target_format: str
     gt: np.ndarray  #: 4x4, maps source into target
     kind: Kind
+    kind_name: str  #: the index's kind, e.g. lidar_scan
+
+    @property
+    def is_lidar(self) -> bool:
+        return self.kind_name.startswith("lidar_")
 
 
 def _pair_txt(path: Path) -> dict[str, str]:
@@ -62,14 +67,16 @@ def load_pairs(root: Path) -> list[RealPair]:
                     target_format=info["target_format"],
                     gt=np.loadtxt(pair_dir / "gt_T_target_source.txt").reshape(4, 4),
                     kind=KINDS[row["kind"]],
+                    kind_name=row["kind"],
                 )
             )
     return pairs
 
 
-def pair_names(root: Path) -> list[str]:
-    """Names for parametrisation, without failing collection when the data is absent."""
+def pair_names(root: Path, lidar_only: bool = False) -> list[str]:
+    """Names for parametrisation (of every pair, or of the LiDAR pairs), without failing collection when the
+    data is absent."""
     try:
-        return [p.name for p in load_pairs(root)]
+        return [p.name for p in load_pairs(root) if p.is_lidar or not lidar_only]
     except OSError:
         return []

@@ -10,7 +10,8 @@ import pytest
 
 import kissm
 
-from cli_json import assert_matches_cli, run_cli
+import testdata
+from cli_json import assert_matches_cli, cli_knows_refinement, run_cli, write_transform
 
 
 def test_demo_clouds_bitwise_equal_cli(cli: Path, demo_clouds: tuple[Path, Path]) -> None:
@@ -96,3 +97,47 @@ def test_cli_threads_do_not_matter(cli: Path, demo_clouds: tuple[Path, Path], th
         kissm.register(kissm.read_points(source_path), kissm.read_points(target_path), voxel_size=0.3, num_threads=1),
         expected,
     )
+
+
+# ---- refinement: `register --refine` and `kissm refine` ------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def refining_cli(cli: Path) -> Path:
+    """The CLI, when it has the refinement options (the CLI side of refinement may not be merged yet)."""
+    if not cli_knows_refinement(cli):
+        pytest.skip(f"{cli} has no `register --refine` (the CLI side of refinement is not in this build)")
+    return cli
+
+
+@pytest.fixture()
+def pair_files(pair, tmp_path: Path) -> tuple[Path, Path]:
+    np.save(tmp_path / "source.npy", pair.source)
+    np.save(tmp_path / "target.npy", pair.target)
+    return tmp_path / "source.npy", tmp_path / "target.npy"
+
+
+@pytest.mark.parametrize("mode", ["none", "gicp", "point_to_plane"])
+def test_refined_registration_bitwise_equals_cli(refining_cli: Path, pair, pair_files, mode: str) -> None:
+    cli_mode = mode.replace("_", "-")
+    expected = run_cli(refining_cli, *pair_files, pair.voxel_size, ["--refine", cli_mode])
+    assert expected["valid"] and (expected["information"] is None) == (mode == "none")
+    assert_matches_cli(kissm.register(pair.source, pair.target, pair.voxel_size, refine=mode), expected, mode)
+
+
+@pytest.mark.parametrize("mode", [None, "gicp", "point_to_plane"])
+def test_refine_command_bitwise_equals_cli(
+    refining_cli: Path, pair, pair_files, tmp_path: Path, mode: str | None
+) -> None:
+    """`kissm refine SRC TGT --initial T.txt` (GICP by default) against kissm.refine from the same prior."""
+    initial = testdata.pose(testdata.rotation_zyx(3.0), [0.2, -0.15, 0.05]) @ pair.transform
+    write_transform(tmp_path / "initial.txt", initial)
+    extra = ["--initial", str(tmp_path / "initial.txt")] + (["--refine", mode.replace("_", "-")] if mode else [])
+    expected = run_cli(refining_cli, *pair_files, pair.voxel_size, extra, command_name="refine")
+    assert expected["valid"]
+    keys = list(expected)
+    assert keys.index("initial_transform") == keys.index("transform") - 1
+    assert np.array(expected["initial_transform"], dtype=float).tobytes() == initial.tobytes()
+    result = kissm.refine(pair.source, pair.target, initial, pair.voxel_size, refine=mode)
+    assert_matches_cli(result, expected, mode or "gicp")
+    assert testdata.rotation_error_deg(result.rotation, pair.rotation) < 0.05

@@ -39,6 +39,8 @@ def test_defaults_come_from_kissm_config_init() -> None:
             assert kissm._config.NONFINITE_POLICIES[value] == c.nonfinite_policy
         elif name == "viewpoint_mode":
             assert kissm._config.VIEWPOINT_MODES[value] == c.viewpoint_mode
+        elif name == "refine_mode":
+            assert kissm._config.REFINE_MODES[value] == c.refine_mode
         else:
             assert value == getattr(c, name), name
     # and the struct handed to the library is byte for byte kissm_config_init's
@@ -63,6 +65,13 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         nonfinite_policy="drop",
         viewpoint_mode="cloud_center",
         log_level=0,
+        refine_mode="point_to_plane",
+        refine_max_iterations=12,
+        refine_max_distance_gain=2.5,
+        refine_kernel_gain=0.75,
+        refine_rotation_epsilon=2e-4,
+        refine_translation_epsilon_gain=5e-3,
+        min_overlap=0.4,
     )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
@@ -71,6 +80,9 @@ def test_fields_round_trip_into_the_c_struct() -> None:
     assert (c.min_normal_neighbors, c.max_correspondences, c.min_inliers, c.log_level) == (5, 3000, 20, 0)
     assert c.nonfinite_policy == _ffi.lib.KISSM_NONFINITE_DROP
     assert c.viewpoint_mode == _ffi.lib.KISSM_VIEWPOINT_CLOUD_CENTER
+    assert (c.refine_mode, c.refine_max_iterations) == (_ffi.lib.KISSM_REFINE_POINT_TO_PLANE, 12)
+    assert (c.refine_max_distance_gain, c.refine_kernel_gain, c.refine_rotation_epsilon) == (2.5, 0.75, 2e-4)
+    assert (c.refine_translation_epsilon_gain, c.min_overlap) == (5e-3, 0.4)
     assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
     # what the matcher got is what was asked for
     with kissm.Matcher(config) as matcher:
@@ -103,6 +115,19 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         ("nonfinite_policy", 7, "config.nonfinite_policy is 7; it must be in [0, 1]"),
         ("viewpoint_mode", -1, "config.viewpoint_mode is -1"),
         ("log_level", 5, "config.log_level is 5; it must be in [0, 4]"),
+        ("refine_mode", 3, "config.refine_mode is 3; it must be in [0, 2]"),
+        ("refine_mode", -1, "config.refine_mode is -1"),
+        ("refine_max_iterations", 0, "config.refine_max_iterations is 0; it must be in [1, 1000]"),
+        ("refine_max_iterations", 1001, "config.refine_max_iterations is 1001"),
+        ("refine_max_distance_gain", 0.0, "config.refine_max_distance_gain is 0; it must be in (0, 100]"),
+        ("refine_max_distance_gain", 101.0, "config.refine_max_distance_gain is 101"),
+        ("refine_kernel_gain", -1.0, "config.refine_kernel_gain is -1; it must be in (0, 100]"),
+        ("refine_kernel_gain", float("nan"), "config.refine_kernel_gain is nan"),
+        ("refine_rotation_epsilon", 1.5, "config.refine_rotation_epsilon is 1.5; it must be in [0, 1]"),
+        ("refine_rotation_epsilon", -1e-9, "config.refine_rotation_epsilon is -1e-09"),
+        ("refine_translation_epsilon_gain", 2.0, "config.refine_translation_epsilon_gain is 2; it must be in [0, 1]"),
+        ("min_overlap", 1.01, "config.min_overlap is 1.01; it must be in [0, 1]"),
+        ("min_overlap", float("inf"), "config.min_overlap is inf"),
     ],
 )
 def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:
@@ -131,6 +156,11 @@ def test_out_of_int32_range_is_a_valueerror() -> None:
         ("viewpoint", 3.0),
         ("viewpoint", ("a", 0, 0)),
         ("nonfinite_policy", 0.5),
+        ("refine_mode", 1.0),
+        ("refine_mode", True),
+        ("refine_max_iterations", 10.0),
+        ("refine_kernel_gain", "1"),
+        ("min_overlap", None),
     ],
 )
 def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
@@ -158,6 +188,23 @@ def test_enumerations_take_names_or_the_c_constants() -> None:
         kissm.Config(nonfinite_policy="ignore")
 
 
+def test_refine_mode_names() -> None:
+    assert kissm._config.REFINE_MODES == {
+        "none": _ffi.lib.KISSM_REFINE_NONE,
+        "gicp": _ffi.lib.KISSM_REFINE_GICP,
+        "point_to_plane": _ffi.lib.KISSM_REFINE_POINT_TO_PLANE,
+    }
+    assert kissm.Config().refine_mode == "none"
+    for name, code in kissm._config.REFINE_MODES.items():
+        assert kissm.Config(refine_mode=code).refine_mode == name
+        assert kissm.Config(refine_mode=name)._to_c().refine_mode == code
+    assert kissm.Config(refine_mode=np.int32(1)) == kissm.Config(refine_mode="gicp")
+    with pytest.raises(
+        ValueError, match="Config.refine_mode is 'point-to-plane'; use one of 'none', 'gicp', 'point_to_plane'"
+    ):
+        kissm.Config(refine_mode="point-to-plane")  # the CLI's spelling is not a Python name
+
+
 def test_unknown_keywords_are_typeerrors() -> None:
     with pytest.raises(TypeError, match="voxel"):
         kissm.Config(voxel=0.3)
@@ -180,7 +227,16 @@ def test_configs_are_immutable_values() -> None:
 
 
 def test_pickle_and_copy() -> None:
-    config = kissm.Config(voxel_size=0.45, num_threads=2, viewpoint=(0, 0, 1.7), nonfinite_policy="drop")
+    config = kissm.Config(
+        voxel_size=0.45,
+        num_threads=2,
+        viewpoint=(0, 0, 1.7),
+        nonfinite_policy="drop",
+        refine_mode="gicp",
+        refine_max_iterations=7,
+        refine_kernel_gain=0.5,
+        min_overlap=0.3,
+    )
     for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
         assert pickle.loads(pickle.dumps(config, protocol)) == config
     assert copy.deepcopy(config) == config and copy.copy(config) == config
@@ -191,6 +247,9 @@ def test_repr_is_readable_and_evaluable() -> None:
     config = kissm.Config(voxel_size=0.5, num_threads=2, viewpoint_mode="cloud_center")
     assert repr(config) == "kissm.Config(voxel_size=0.5, num_threads=2, viewpoint_mode='cloud_center')"
     assert eval(repr(config), {"kissm": kissm}) == config
+    refined = kissm.Config(refine_mode="point_to_plane", refine_max_iterations=5, min_overlap=0.25)
+    assert repr(refined) == "kissm.Config(refine_mode='point_to_plane', refine_max_iterations=5, min_overlap=0.25)"
+    assert eval(repr(refined), {"kissm": kissm}) == refined
 
 
 def test_matcher_overrides_and_config() -> None:

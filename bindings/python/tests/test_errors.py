@@ -85,7 +85,9 @@ def test_null_argument() -> None:
 
 def test_struct_size() -> None:
     c = _ffi.ffi.new("kissm_config *")
-    with pytest.raises(kissm.StructSizeError, match="^kissm_config_init: struct_size is 4; this kissm needs"):
+    with pytest.raises(
+        kissm.StructSizeError, match=r"^kissm_config_init: struct_size is 4; .*\(set it to sizeof\(kissm_config\)\)$"
+    ):
         _errors.check(_ffi.lib.kissm_config_init(c, 4))
 
 

@@ -1,12 +1,16 @@
 # SPDX-License-Identifier: MIT
-"""Cross-language round trip, Python side: the clouds of tests/data registered as listed in
-tests/data/golden.json (written by the C library) give the same result bit for bit. The C suite
-(tests/roundtrip) and the Rust suite (kissm/tests/golden.rs) check the same file."""
+"""Cross-language round trip, Python side: the clouds of tests/data registered (``"call": "register"``) or
+refined from the case's initial transform (``"call": "refine"``) as listed in tests/data/golden.json (written by
+the C library) give the same result bit for bit: validity, reason, every count, the transforms, the information
+matrix and every double (null in the file is NaN). The C suite (tests/roundtrip) and the Rust suite
+(kissm/tests/golden.rs) check the same file."""
 
 from __future__ import annotations
 
 import json
+import math
 import struct
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,8 +20,10 @@ import kissm
 import testdata
 
 DATA = testdata.data_dir()  # the committed pair and golden.json, from tests/data
-GOLDEN = json.loads((DATA / "golden.json").read_text())
+# (%.17g prints -0.0 as "-0", which json would read as the integer 0.)
+GOLDEN = json.loads((DATA / "golden.json").read_text(), parse_int=lambda t: -0.0 if t == "-0" else int(t))
 
+#: Every golden integer, by its kissm_result name (refine_converged is a bool in Python, 0/1 in the file).
 COUNTS = [
     "num_source_points",
     "num_target_points",
@@ -30,27 +36,57 @@ COUNTS = [
     "num_rotation_inliers",
     "num_final_inliers",
     "max_core_number",
+    "num_refine_correspondences",
+    "refine_iterations",
+    "refine_converged",
 ]
+DOUBLES = ["residual_rms", "overlap", "refine_rmse", "refine_condition"]
+ARRAYS = ["transform", "coarse_transform", "information"]
 
 
-def bits(x: float) -> bytes:
-    return struct.pack("<d", x)
+def bits(x: float | None) -> bytes:
+    """The exact bits of a golden number; every NaN (JSON null) as one pattern."""
+    return struct.pack("<d", math.nan if x is None or math.isnan(x) else x)
 
 
-@pytest.mark.parametrize("case", GOLDEN["cases"], ids=lambda c: c["name"])
-@pytest.mark.parametrize("threads", [1, 2])
-def test_golden(case: dict, threads: int) -> None:
+def run_case(case: dict[str, Any], threads: int) -> kissm.Result:
     source = kissm.read_points(DATA / GOLDEN["source"])
     target = kissm.read_points(DATA / GOLDEN["target"])
     if case["scalar"] == "float32":
         source, target = source.astype(np.float32), target.astype(np.float32)
-    with kissm.Matcher(voxel_size=case["voxel_size"], num_threads=threads) as matcher:
-        result = matcher.register(source, target)
+    else:
+        assert case["scalar"] == "float64", case["scalar"]
+    config = kissm.Config(voxel_size=case["voxel_size"], num_threads=threads, refine_mode=case["refine"])
+    with kissm.Matcher(config) as matcher:
+        if case["call"] == "refine":
+            initial = np.array(case["initial_transform"], dtype=np.float64).reshape(4, 4)
+            return matcher.refine(source, target, initial)
+        assert case["call"] == "register", case["call"]
+        return matcher.register(source, target)
+
+
+def test_golden_file_lists_every_kind_of_case() -> None:
+    """The cases this test must understand are all there (a new kind needs code here)."""
+    calls = {(case["call"], case["refine"]) for case in GOLDEN["cases"]}
+    assert {("register", "none"), ("register", "gicp"), ("register", "point_to_plane"), ("refine", "gicp")} <= calls
+    for case in GOLDEN["cases"]:
+        assert case["call"] in ("register", "refine") and case["refine"] in kissm._config.REFINE_MODES
+        assert ("initial_transform" in case) == (case["call"] == "refine")
+        assert all(name in case for name in COUNTS + DOUBLES + ARRAYS), case["name"]
+
+
+@pytest.mark.parametrize("case", GOLDEN["cases"], ids=lambda c: c["name"])
+@pytest.mark.parametrize("threads", [1, 2])
+def test_golden(case: dict[str, Any], threads: int) -> None:
+    result = run_case(case, threads)
     assert result.valid == bool(case["valid"])
     assert result.reason_code == case["reason"]
-    got = [bits(v) for v in result.transform.ravel()]
-    expect = [bits(v) for v in case["transform"]]
-    assert got == expect
+    for name in ARRAYS:
+        got = [bits(v) for v in getattr(result, name).ravel()]
+        expect = [bits(v) for v in case[name]]
+        assert got == expect, f"{name}: {getattr(result, name).ravel().tolist()} != {case[name]}"
     for name in COUNTS:
-        assert getattr(result, name) == case[name], name
-    assert bits(result.residual_rms) == bits(case["residual_rms"])
+        assert int(getattr(result, name)) == case[name], name
+    for name in DOUBLES:
+        assert bits(getattr(result, name)) == bits(case[name]), f"{name}: {getattr(result, name)!r} != {case[name]}"
+    assert result.refined == (case["refine"] != "none" or case["call"] == "refine")

@@ -21,6 +21,7 @@ from realdata import RealPair, load_pairs, pair_names
 from testdata import rotation_error_deg
 
 NAMES = pair_names(data_dir()) or ["(no real data)"]
+LIDAR_NAMES = pair_names(data_dir(), lidar_only=True) or ["(no real LiDAR data)"]
 
 
 @pytest.fixture(scope="module")
@@ -56,6 +57,32 @@ def test_real_pair_against_ground_truth(real_pairs: dict[str, RealPair], name: s
         assert success, f"{name}: {result!r}\nRRE {rre:.3f} deg, RTE {rte:.4f} m"
     else:  # object scans: may give up, must not be confidently wrong
         assert success or not result.valid, f"{name}: valid but wrong (RRE {rre:.3f} deg, RTE {rte:.4f} m)"
+
+
+#: Refinement may leave the coarse pose's error at most this much worse (degrees, metres): the ground truths
+#: are themselves SLAM or ICP estimates good to about this.
+REFINE_SLACK_DEG, REFINE_SLACK_M = 0.1, 0.02
+
+
+@pytest.mark.parametrize("name", LIDAR_NAMES)
+def test_real_lidar_pair_refined_with_gicp(real_pairs: dict[str, RealPair], name: str) -> None:
+    """Every LiDAR pair as recorded: GICP refinement keeps the pose valid and brings it closer to the ground
+    truth than the global solver's, or leaves it within REFINE_SLACK of that."""
+    pair = real_pairs[name]
+    assert pair.is_lidar
+    source, target = _points(pair.source, pair.source_format), _points(pair.target, pair.target_format)
+    result = kissm.register(source, target, voxel_size=pair.kind.voxel, refine="gicp", num_threads=2)
+    assert result.valid and result.refined, f"{name}: {result!r}"
+    assert np.array_equal(result.coarse_transform, _register(name, pair).transform)  # the solver's pose, unchanged
+    coarse_rre = rotation_error_deg(result.coarse_transform[:3, :3], pair.gt[:3, :3])
+    coarse_rte = float(np.linalg.norm(result.coarse_transform[:3, 3] - pair.gt[:3, 3]))
+    rre = rotation_error_deg(result.rotation, pair.gt[:3, :3])
+    rte = float(np.linalg.norm(result.translation - pair.gt[:3, 3]))
+    report = f"{name}: coarse {coarse_rre:.3f} deg {coarse_rte:.4f} m, refined {rre:.3f} deg {rte:.4f} m"
+    assert rre < coarse_rre + REFINE_SLACK_DEG and rte < coarse_rte + REFINE_SLACK_M, report
+    assert rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m, report
+    assert 0.5 < result.overlap <= 1.0 and result.refine_converged, f"{report}\n{result!r}"
+    assert np.linalg.eigvalsh(result.information).min() > 0, report
 
 
 @pytest.mark.parametrize("name", NAMES)

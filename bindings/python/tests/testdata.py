@@ -49,6 +49,13 @@ def rotation_zyx(yaw_deg: float, pitch_deg: float = 0.0, roll_deg: float = 0.0) 
     return rz @ ry @ rx
 
 
+def pose(rotation: np.ndarray, translation: object) -> np.ndarray:
+    """The 4x4 matrix of (rotation, translation)."""
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = rotation, translation
+    return out
+
+
 def rotation_error_deg(a: np.ndarray, b: np.ndarray) -> float:
     """The angle of the rotation between ``a`` and ``b``, in degrees."""
     cos = (np.trace(a.T @ b) - 1.0) / 2.0
@@ -62,6 +69,11 @@ class Pair:
     rotation: np.ndarray  #: the true pose: p_target = rotation @ p_source + translation
     translation: np.ndarray
     voxel_size: float = VOXEL_SIZE
+
+    @property
+    def transform(self) -> np.ndarray:
+        """The true pose as a 4x4 matrix."""
+        return pose(self.rotation, self.translation)
 
     def moved(self, rotation: np.ndarray, translation: np.ndarray) -> Pair:
         """The target cloud moved by (rotation, translation); the ground truth follows it."""

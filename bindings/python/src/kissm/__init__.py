@@ -14,6 +14,10 @@ A thin Python layer over the kissm C library (loaded through cffi in ABI mode)::
         for scan in scans:  # ...and match it many times
             print(matcher.register_features(matcher.compute_features(scan), target))
 
+    refined = kissm.register(source_xyz, target_xyz, voxel_size=0.5, refine="gicp")  # + fine registration
+    tracked = kissm.refine(source_xyz, target_xyz, prior_4x4, voxel_size=0.5)        # from a known pose
+    refined.information  # 6x6, rotation then translation: GTSAM's Pose3 convention
+
 Results are bitwise identical to the C library's (and the ``kissm`` CLI's) on the same input, whatever
 ``num_threads``. The library never prints; neither does this package.
 """
@@ -22,7 +26,7 @@ from __future__ import annotations
 
 from typing import Any, TypeAlias
 
-from . import _config, _ffi, _points, _read
+from . import _config, _ffi, _matcher, _points, _read
 from ._config import Config
 from ._errors import (
     CancelledError,
@@ -71,17 +75,56 @@ NonFinitePolicy: TypeAlias = _config.NonFinitePolicy
 ViewpointMode: TypeAlias = _config.ViewpointMode
 """The names of :attr:`Config.viewpoint_mode`: ``"fixed"`` or ``"cloud_center"``."""
 
+RefineMode: TypeAlias = _config.RefineMode
+"""The names of :attr:`Config.refine_mode`: ``"none"``, ``"gicp"`` or ``"point_to_plane"``."""
 
-def register(source: PointsLike, target: PointsLike, voxel_size: float, **config: Any) -> Result:
+TransformLike: TypeAlias = _matcher.TransformLike
+"""What :func:`refine` and :meth:`Matcher.refine` accept as the initial pose: a (4, 4) array-like of real
+numbers mapping source points into the target frame. ``Any`` for type checkers."""
+
+
+def _with_refine(refine: RefineMode | int | None, config: dict[str, Any]) -> dict[str, Any]:
+    """``config`` with ``refine`` as its ``refine_mode``."""
+    if refine is None:
+        return config
+    if "refine_mode" in config:
+        raise TypeError("pass refine or refine_mode, not both (refine is refine_mode's short name)")
+    return {**config, "refine_mode": refine}
+
+
+def register(
+    source: PointsLike, target: PointsLike, voxel_size: float, *, refine: RefineMode | int | None = None, **config: Any
+) -> Result:
     """Register ``source`` against ``target`` once: ``Matcher(voxel_size=voxel_size, **config).register(...)``.
 
     ``voxel_size`` (the clouds' unit) has no default because it depends on the data: 0.3-0.5 for outdoor
-    LiDAR in metres, about 0.05 for indoor RGB-D fragments. Other keyword arguments are :class:`Config`
-    fields, e.g. ``num_threads=2`` or ``nonfinite_policy="drop"``. To register many pairs, keep a
-    :class:`Matcher`.
+    LiDAR in metres, about 0.05 for indoor RGB-D fragments. ``refine`` (``"gicp"`` or ``"point_to_plane"``)
+    refines the global solver's pose in the same call: it sets :attr:`Config.refine_mode`. Other keyword
+    arguments are :class:`Config` fields, e.g. ``num_threads=2`` or ``nonfinite_policy="drop"``. To register
+    many pairs, keep a :class:`Matcher`.
     """
-    with Matcher(voxel_size=voxel_size, **config) as matcher:
+    with Matcher(voxel_size=voxel_size, **_with_refine(refine, config)) as matcher:
         return matcher.register(source, target)
+
+
+def refine(
+    source: PointsLike,
+    target: PointsLike,
+    initial: TransformLike,
+    voxel_size: float,
+    *,
+    refine: RefineMode | int | None = None,
+    **config: Any,
+) -> Result:
+    """Refine the pose ``initial`` of ``source`` in ``target`` once:
+    ``Matcher(voxel_size=voxel_size, **config).refine(source, target, initial)``.
+
+    ``initial`` is a (4, 4) array-like mapping source points into the target frame (a prior, the previous
+    scan's pose). ``refine`` (or ``refine_mode``) picks the cost, ``"gicp"`` when not given; other keyword
+    arguments are :class:`Config` fields. See :meth:`Matcher.refine`.
+    """
+    with Matcher(voxel_size=voxel_size, **_with_refine(refine, config)) as matcher:
+        return matcher.refine(source, target, initial)
 
 
 __all__ = [
@@ -103,9 +146,11 @@ __all__ = [
     "OutOfMemoryError",
     "ParseError",
     "PointsLike",
+    "RefineMode",
     "Result",
     "StructSizeError",
     "TooFewPointsError",
+    "TransformLike",
     "UnsupportedFormatError",
     "ViewpointMode",
     "VoxelRangeError",
@@ -113,5 +158,6 @@ __all__ = [
     "as_point_array",
     "library_path",
     "read_points",
+    "refine",
     "register",
 ]

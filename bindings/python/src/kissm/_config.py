@@ -13,11 +13,21 @@ from ._ffi import ffi, lib
 
 NonFinitePolicy = Literal["reject", "drop"]
 ViewpointMode = Literal["fixed", "cloud_center"]
+RefineMode = Literal["none", "gicp", "point_to_plane"]
 
 #: Python names of the C enumerations (the fields hold the names; the ints are accepted too).
 NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "drop": lib.KISSM_NONFINITE_DROP}
 VIEWPOINT_MODES: dict[str, int] = {"fixed": lib.KISSM_VIEWPOINT_FIXED, "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER}
-_ENUMS: dict[str, dict[str, int]] = {"nonfinite_policy": NONFINITE_POLICIES, "viewpoint_mode": VIEWPOINT_MODES}
+REFINE_MODES: dict[str, int] = {
+    "none": lib.KISSM_REFINE_NONE,
+    "gicp": lib.KISSM_REFINE_GICP,
+    "point_to_plane": lib.KISSM_REFINE_POINT_TO_PLANE,
+}
+_ENUMS: dict[str, dict[str, int]] = {
+    "nonfinite_policy": NONFINITE_POLICIES,
+    "viewpoint_mode": VIEWPOINT_MODES,
+    "refine_mode": REFINE_MODES,
+}
 
 _FLOAT_FIELDS = (
     "voxel_size",
@@ -28,8 +38,20 @@ _FLOAT_FIELDS = (
     "prune_noise_bound_gain",
     "solver_noise_bound_gain",
     "noise_bound_max",
+    "refine_max_distance_gain",
+    "refine_kernel_gain",
+    "refine_rotation_epsilon",
+    "refine_translation_epsilon_gain",
+    "min_overlap",
 )
-_INT_FIELDS = ("num_threads", "min_normal_neighbors", "max_correspondences", "min_inliers", "log_level")
+_INT_FIELDS = (
+    "num_threads",
+    "min_normal_neighbors",
+    "max_correspondences",
+    "min_inliers",
+    "log_level",
+    "refine_max_iterations",
+)
 
 
 def _new_c_config() -> Any:
@@ -125,6 +147,25 @@ class Config:
     log_level: int = _DEFAULTS["log_level"]
     """Most verbose level passed to a log callback (0..4); kept for completeness: the Python package installs no log
     callback, and the library itself never prints."""
+    refine_mode: RefineMode = _DEFAULTS["refine_mode"]
+    """Fine registration of the solver's pose in the same call, on the voxelised clouds: 'none' (the solver's pose
+    as it is), 'gicp' (Generalized ICP, plane to plane) or 'point_to_plane'. :meth:`Matcher.refine` uses this
+    cost too ('gicp' when it is 'none'). With refinement, ``Result.transform`` is the refined pose and
+    ``Result.coarse_transform`` the solver's."""
+    refine_max_iterations: int = _DEFAULTS["refine_max_iterations"]
+    """Refinement iteration cap, 1..1000."""
+    refine_max_distance_gain: float = _DEFAULTS["refine_max_distance_gain"]
+    """Refinement's correspondence distance (and ``Result.overlap``'s) = gain * voxel_size; in (0, 100]."""
+    refine_kernel_gain: float = _DEFAULTS["refine_kernel_gain"]
+    """Scale of refinement's Cauchy kernel = gain * voxel_size; in (0, 100]."""
+    refine_rotation_epsilon: float = _DEFAULTS["refine_rotation_epsilon"]
+    """Refinement has converged when a step turns the pose by less than this (radians) and moves it by less than
+    ``refine_translation_epsilon_gain * voxel_size``; in [0, 1]."""
+    refine_translation_epsilon_gain: float = _DEFAULTS["refine_translation_epsilon_gain"]
+    """Convergence threshold on a refinement step's translation = gain * voxel_size; in [0, 1]."""
+    min_overlap: float = _DEFAULTS["min_overlap"]
+    """With refinement, ``Result.valid`` needs ``Result.overlap`` >= this (else reason "the refined pose overlaps
+    too little"); in [0, 1]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object

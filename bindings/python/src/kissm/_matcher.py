@@ -7,11 +7,17 @@ import threading
 import warnings
 from typing import Any, NoReturn
 
+import numpy as np
+
 from ._config import Config
 from ._errors import check, raise_status
 from ._ffi import ffi, lib
 from ._points import PointsLike, points_view
 from ._result import Result
+
+#: What :meth:`Matcher.refine` accepts as ``initial``: a (4, 4) array-like of real numbers (``Any`` for type
+#: checkers, as numpy's ``ArrayLike``).
+TransformLike = Any
 
 
 def _new_result() -> Any:
@@ -19,6 +25,22 @@ def _new_result() -> Any:
     result = ffi.new("kissm_result *")
     check(lib.kissm_result_init(result, ffi.sizeof("kissm_result")))
     return result
+
+
+def transform_view(initial: TransformLike, name: str = "initial") -> Any:
+    """A ``double[16]`` holding ``initial`` row-major: the shape and type are checked here, the values (finite,
+    rigid) by the library, whose :class:`kissm.InvalidArgumentError` names ``initial_transform``."""
+    try:
+        array = np.asarray(initial)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{name} cannot be read as a (4, 4) array: {e}") from None
+    if array.dtype.kind not in "fiu":
+        raise TypeError(
+            f"{name} has dtype {array.dtype}; it must be a (4, 4) array of real numbers (the initial_transform)"
+        )
+    if array.shape != (4, 4):
+        raise ValueError(f"{name} must have shape (4, 4), the initial_transform as a 4x4 matrix, not {array.shape}")
+    return ffi.new("double[16]", array.astype(np.float64).ravel().tolist())
 
 
 class Features:
@@ -60,6 +82,14 @@ class Features:
             "kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
             "and call Matcher.compute_features() again"
         )
+
+
+def _check_features(source: Features, target: Features) -> None:
+    for name, value in (("source", source), ("target", target)):
+        if not isinstance(value, Features):
+            raise TypeError(
+                f"{name} must be kissm.Features (from Matcher.compute_features), not {type(value).__name__}"
+            )
 
 
 class Matcher:
@@ -152,14 +182,58 @@ class Matcher:
     def register_features(self, source: Features, target: Features) -> Result:
         """Register two described clouds: the same pose, counts and validity as :meth:`register` on the
         clouds they were computed from (voxelisation and feature times are reported as 0)."""
-        for name, value in (("source", source), ("target", target)):
-            if not isinstance(value, Features):
-                raise TypeError(
-                    f"{name} must be kissm.Features (from Matcher.compute_features), not {type(value).__name__}"
-                )
+        _check_features(source, target)
         result = _new_result()
         with self._call_lock:
             status = lib.kissm_register_features(self._handle(), source._ptr, target._ptr, result)
+            if status != 0:
+                raise_status(status)
+        return Result._from_c(result)
+
+    def refine(self, source: PointsLike, target: PointsLike, initial: TransformLike) -> Result:
+        """Fine registration from a known pose (tracking, re-localisation from a prior): no descriptors, no
+        global search. ``initial`` is a (4, 4) array-like mapping source points into the target frame, as
+        ``Result.transform`` does; ``source`` and ``target`` are read as by :meth:`register`.
+
+        Both clouds are voxelised, their normals estimated, and ``initial`` refined with ``config.refine_mode``
+        ('gicp' when it is 'none'). The Result's ``coarse_transform`` is ``initial`` (made exactly rigid),
+        ``transform`` the refined pose, ``information`` its information matrix; ``valid`` says whether the
+        refined pose overlaps the target enough and is constrained in every direction (else ``reason``).
+
+        Raises:
+            TypeError, ValueError: ``initial`` is not a (4, 4) array of real numbers, or the clouds are not
+                (N, 3) arrays (before the library is called).
+            kissm.InvalidArgumentError: ``initial`` is not finite, its last row is not (0, 0, 0, 1), its
+                rotation block is not a rotation, or its translation is beyond 1e9 (the library's message
+                names ``initial_transform``).
+            ValueError: the library refused a cloud, as for :meth:`register`.
+            kissm.CancelledError: :meth:`cancel` was called meanwhile.
+        """
+        src = points_view(source, "source")
+        tgt = points_view(target, "target")
+        transform = transform_view(initial)
+        result = _new_result()
+        with self._call_lock:
+            status = lib.kissm_refine(self._handle(), src.c, tgt.c, transform, result)
+            if status != 0:
+                raise_status(status)
+        return Result._from_c(result)
+
+    def refine_features(self, source: Features, target: Features, initial: TransformLike) -> Result:
+        """:meth:`refine` on described clouds: the same refined pose as :meth:`refine` on the clouds they were
+        computed from (voxelisation and feature times are reported as 0). Features computed by a matcher with
+        refinement on (``refine_mode`` other than 'none') carry the search index refinement uses, so a map
+        described once is not indexed again for every scan.
+
+        Raises:
+            TypeError, ValueError, kissm.InvalidArgumentError: as :meth:`refine`.
+            kissm.FeaturesMismatchError: as :meth:`register_features`.
+        """
+        _check_features(source, target)
+        transform = transform_view(initial)
+        result = _new_result()
+        with self._call_lock:
+            status = lib.kissm_refine_features(self._handle(), source._ptr, target._ptr, transform, result)
             if status != 0:
                 raise_status(status)
         return Result._from_c(result)

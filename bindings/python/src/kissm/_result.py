@@ -25,8 +25,10 @@ _COUNT_FIELDS = (
     "num_rotation_inliers",
     "num_final_inliers",
     "max_core_number",
+    "num_refine_correspondences",
+    "refine_iterations",
 )
-_FLOAT_FIELDS = ("inlier_ratio", "residual_rms", "noise_bound")
+_FLOAT_FIELDS = ("inlier_ratio", "residual_rms", "noise_bound", "overlap", "refine_rmse", "refine_condition")
 _TIME_FIELDS = (
     "time_voxelize_ms",
     "time_features_ms",
@@ -34,7 +36,26 @@ _TIME_FIELDS = (
     "time_pruning_ms",
     "time_solver_ms",
     "time_total_ms",
+    "time_refine_ms",
 )
+
+
+def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle of the rotation between the rotation blocks of two 4x4 transforms, in degrees."""
+    cos = (float(np.trace(a[:3, :3].T @ b[:3, :3])) - 1.0) / 2.0
+    return math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+
+
+def _sigmas(information: np.ndarray) -> tuple[float, float]:
+    """Standard deviations by an information matrix: (rotation in degrees, translation), each the root of the
+    summed variances of its three components; NaN when it is NaN or not positive definite."""
+    try:
+        variances = np.diag(np.linalg.inv(information))
+    except np.linalg.LinAlgError:
+        return math.nan, math.nan
+    if not (variances >= 0).all():
+        return math.nan, math.nan
+    return math.degrees(math.sqrt(float(variances[:3].sum()))), math.sqrt(float(variances[3:].sum()))
 
 
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
@@ -46,6 +67,11 @@ class Result:
     False but a pose was estimated it is kept for inspection, and ``reason`` says why it is not trusted.
     Counts and per-stage wall-clock times (milliseconds) are those of the C ``kissm_result``; the times are
     the only fields that differ between identical calls.
+
+    With refinement (``Config.refine_mode``, ``register(..., refine="gicp")``, :meth:`Matcher.refine`),
+    ``transform`` is the refined pose, ``coarse_transform`` the one refinement started from, and
+    ``information``, ``overlap``, ``refine_rmse`` and ``refine_condition`` describe the refined pose; without
+    it they are NaN (``refined`` is False) and the refinement counts are 0.
     """
 
     valid: bool
@@ -105,7 +131,42 @@ class Result:
     time_solver_ms: float
     """Milliseconds spent on rotation, translation, inliers and validity."""
     time_total_ms: float
-    """The sum of the stage times, in milliseconds."""
+    """The sum of the stage times (``time_refine_ms`` included), in milliseconds."""
+    coarse_transform: np.ndarray
+    """(4, 4) float64: the pose refinement started from: the global solver's, or for :meth:`Matcher.refine` the
+    ``initial`` transform. Equal to ``transform`` when no refinement ran; all NaN when no pose was estimated."""
+    information: np.ndarray
+    """(6, 6) float64, symmetric: the information matrix (inverse covariance) of the refined pose; all NaN when
+    refinement did not run.
+
+    Rows and columns are rotation (radians) then translation (the clouds' unit) of the error ``xi`` in
+    ``T_true = transform @ expm(hat(xi))``: a perturbation on the right, in the source's frame. That is GTSAM's
+    ``Pose3`` convention, so it is a between factor as it stands (with ``transform`` = pose of the source in
+    the target's frame)::
+
+        gtsam.BetweenFactorPose3(target_key, source_key, gtsam.Pose3(result.transform),
+                                 gtsam.noiseModel.Gaussian.Information(result.information))
+
+    (g2o orders translation first: swap the 3x3 blocks.) It is the Gauss-Newton information of the refinement's
+    cost scaled by its residual variance, counting correspondences as independent, so it is optimistic; a
+    small eigenvalue marks a direction the data leaves free (see ``refine_condition``)."""
+    overlap: float
+    """Share of the source's voxels that the refined pose lays within refinement's correspondence distance of a
+    target voxel, in [0, 1]; NaN when refinement did not run. ``Config.min_overlap`` is checked against it."""
+    refine_rmse: float
+    """Weighted RMS of refinement's residuals at its final pose (point-to-plane distance, the clouds' unit); NaN
+    when refinement did not run or found no correspondence."""
+    refine_condition: float
+    """Weakest over strongest direction of ``information`` (rotations as displacements at the matched points'
+    radius), in [0, 1]: near 0 the pose slides along some direction. NaN when refinement did not run."""
+    time_refine_ms: float
+    """Milliseconds spent on refinement (0 when it did not run)."""
+    num_refine_correspondences: int
+    """Refinement's correspondences at its final pose (0 when it did not run)."""
+    refine_iterations: int
+    """Refinement iterations run (0 when it did not run)."""
+    refine_converged: bool
+    """Whether refinement stopped on its convergence test rather than its iteration cap."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
@@ -120,6 +181,9 @@ class Result:
             "rotation": array(r.rotation, 9, (3, 3)),
             "translation": array(r.translation, 3, (3,)),
             "inlier_extent": array(r.inlier_extent, 3, (3,)),
+            "coarse_transform": array(r.coarse_transform, 16, (4, 4)),
+            "information": array(r.information, 36, (6, 6)),
+            "refine_converged": bool(r.refine_converged),
         }
         values.update({name: int(getattr(r, name)) for name in _COUNT_FIELDS})
         values.update({name: float(getattr(r, name)) for name in _FLOAT_FIELDS + _TIME_FIELDS})
@@ -131,10 +195,14 @@ class Result:
         return bool(np.isfinite(self.transform).all())
 
     @property
+    def refined(self) -> bool:
+        """Whether refinement ran (then ``overlap``, ``information`` and the refine fields are set)."""
+        return not math.isnan(self.overlap)
+
+    @property
     def rotation_angle_deg(self) -> float:
         """The rotation's angle in degrees (NaN without a pose)."""
-        cos = (float(np.trace(self.rotation)) - 1.0) / 2.0
-        return math.degrees(math.acos(min(1.0, max(-1.0, cos)))) if self.has_pose else math.nan
+        return _angle_deg(np.eye(4), self.transform) if self.has_pose else math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as plain Python values (nested lists for the arrays), e.g. for JSON."""
@@ -147,16 +215,33 @@ class Result:
         head = "kissm.Result("
         pad = " " * len(head)
         status = "valid=True" if self.valid else f"valid=False, reason={self.reason!r}"
-        lines = [
-            f"{head}{status},",
-            f"{pad}{self.num_final_inliers} final inliers of {self.num_initial_correspondences} matches "
-            f"(inlier_ratio {self.inlier_ratio:.3f}), residual_rms {self.residual_rms:.4g}, "
-            f"{self.time_total_ms:.1f} ms,",
-        ]
+        lines = [f"{head}{status},"]
+        from_prior = self.refined and self.num_initial_correspondences == 0  # Matcher.refine: no global solver
+        if from_prior:
+            lines.append(f"{pad}refined from an initial pose, {self.time_total_ms:.1f} ms,")
+        else:
+            lines.append(
+                f"{pad}{self.num_final_inliers} final inliers of {self.num_initial_correspondences} matches "
+                f"(inlier_ratio {self.inlier_ratio:.3f}), residual_rms {self.residual_rms:.4g}, "
+                f"{self.time_total_ms:.1f} ms,"
+            )
+        moved = ""
+        if self.refined:
+            stop = "converged" if self.refine_converged else "iteration cap"
+            rotation_sigma, translation_sigma = _sigmas(self.information)
+            lines += [
+                f"{pad}refined: {self.refine_iterations} iterations ({stop}), {self.num_refine_correspondences} "
+                f"correspondences, overlap {self.overlap:.3f}, refine_rmse {self.refine_rmse:.4g},",
+                f"{pad}refine_condition {self.refine_condition:.3g}, 1-sigma {rotation_sigma:.3g} deg and "
+                f"{translation_sigma:.3g} (from information),",
+            ]
+            turned = _angle_deg(self.coarse_transform, self.transform)
+            shifted = float(np.linalg.norm(self.transform[:3, 3] - self.coarse_transform[:3, 3]))
+            moved = f" (refinement moved it {turned:.3f} deg and {shifted:.4g})"
         if self.has_pose:
             lines.append(
                 f"{pad}rotation {self.rotation_angle_deg:.2f} deg, "
-                f"translation {float(np.linalg.norm(self.translation)):.4g},"
+                f"translation {float(np.linalg.norm(self.translation)):.4g}{moved},"
             )
             prefix = f"{pad}transform="
             matrix = np.array2string(self.transform, precision=6, suppress_small=True, separator=", ", prefix=prefix)
