@@ -359,8 +359,9 @@ def _note(r: dict) -> str:
     info = r.get("info", {})
     if "refine_iterations" in info:
         ov = info.get("overlap")
-        return (f"{info.get('reason') or ''}; overlap {fmt(ov, 2) if ov is not None else '–'}, "
-                f"{info['refine_iterations']} it{'' if info.get('refine_converged') else ' (cap)'}").lstrip("; ")
+        why = "" if r["valid"] else f"{info.get('reason')}; "  # why kissm reported the pose invalid
+        return (f"{why}overlap {fmt(ov, 2) if ov is not None else '–'}, "
+                f"{info['refine_iterations']} it{'' if info.get('refine_converged') else ' (cap)'}")
     if "gates_valid" in info:
         return (f"{r['inliers']} inliers, overlap {fmt(info['overlap'] * 100, 0)}%, gates "
                 f"{'accept' if info['gates_valid'] else 'reject'}")
