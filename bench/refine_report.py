@@ -7,7 +7,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import DATASET_LABEL, SHORT, STAGE_COLOR, STAGE_LABEL, Results, fmt, fmt_ms, fmt_ratio, med, rte_cell, table
+from report import (
+    DATASET_LABEL,
+    SHORT,
+    STAGE_COLOR,
+    STAGE_LABEL,
+    Results,
+    fmt,
+    fmt_ms,
+    fmt_ratio,
+    machine_busy,
+    med,
+    rte_cell,
+    table,
+)
 
 FROM_KISSM = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl")  # start from kissm's coarse pose
 ERROR_COLUMNS = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl", "ref_sgicp")
@@ -179,6 +192,11 @@ Same cases, workers, pinning and interleaving as above; every method is its own 
         L.append(f"- **Same start, checked**: kissm's refined calls started from the peers' start pose bit for bit in "
                  f"{sum(starts)} of {len(starts)} calls" + ("." if all(starts) else " — **the comparison is not from "
                                                               "one start where it differs**."))
+    if machine_busy(res.raw["meta"]) and max(res.threads) > 1:
+        L.append("- **Busy machine**: the peers' OpenMP threads spin at their barriers, so while another program "
+                 "holds a CPU a 2-thread call of small_gicp or Open3D can take many times its 1-thread time (not so "
+                 "with `OMP_WAIT_POLICY=passive`). In this run the peers' 2-thread times, and kissm's ratios against "
+                 "them, are inflated; only a quiet run settles the 2-thread targets.")
     L.append("")
     lines = verdicts(res)
     if lines:

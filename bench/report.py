@@ -157,6 +157,12 @@ class Results:
         }
 
 
+def machine_busy(meta: dict) -> bool:
+    """Whether the load average at the start or the end of the run was over half the CPUs."""
+    ls, le = meta.get("load_start"), meta.get("load_end")
+    return bool(ls and le and max(ls[0], le[0]) > 0.5 * (meta["machine"].get("cpus_online") or 1))
+
+
 def success_cell(s):
     if s["n"] == 0:
         return "–"
@@ -334,7 +340,7 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     L.append(f"- Run: {meta['started']} to {meta.get('finished', '?')} ({meta.get('duration_s', 0) / 60:.0f} min)")
     ls, le = meta.get("load_start"), meta.get("load_end")
     if ls and le:
-        busy = max(ls[0], le[0]) > 0.5 * (mach.get("cpus_online") or 1)
+        busy = machine_busy(meta)
         L.append(f"- Load average (1/5/15 min) at the start {ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end "
                  f"{le[0]:.2f} / {le[1]:.2f} / {le[2]:.2f} on {mach.get('cpus_online')} CPUs"
                  + (" — **the machine was busy with other work: absolute times are noisy; ratios come from "
@@ -683,7 +689,8 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     L.append("## Reproduce")
     L.append("")
     L.append("```sh")
-    L.append("bash bench/run.sh            # the full run (about 45 minutes on 2 cores); see bench/README.md")
+    L.append("bash bench/run.sh            # the full run (about an hour on 2 cores); see bench/README.md")
+    L.append("bash bench/run.sh --refine-only --out /tmp/refine   # the refinement comparison alone (15 minutes)")
     L.append("bash bench/run.sh --smoke    # seconds: a check of the harness")
     L.append("```")
     L.append("")
