@@ -57,11 +57,23 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
-from report import METHOD_LABEL, STAGE_ORDER as STAGES  # noqa: E402  (one definition, shared with the report)
+from report import METHOD_LABEL, STAGE_ORDER as STAGES  # noqa: E402, I001  (one definition, shared with the report)
 
-METHODS = ("kissm", "reference", "o3d_ransac", "o3d_fgr")
-# The Python module each method needs (checked before a run).
-METHOD_MODULE = {"kissm": "kissm", "reference": "kiss_matcher", "o3d_ransac": "open3d", "o3d_fgr": "open3d"}
+COARSE_METHODS = ("kissm", "reference", "o3d_ransac", "o3d_fgr")
+REFINE_METHODS = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl", "ref_sgicp")
+METHODS = COARSE_METHODS + REFINE_METHODS
+# The Python modules each method needs (checked before a run).
+METHOD_MODULES = {
+    "kissm": ("kissm",), "reference": ("kiss_matcher",), "o3d_ransac": ("open3d",), "o3d_fgr": ("open3d",),
+    "kissm_gicp": ("kissm",), "kissm_p2pl": ("kissm",), "sgicp": ("small_gicp",), "o3d_gicp": ("open3d",),
+    "o3d_p2pl": ("open3d",), "ref_sgicp": ("kiss_matcher", "small_gicp"),
+}
+# Peers that refine from kissm's coarse pose (computed once per case by the parent, untimed).
+FROM_KISSM_START = ("sgicp", "o3d_gicp", "o3d_p2pl")
+KISSM_REFINE_MODE = {"kissm_gicp": "gicp", "kissm_p2pl": "point_to_plane"}
+# The upstream loop-closure chain (KISS-Matcher's ROS module): its fine step's settings and acceptance gates.
+UPSTREAM_CHAIN = {"corr_dist_gain": 5.0, "max_iterations": 10, "num_neighbors": 20, "min_inliers": 100,
+                  "min_overlap": 0.9}
 
 # Voxel size and success thresholds per kind of data (SPEC §7; docs/accuracy.md).
 KIND_SETTINGS = {
@@ -114,31 +126,51 @@ class _Runner:
         self.src = self.tgt = None
         self.voxel = None
         self.seed = 0
-        if method == "kissm":
+        self.init = None  # the coarse pose the refinement peers start from
+        self.coarse_valid = False
+        self.refine: dict = {}
+        family = METHOD_MODULES[method]
+        if family == ("kissm",):
             import kissm
 
             self.lib = kissm
             self.version = kissm.__version__
-        elif method == "reference":
+        elif family == ("kiss_matcher",):
             import kiss_matcher
 
             self.lib = kiss_matcher
             self.version = getattr(kiss_matcher, "__version__", "?")
-        else:
+        elif family == ("open3d",):
             import open3d as o3d
 
             o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
             self.lib = o3d
             self.version = o3d.__version__
+        else:  # small_gicp, alone or after the reference
+            from importlib import metadata
 
-    def load(self, src_path: str, tgt_path: str, voxel: float, seed: int) -> dict:
+            import small_gicp
+
+            self.sg = small_gicp
+            self.version = metadata.version("small-gicp")
+            if "kiss_matcher" in family:
+                import kiss_matcher
+
+                self.lib = kiss_matcher
+                self.version = f"kiss-matcher {metadata.version('kiss-matcher')} + small_gicp {self.version}"
+
+    def load(self, msg: dict) -> dict:
         np = self.np
         self.src = self.tgt = None
         _trim_heap()
-        self.src = np.ascontiguousarray(np.load(src_path), dtype=np.float64)
-        self.tgt = np.ascontiguousarray(np.load(tgt_path), dtype=np.float64)
-        self.voxel = float(voxel)
-        self.seed = int(seed)
+        self.src = np.ascontiguousarray(np.load(msg["src"]), dtype=np.float64)
+        self.tgt = np.ascontiguousarray(np.load(msg["tgt"]), dtype=np.float64)
+        self.voxel = float(msg["voxel"])
+        self.seed = int(msg.get("seed", 0))
+        self.refine = dict(msg.get("refine") or {})
+        start = msg.get("init")
+        self.init = None if start is None else np.asarray(start["transform"], dtype=np.float64).reshape(4, 4)
+        self.coarse_valid = bool(start and start["valid"])
         _trim_heap()
         _reset_peak()
         st = _proc_status()
@@ -156,10 +188,11 @@ class _Runner:
         return rec
 
     # ---- kissm: the Python binding, raw float64 arrays in, pose out --------------------------------------
-    def _run_kissm(self) -> dict:
+    def _run_kissm(self, refine_mode: str | None = None) -> dict:
         kissm = self.lib
+        config = {"refine_mode": refine_mode} if refine_mode else {}
         t0 = time.perf_counter()
-        with kissm.Matcher(voxel_size=self.voxel, num_threads=self.threads) as matcher:
+        with kissm.Matcher(voxel_size=self.voxel, num_threads=self.threads, **config) as matcher:
             r = matcher.register(self.src, self.tgt)
         transform = r.transform
         wall = (time.perf_counter() - t0) * 1e3
@@ -168,13 +201,27 @@ class _Runner:
             "pruning": r.time_pruning_ms, "solver": r.time_solver_ms,
         }
         stages["input"] = max(0.0, wall - r.time_total_ms)
-        return {
+        rec = {
             "wall_ms": wall, "engine_ms": r.time_total_ms, "stages": stages, "transform": transform.tolist(),
             "valid": bool(r.valid), "inliers": int(r.num_final_inliers),
             "info": {"reason": r.reason, "src_voxels": r.num_source_voxels, "tgt_voxels": r.num_target_voxels,
                      "src_keypoints": r.num_source_keypoints, "tgt_keypoints": r.num_target_keypoints,
                      "initial_corr": r.num_initial_correspondences, "pruned_corr": r.num_pruned_correspondences},
         }
+        if refine_mode:
+            stages["refine"] = r.time_refine_ms
+            rec["coarse_transform"] = r.coarse_transform.tolist()
+            rec["info"].update(
+                overlap=_finite(r.overlap), refine_rmse=_finite(r.refine_rmse),
+                refine_condition=_finite(r.refine_condition), refine_iterations=int(r.refine_iterations),
+                refine_converged=bool(r.refine_converged), refine_corr=int(r.num_refine_correspondences))
+        return rec
+
+    def _run_kissm_gicp(self) -> dict:
+        return self._run_kissm(KISSM_REFINE_MODE["kissm_gicp"])
+
+    def _run_kissm_p2pl(self) -> dict:
+        return self._run_kissm(KISSM_REFINE_MODE["kissm_p2pl"])
 
     # ---- the reference: PyPI kiss-matcher, its own C++ stage times -----------------------------------------
     def _run_reference(self) -> dict:
@@ -260,6 +307,143 @@ class _Runner:
     def _run_o3d_fgr(self) -> dict:
         return self._run_o3d(True)
 
+    # ---- refinement peers, from kissm's coarse pose (self.init) ---------------------------------------------
+    def _start(self):
+        if self.init is None:
+            raise ValueError("no initial pose was loaded (a refinement peer needs kissm's coarse pose)")
+        return self.init
+
+    def _run_sgicp(self) -> dict:
+        """small_gicp GICP: preprocess_points (voxel grid, kd-tree, covariances) of both clouds, then align."""
+        sg = self.sg
+        init = self._start()
+        t0 = time.perf_counter()
+        src, _ = sg.preprocess_points(self.src, self.voxel, num_threads=self.threads)
+        tgt, tgt_tree = sg.preprocess_points(self.tgt, self.voxel, num_threads=self.threads)
+        t1 = time.perf_counter()
+        result = sg.align(tgt, src, tgt_tree, init, registration_type="GICP",
+                          max_correspondence_distance=self.refine["max_distance"], num_threads=self.threads,
+                          max_iterations=self.refine["max_iterations"])
+        transform = self.np.asarray(result.T_target_source, dtype=self.np.float64)
+        t2 = time.perf_counter()
+        wall = (t2 - t0) * 1e3
+        stages = {"preprocess": (t1 - t0) * 1e3, "align": (t2 - t1) * 1e3}
+        return {
+            "wall_ms": wall, "engine_ms": wall, "stages": stages, "transform": transform.tolist(),
+            "coarse_transform": init.tolist(),
+            # small_gicp has no validity decision: its pose is reported when kissm's coarse pose was.
+            "valid": self.coarse_valid, "inliers": int(result.num_inliers),
+            "info": {"converged": bool(result.converged), "iterations": int(result.iterations),
+                     "src_points": src.size(), "tgt_points": tgt.size()},
+        }
+
+    def _run_o3d_refine(self, gicp: bool) -> dict:
+        """Open3D GICP or point-to-plane ICP from the coarse pose, with its own downsampling and covariances or
+        normals."""
+        o3d, np = self.lib, self.np
+        reg = o3d.pipelines.registration
+        v = self.voxel
+        init = self._start()
+        stages = {"input": 0.0, "voxelize": 0.0, "covariances": 0.0}
+        t0 = time.perf_counter()
+        clouds = []
+        for points, needs_geometry in ((self.src, gicp), (self.tgt, True)):
+            ta = time.perf_counter()
+            cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+            tb = time.perf_counter()
+            down = cloud.voxel_down_sample(v)
+            tc = time.perf_counter()
+            if needs_geometry and gicp:
+                down.estimate_covariances(o3d.geometry.KDTreeSearchParamKNN(knn=30))  # GICP's own default
+            elif needs_geometry:
+                down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=2 * v, max_nn=30))
+            td = time.perf_counter()
+            stages["input"] += (tb - ta) * 1e3
+            stages["voxelize"] += (tc - tb) * 1e3
+            stages["covariances"] += (td - tc) * 1e3
+            clouds.append(down)
+        t1 = time.perf_counter()
+        criteria = reg.ICPConvergenceCriteria(max_iteration=self.refine["max_iterations"])
+        if gicp:
+            result = reg.registration_generalized_icp(clouds[0], clouds[1], self.refine["max_distance"], init,
+                                                      reg.TransformationEstimationForGeneralizedICP(), criteria)
+        else:
+            result = reg.registration_icp(clouds[0], clouds[1], self.refine["max_distance"], init,
+                                          reg.TransformationEstimationPointToPlane(), criteria)
+        transform = np.asarray(result.transformation, dtype=np.float64)
+        t2 = time.perf_counter()
+        wall = (t2 - t0) * 1e3
+        stages["align"] = (t2 - t1) * 1e3
+        return {
+            "wall_ms": wall, "engine_ms": wall, "stages": stages, "transform": transform.tolist(),
+            "coarse_transform": init.tolist(), "valid": self.coarse_valid and result.fitness > 0,
+            "inliers": len(result.correspondence_set),
+            "info": {"fitness": float(result.fitness), "inlier_rmse": float(result.inlier_rmse),
+                     "src_points": len(clouds[0].points), "tgt_points": len(clouds[1].points)},
+        }
+
+    def _run_o3d_gicp(self) -> dict:
+        return self._run_o3d_refine(True)
+
+    def _run_o3d_p2pl(self) -> dict:
+        return self._run_o3d_refine(False)
+
+    # ---- the upstream chain: reference coarse + small_gicp VGICP, as KISS-Matcher's ROS loop closure does -------
+    def _run_ref_sgicp(self) -> dict:
+        km, sg, np = self.lib, self.sg, self.np
+        v, threads = self.voxel, self.threads
+        chain = UPSTREAM_CHAIN
+        if v < REFERENCE_MIN_VOXEL:
+            raise ValueError(f"the reference refuses voxel sizes below {REFERENCE_MIN_VOXEL}")
+        t0 = time.perf_counter()
+        # 1. voxelised clouds (upstream voxelises its submaps before both steps)
+        src = sg.voxelgrid_sampling(self.src, v, threads)
+        tgt = sg.voxelgrid_sampling(self.tgt, v, threads)
+        src_xyz = np.ascontiguousarray(src.points()[:, :3])
+        tgt_xyz = np.ascontiguousarray(tgt.points()[:, :3])
+        t1 = time.perf_counter()
+        # 2. the coarse estimate
+        matcher = km.KISSMatcher(km.KISSMatcherConfig(v))
+        solution = matcher.estimate(src_xyz, tgt_xyz)
+        coarse = np.eye(4)
+        coarse[:3, :3] = np.array(solution.rotation, dtype=np.float64).reshape(3, 3)
+        coarse[:3, 3] = np.array(solution.translation, dtype=np.float64).reshape(3)
+        t2 = time.perf_counter()
+        ref_engine = (matcher.get_processing_time() + matcher.get_extraction_time() + matcher.get_matching_time()
+                      + matcher.get_solver_time()) * 1e3
+        inliers = int(matcher.get_num_final_inliers())
+        # 3. VGICP from the coarse pose: covariances of both clouds, the target's Gaussian voxel map. Upstream
+        # skips this step when its gates reject the coarse pose; here it always runs, so its time is counted.
+        sg.estimate_covariances(src, num_neighbors=chain["num_neighbors"], num_threads=threads)
+        sg.estimate_covariances(tgt, num_neighbors=chain["num_neighbors"], num_threads=threads)
+        voxelmap = sg.GaussianVoxelMap(v)
+        voxelmap.insert(tgt)
+        t3 = time.perf_counter()
+        result = sg.align(voxelmap, src, coarse, max_correspondence_distance=chain["corr_dist_gain"] * v,
+                          num_threads=threads, max_iterations=chain["max_iterations"])
+        transform = np.asarray(result.T_target_source, dtype=np.float64)
+        t4 = time.perf_counter()
+        wall = (t4 - t0) * 1e3
+        overlap = result.num_inliers / max(1, src.size())
+        coarse_valid = bool(solution.valid) and inliers >= REFERENCE_MIN_INLIERS
+        stages = {"voxelize": (t1 - t0) * 1e3, "reference": (t2 - t1) * 1e3, "preprocess": (t3 - t2) * 1e3,
+                  "align": (t4 - t3) * 1e3}
+        return {
+            # engine: the Python wall minus the reference binding's copy of the points (its wall minus its C++)
+            "wall_ms": wall, "engine_ms": wall - max(0.0, stages["reference"] - ref_engine), "stages": stages,
+            "transform": transform.tolist(), "coarse_transform": coarse.tolist(),
+            # valid: the reference's rule of the coarse comparison; gates_valid: upstream's own acceptance.
+            "valid": coarse_valid, "inliers": inliers,
+            "info": {"ref_engine_ms": ref_engine, "solution_valid": bool(solution.valid), "overlap": overlap,
+                     "converged": bool(result.converged), "iterations": int(result.iterations),
+                     "gates_valid": bool(solution.valid) and inliers > chain["min_inliers"]
+                     and overlap >= chain["min_overlap"], "src_points": src.size(), "tgt_points": tgt.size()},
+        }
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None  # JSON has no NaN
+
 
 def worker_main(method: str, threads: int, cpus: list[int]) -> int:
     # Pin before importing anything that starts threads (TBB and OpenMP size their pools from the mask).
@@ -285,7 +469,7 @@ def worker_main(method: str, threads: int, cpus: list[int]) -> int:
         cmd = msg.get("cmd")
         try:
             if cmd == "load":
-                reply = runner.load(msg["src"], msg["tgt"], msg["voxel"], msg.get("seed", 0))
+                reply = runner.load(msg)
             elif cmd == "run":
                 reply = runner.run()
             elif cmd == "mem":
@@ -438,8 +622,9 @@ def list_pairs(data_dir: Path) -> list[dict]:
 
 
 def load_pair(data_dir: Path, row: dict):
-    import kissm
     import numpy as np
+
+    import kissm
 
     pair_dir = data_dir / row["pair_dir"]
     meta = read_pair_txt(pair_dir / "pair.txt")
@@ -637,13 +822,47 @@ def cpus_for(threads: int) -> list[int]:
     return available[:threads]
 
 
+def within(rre, rte, category: str) -> bool:
+    max_rre, max_rte = THRESHOLDS[category]
+    return rre is not None and rre < max_rre and rte < max_rte
+
+
 def judge(record: dict, gt, category: str) -> None:
     import numpy as np
 
     rre, rte = pose_errors(record["transform"], np.asarray(gt))
-    max_rre, max_rte = THRESHOLDS[category]
     record["rre_deg"], record["rte_m"] = rre, rte
-    record["success"] = bool(record["valid"] and rre is not None and rre < max_rre and rte < max_rte)
+    record["success"] = bool(record["valid"] and within(rre, rte, category))
+    if "coarse_transform" in record:  # a refining method: the errors of the pose it started from
+        c_rre, c_rte = pose_errors(record["coarse_transform"], np.asarray(gt))
+        record["coarse_rre_deg"], record["coarse_rte_m"] = c_rre, c_rte
+        record["start_within"] = within(c_rre, c_rte, category)
+        record["within"] = within(rre, rte, category)
+
+
+def refine_settings() -> dict:
+    """What the refinement peers share with kissm's refinement: its correspondence distance (as a gain on the
+    voxel size) and its iteration cap, both kissm's defaults, read from the library."""
+    import kissm
+
+    config = kissm.Config()
+    return {"max_distance_gain": config.refine_max_distance_gain, "max_iterations": config.refine_max_iterations}
+
+
+def add_coarse_starts(cases: list[dict], threads: int) -> None:
+    """kissm's coarse pose for each case (one untimed call in this process; kissm's result does not depend on
+    the thread count): the start of the refinement peers, the same start kissm's own refinement has."""
+    import numpy as np
+
+    import kissm
+
+    for case in cases:
+        src, tgt = np.load(case["src_path"]), np.load(case["tgt_path"])
+        with kissm.Matcher(voxel_size=case["voxel"], num_threads=threads) as matcher:
+            r = matcher.register(src, tgt)
+        rre, rte = pose_errors(r.transform, np.asarray(case["gt"]))
+        case["coarse"] = {"transform": r.transform.tolist(), "valid": bool(r.valid), "rre_deg": rre, "rte_m": rte,
+                          "within": within(rre, rte, case["category"])}
 
 
 def slim(record: dict) -> dict:
@@ -653,6 +872,17 @@ def slim(record: dict) -> dict:
 def run_real(args, cases, methods, threads_list, log, results) -> None:
     total = len(threads_list) * len(cases)
     done = 0
+    refine = {}
+    if any(m in REFINE_METHODS for m in methods):
+        refine = refine_settings()
+        results["meta"]["refine_settings"] = dict(refine, upstream_chain=UPSTREAM_CHAIN)
+    if any(m in FROM_KISSM_START for m in methods):
+        t0 = time.monotonic()
+        add_coarse_starts(cases, max(threads_list))
+        print(f"bench: kissm's coarse poses for {len(cases)} cases in {time.monotonic() - t0:.0f} s", flush=True)
+        by_index = {c["index"]: c for c in cases}
+        for c in results["cases"]:
+            c["coarse"] = by_index[c["index"]]["coarse"]
     for threads in threads_list:
         cpus = cpus_for(threads)
         for case in cases:
@@ -664,8 +894,13 @@ def run_real(args, cases, methods, threads_list, log, results) -> None:
                 try:
                     w = Worker(m, threads, cpus, log, args.python)
                     results["versions"].setdefault(m, w.hello.get("version"))
-                    load = w.call({"cmd": "load", "src": case["src_path"], "tgt": case["tgt_path"],
-                                   "voxel": case["voxel"], "seed": case["seed"]}, timeout=300)
+                    msg = {"cmd": "load", "src": case["src_path"], "tgt": case["tgt_path"], "voxel": case["voxel"],
+                           "seed": case["seed"]}
+                    if m in REFINE_METHODS:
+                        msg["init"] = case.get("coarse")
+                        msg["refine"] = {"max_distance": refine["max_distance_gain"] * case["voxel"],
+                                         "max_iterations": refine["max_iterations"]}
+                    load = w.call(msg, timeout=300)
                     w.baseline_kb = load["baseline_kb"]
                     workers[m] = w
                 except (WorkerError, WorkerTimeout) as exc:
@@ -678,6 +913,8 @@ def run_real(args, cases, methods, threads_list, log, results) -> None:
                     try:
                         rec = workers[m].call({"cmd": "run"}, timeout=args.timeout)
                         judge(rec, case["gt"], case["category"])
+                        if m in KISSM_REFINE_MODE and "coarse" in case:  # the peers' start, bit for bit?
+                            rec["same_start"] = rec["coarse_transform"] == case["coarse"]["transform"]
                         rec["status"] = "ok"
                     except WorkerTimeout as exc:
                         failed[m] = "timeout"
@@ -869,8 +1106,9 @@ def machine_info(python: str) -> dict:
 def available_methods(methods: list[str]) -> tuple[list[str], dict[str, str]]:
     ok, missing = [], {}
     for m in methods:
-        if importlib.util.find_spec(METHOD_MODULE[m]) is None:
-            missing[m] = f"Python module {METHOD_MODULE[m]!r} is not installed"
+        absent = [mod for mod in METHOD_MODULES[m] if importlib.util.find_spec(mod) is None]
+        if absent:
+            missing[m] = "Python module " + " and ".join(repr(mod) for mod in absent) + " not installed"
         else:
             ok.append(m)
     return ok, missing
@@ -882,18 +1120,22 @@ def parse_args(argv):
     p.add_argument("--threads", type=int, nargs="+", default=[1, 2], help="thread counts (default: 1 2)")
     p.add_argument("--rotations", type=int, default=2, help="rotated variants per pair besides the raw one (2)")
     p.add_argument("--repeats", type=int, default=3, help="timed calls per method and case after the warm-up (3)")
-    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
+    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
+                   help="coarse: " + " ".join(COARSE_METHODS) + "; refinement: " + " ".join(REFINE_METHODS))
+    p.add_argument("--refine-only", action="store_true", help="only the refinement comparison: kissm coarse and "
+                   "refined, small_gicp, Open3D GICP / point-to-plane, reference + small_gicp; no scaling")
     p.add_argument("--pairs", nargs="*", default=None, help="only pairs whose dataset/pair contains one of these")
     p.add_argument("--data", type=Path, default=Path(os.environ.get("KISSM_DATA_DIR", REPO.parent / "shared" / "data")))
     p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/benchmarks.md and OUT/img/*.png")
-    p.add_argument("--raw", type=Path, default=None, help="raw results JSON (default bench/results/latest.json; "
-                   "OUT/raw.json with --smoke)")
+    p.add_argument("--raw", type=Path, default=None, help="raw results JSON (default bench/results/latest.json "
+                   "with the default --out, else OUT/raw.json)")
     p.add_argument("--timeout", type=float, default=600.0, help="seconds per call on real pairs (600)")
     p.add_argument("--no-real", action="store_true", help="skip the real pairs")
     p.add_argument("--no-scaling", action="store_true", help="skip the synthetic scaling runs")
     p.add_argument("--scaling-sizes", type=int, nargs="+",
                    default=[10_000, 30_000, 100_000, 300_000, 1_000_000, 3_000_000], help="target voxels per cloud")
-    p.add_argument("--scaling-methods", nargs="+", choices=METHODS, default=None, help="default: --methods")
+    p.add_argument("--scaling-methods", nargs="+", choices=COARSE_METHODS, default=None,
+                   help="default: the coarse ones of --methods")
     p.add_argument("--scaling-threads", type=int, default=None, help="default: the largest of --threads")
     p.add_argument("--scaling-voxel", type=float, default=0.5)
     p.add_argument("--scaling-repeats", type=int, default=3,
@@ -923,11 +1165,15 @@ def main(argv=None) -> int:
             args.repeats = 1
         if "--scaling-sizes" not in explicit:
             args.scaling_sizes = [10_000, 30_000, 100_000]
+    if args.refine_only:
+        if "--methods" not in explicit:  # the coarse ones for the coarse errors, times and success to compare
+            args.methods = ["kissm", "reference", *REFINE_METHODS]
+        args.no_scaling = True
     if args.smoke:
         if "--out" not in explicit:
             args.out = Path(tempfile.mkdtemp(prefix="kissm-bench-smoke-"))
-        if "--methods" not in explicit:
-            args.methods = ["kissm", "reference"]
+        if "--methods" not in explicit:  # the fast methods; the peers among them only when installed
+            args.methods = ["kissm", "reference", *REFINE_METHODS]
         if "--threads" not in explicit:
             args.threads = [1]
         if "--rotations" not in explicit:
@@ -940,11 +1186,12 @@ def main(argv=None) -> int:
             args.scaling_methods = ["kissm"]
         if "--pairs" not in explicit:
             args.pairs = ["kitti07_keyframes_gtsam_points/000002__000003"]
-    if args.raw is None:
-        args.raw = args.out / "raw.json" if args.smoke else HERE / "results" / "latest.json"
+    if args.raw is None:  # the committed raw results only with the committed report
+        committed = not args.smoke and args.out.resolve() == (REPO / "docs").resolve()
+        args.raw = HERE / "results" / "latest.json" if committed else args.out / "raw.json"
 
     methods, missing = available_methods(args.methods)
-    if "kissm" not in methods:
+    if importlib.util.find_spec("kissm") is None:  # it reads the data and gives the refinement peers their start
         print("bench: the kissm Python package is not importable (pip install ./bindings/python)", file=sys.stderr)
         return 2
     if missing and not args.smoke:
@@ -953,7 +1200,7 @@ def main(argv=None) -> int:
         return 2
     if missing:
         print("bench: smoke run without " + ", ".join(METHOD_LABEL[m] for m in missing) + " (not installed)")
-    scaling_methods = [m for m in (args.scaling_methods or methods) if m in methods]
+    scaling_methods = [m for m in (args.scaling_methods or methods) if m in methods and m in COARSE_METHODS]
     scaling_threads = args.scaling_threads or max(args.threads)
     for t in set(args.threads) | {scaling_threads}:
         cpus_for(t)

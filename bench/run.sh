@@ -7,6 +7,7 @@
 #                                      # writes docs/benchmarks.md, docs/img/*.png, bench/results/latest.json
 #   bash bench/run.sh --smoke          # seconds: the harness on one small pair (results in a temp dir)
 #   bash bench/run.sh --quick          # minutes: 1 rotation, 1 repeat, scaling to 100K voxels
+#   bash bench/run.sh --refine-only --out /tmp/refine   # 15 minutes: the refinement comparison alone (issue 14)
 #   bash bench/run.sh --setup-only     # only make the venv
 #   bash bench/run.sh --threads 2 --repeats 5 ...   # any bench.py option (python bench/bench.py --help)
 #
