@@ -809,6 +809,21 @@ int reason_of(const Run &r, const char *what, bool refine_command = false) {
     return code;
 }
 
+// A validity setting (`option`, after `command`) at exactly the value `measured` the `base` run reported under
+// `key` keeps the pose valid; one ulp toward `beyond` refuses it for `reason`, and only the decision moves: the
+// pose and the measure are the base run's.
+void check_decision_flips(const std::string &command, const std::string &option, const char *key, double measured,
+                          double beyond, int reason, const Run &base, bool refine_command = false) {
+    const std::string at = option + " at the measured " + key, past = option + " one ulp past the measured " + key;
+    CHECK_EQ_INT(reason_of(run(command + option + " " + exact(measured) + " --json"), at.c_str(), refine_command),
+                 KISSM_REASON_NONE);
+    const Run beyond_run = run(command + option + " " + exact(std::nextafter(measured, beyond)) + " --json");
+    CHECK_EQ_INT(reason_of(beyond_run, past.c_str(), refine_command), reason);
+    for (const char *k : {"transform", key}) {
+        CHECK_MSG(json_line_value(beyond_run.out, k) == json_line_value(base.out, k), "%s: %s moved", past.c_str(), k);
+    }
+}
+
 // --max-rotation-uncertainty, --refine-min-inliers and --min-inlier-coverage: the tool's and the library's
 // range checks, refused by `refine`, and each moves the decision exactly at the value the JSON reports.
 void test_validity_options() {
@@ -848,13 +863,8 @@ void test_validity_options() {
     const uint64_t inliers = static_cast<uint64_t>(b.at("final_inliers").number);
     CHECK_MSG(std::isfinite(u) && u > 0.0, "rotation_uncertainty %s", b.at("rotation_uncertainty").text.c_str());
     CHECK(b.at("inlier_coverage").is(Json::Type::Null));
-    CHECK_EQ_INT(reason_of(run(plain + "--max-rotation-uncertainty " + exact(u) + " --json"), "at u"),
-                 KISSM_REASON_NONE);
-    const Run below = run(plain + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json");
-    CHECK_EQ_INT(reason_of(below, "just below u"), KISSM_REASON_UNCERTAIN_ROTATION);
-    // Only the decision moves, not the pose.
-    CHECK(json_line_value(below.out, "transform") == json_line_value(base.out, "transform"));
-    CHECK(json_line_value(below.out, "rotation_uncertainty") == json_line_value(base.out, "rotation_uncertainty"));
+    check_decision_flips(plain, "--max-rotation-uncertainty", "rotation_uncertainty", u, 0.0,
+                         KISSM_REASON_UNCERTAIN_ROTATION, base);
     // Each rule ignores the other's settings.
     CHECK_EQ_INT(reason_of(run(reg + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json"),
                            "refined, strict rotation"),
@@ -879,11 +889,8 @@ void test_validity_options() {
     const double coverage = f.at("inlier_coverage").as_double();
     const uint64_t fine_inliers = static_cast<uint64_t>(f.at("final_inliers").number);
     CHECK_MSG(coverage > 0.0 && coverage < 1.0, "inlier_coverage %s", f.at("inlier_coverage").text.c_str());
-    CHECK_EQ_INT(reason_of(run(reg + "--min-inlier-coverage " + exact(coverage) + " --json"), "at the coverage"),
-                 KISSM_REASON_NONE);
-    const Run clustered = run(reg + "--min-inlier-coverage " + exact(std::nextafter(coverage, 2.0)) + " --json");
-    CHECK_EQ_INT(reason_of(clustered, "just above the coverage"), KISSM_REASON_CLUSTERED_INLIERS);
-    CHECK(json_line_value(clustered.out, "transform") == json_line_value(fine.out, "transform"));
+    check_decision_flips(reg, "--min-inlier-coverage", "inlier_coverage", coverage, 2.0, KISSM_REASON_CLUSTERED_INLIERS,
+                         fine);
     CHECK_EQ_INT(
         reason_of(run(reg + "--refine-min-inliers " + std::to_string(fine_inliers) + " --json"), "at the inliers"),
         KISSM_REASON_NONE);
@@ -1114,12 +1121,8 @@ void test_refine_rule_options() {
     const double condition = f.at("refine_condition").as_double();
     CHECK_MSG(condition >= defaults.min_refine_condition && condition < 1.0, "refine_condition %s",
               f.at("refine_condition").text.c_str());
-    CHECK_EQ_INT(reason_of(run(reg + "--min-refine-condition " + exact(condition) + " --json"), "at the condition"),
-                 KISSM_REASON_NONE);
-    const Run slides = run(reg + "--min-refine-condition " + exact(std::nextafter(condition, 2.0)) + " --json");
-    CHECK_EQ_INT(reason_of(slides, "just above the condition"), KISSM_REASON_UNCONSTRAINED);
-    CHECK(json_line_value(slides.out, "transform") == json_line_value(fine.out, "transform"));
-    CHECK(json_line_value(slides.out, "refine_condition") == json_line_value(fine.out, "refine_condition"));
+    check_decision_flips(reg, "--min-refine-condition", "refine_condition", condition, 2.0, KISSM_REASON_UNCONSTRAINED,
+                         fine);
     // Without refinement there is no condition to judge.
     CHECK_EQ_INT(reason_of(run(plain + "--min-refine-condition 1 --json"), "unrefined, condition 1"),
                  KISSM_REASON_NONE);
@@ -1127,12 +1130,8 @@ void test_refine_rule_options() {
     const Run prior = run(ref + "--json");
     CHECK_MSG(prior.code == 0, "refine from the truth: exit %d (%s)", prior.code, prior.err.c_str());
     const double prior_condition = contract_json(prior, true, "refine").at("refine_condition").as_double();
-    CHECK_EQ_INT(reason_of(run(ref + "--min-refine-condition " + exact(prior_condition) + " --json"),
-                           "refine, at the condition", true),
-                 KISSM_REASON_NONE);
-    const Run strict = run(ref + "--min-refine-condition " + exact(std::nextafter(prior_condition, 2.0)) + " --json");
-    CHECK_EQ_INT(reason_of(strict, "refine, just above the condition", true), KISSM_REASON_UNCONSTRAINED);
-    CHECK(json_line_value(strict.out, "transform") == json_line_value(prior.out, "transform"));
+    check_decision_flips(ref, "--min-refine-condition", "refine_condition", prior_condition, 2.0,
+                         KISSM_REASON_UNCONSTRAINED, prior, true);
 
     // The refinement's planes: another radius, another refined pose from the same coarse one, as accurate.
     const double gain = 0.75 * defaults.refine_normal_radius_gain;

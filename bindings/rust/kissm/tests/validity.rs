@@ -52,6 +52,14 @@ fn accurate(pair: &Scene, reg: &Registration, what: &str) {
     assert!(reg.valid, "{what}: an accurate pose is not valid: {}", reg.reason);
 }
 
+/// The shared scene and its GICP-refined registration under the default rules (accurate, so valid).
+fn refined_scene(test: &str) -> Option<(&'static Scene, Registration)> {
+    let pair = scene(test)?;
+    let base = register(builder(RefineMode::Gicp), pair);
+    accurate(pair, &base, "GICP");
+    Some((pair, base))
+}
+
 #[test]
 fn rotation_uncertainty_decides_an_unrefined_pose() {
     let Some(pair) = scene("rotation_uncertainty_decides_an_unrefined_pose") else { return };
@@ -82,9 +90,7 @@ fn rotation_uncertainty_decides_an_unrefined_pose() {
 
 #[test]
 fn the_refined_rule_needs_inliers_covering_the_overlap() {
-    let Some(pair) = scene("the_refined_rule_needs_inliers_covering_the_overlap") else { return };
-    let base = register(builder(RefineMode::Gicp), pair);
-    accurate(pair, &base, "GICP");
+    let Some((pair, base)) = refined_scene("the_refined_rule_needs_inliers_covering_the_overlap") else { return };
     let coverage = base.refinement.expect("refined").inlier_coverage;
     let inliers = base.final_inliers() as usize;
     assert!(coverage >= Config::default().min_inlier_coverage() && coverage < 1.0, "{coverage}");
@@ -117,9 +123,7 @@ fn the_refined_rule_needs_inliers_covering_the_overlap() {
 
 #[test]
 fn the_refined_rules_need_a_conditioned_pose() {
-    let Some(pair) = scene("the_refined_rules_need_a_conditioned_pose") else { return };
-    let base = register(builder(RefineMode::Gicp), pair);
-    accurate(pair, &base, "GICP");
+    let Some((pair, base)) = refined_scene("the_refined_rules_need_a_conditioned_pose") else { return };
     let condition = base.refinement.expect("refined").condition;
     assert!(condition >= Config::default().min_refine_condition() && condition < 1.0, "{condition}");
 
