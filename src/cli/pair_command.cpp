@@ -63,6 +63,8 @@ constexpr FieldOption kFieldOptions[] = {
     {"config.max_rotation_uncertainty ", "--max-rotation-uncertainty"},
     {"config.min_inlier_coverage ", "--min-inlier-coverage"},
     {"config.refine_min_inliers ", "--refine-min-inliers"},
+    {"config.min_refine_condition ", "--min-refine-condition"},
+    {"config.refine_normal_radius_gain ", "--refine-normal-radius"},
 };
 
 std::string settings_error(int32_t status) {
@@ -232,6 +234,12 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
         } else if (name == "--min-overlap") {
             opt.min_overlap = parse_double(name, cur.value());
             opt.have_min_overlap = true;
+        } else if (name == "--min-refine-condition") {
+            opt.min_refine_condition = parse_double(name, cur.value());
+            opt.have_min_refine_condition = true;
+        } else if (name == "--refine-normal-radius") {
+            opt.refine_normal_radius_gain = parse_double(name, cur.value());
+            opt.have_refine_normal_radius = true;
         } else if (name == "--format-src") {
             opt.source_format = parse_format(name, cur.value());
         } else if (name == "--format-tgt") {
@@ -291,6 +299,8 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
     if (opt.have_refine_iterations) config.refine_max_iterations = opt.refine_iterations;
     if (opt.have_refine_distance) config.refine_max_distance_gain = opt.refine_distance;
     if (opt.have_min_overlap) config.min_overlap = opt.min_overlap;
+    if (opt.have_min_refine_condition) config.min_refine_condition = opt.min_refine_condition;
+    if (opt.have_refine_normal_radius) config.refine_normal_radius_gain = opt.refine_normal_radius_gain;
     if (opt.drop_nonfinite) config.nonfinite_policy = KISSM_NONFINITE_DROP;
     if (opt.viewpoint_center) config.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
     if (opt.verbose) {
@@ -376,8 +386,16 @@ void print_refinement_help(std::FILE *out, PairCommand command, const kissm_conf
                  "  --refine-distance GAIN  correspondence distance = GAIN * voxel, in (0, 100] (default %g); also\n"
                  "                          the distance within which a source voxel counts as overlapping\n"
                  "  --min-overlap X         least overlap of a valid refined pose, in [0, 1] (default %g): the\n"
-                 "                          share of the source's voxels within that distance of the target\n",
-                 d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap);
+                 "                          share of the source's voxels within that distance of the target\n"
+                 "  --min-refine-condition X (default %g)\n"
+                 "                          least condition of a valid refined pose, in [0, 1]: the weakest\n"
+                 "                          direction's share of the strongest one's information; below it the\n"
+                 "                          pose slides (a corridor, a plane)\n"
+                 "  --refine-normal-radius GAIN (default %g)\n"
+                 "                          refinement aligns planes fitted to the neighbours within GAIN * voxel\n"
+                 "                          (at least 5 of them; at most the normals' radius), in (0, 50]\n",
+                 d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap, d.min_refine_condition,
+                 d.refine_normal_radius_gain);
     if (command == PairCommand::Register) {
         std::fprintf(out,
                      "  --refine-min-inliers N  final inliers a valid refined pose needs, 3..100000 (default %d);\n"

@@ -44,6 +44,12 @@ struct PairOptions {
     double refine_distance = 0.0;
     bool have_min_overlap = false;
     double min_overlap = 0.0;
+    // kissm_refine's rule and refinement too: the refined pose's least condition, and the radius (in voxels)
+    // of the planes refinement aligns.
+    bool have_min_refine_condition = false;
+    double min_refine_condition = 0.0;
+    bool have_refine_normal_radius = false;
+    double refine_normal_radius_gain = 0.0;
     std::string initial; // refine only: the initial transform file
     std::string out_transform;
     std::string out_aligned;

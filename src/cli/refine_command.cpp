@@ -33,9 +33,9 @@ void print_refine_help(std::FILE *out) {
     print_refinement_help(out, PairCommand::Refine, defaults);
     print_pair_output_help(out);
     std::fprintf(out, "Exit status: 0 valid refined pose, 1 refinement ran but the pose is not valid (see the\n"
-                      "reason: too little overlap, or a direction the clouds leave free), 2 usage or input error,\n"
-                      "including a malformed, non-finite or non-rigid --initial file (one \"kissm: ...\" line on\n"
-                      "stderr).\n");
+                      "reason: too little overlap, a direction the clouds leave free, or a refinement still moving\n"
+                      "at its iteration cap), 2 usage or input error, including a malformed, non-finite or\n"
+                      "non-rigid --initial file (one \"kissm: ...\" line on stderr).\n");
 }
 
 int run_refine(const std::vector<std::string> &args) { return run_pair_command(PairCommand::Refine, args); }

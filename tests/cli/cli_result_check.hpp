@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -180,8 +181,10 @@ inline void check_matches_library(const Json &j, const kissm_result &r, const ch
 
 // The library's result for the tool's call: the same files (through kissm_read_points), voxel size and
 // refinement mode, every other setting at its default; kissm_refine when initial is given.
+// adjust, when given, changes the config further (the tool's other options) after voxel and refine mode.
 inline bool library_result(const std::string &source, const std::string &target, double voxel, int32_t refine_mode,
-                           const double *initial, kissm_result *result) {
+                           const double *initial, kissm_result *result,
+                           const std::function<void(kissm_config &)> &adjust = {}) {
     kissm_cloud *clouds[2] = {nullptr, nullptr};
     kissm_matcher *matcher = nullptr;
     bool ok = kissm_read_points(source.c_str(), KISSM_FORMAT_AUTO, &clouds[0]) == KISSM_OK &&
@@ -192,6 +195,7 @@ inline bool library_result(const std::string &source, const std::string &target,
          kissm_cloud_points(clouds[1], &points[1]) == KISSM_OK && kissm_config_init(&config, sizeof config) == KISSM_OK;
     config.voxel_size = voxel;
     config.refine_mode = refine_mode;
+    if (adjust) adjust(config);
     ok = ok && kissm_create(&config, &matcher) == KISSM_OK;
     result->struct_size = sizeof *result;
     if (ok) {

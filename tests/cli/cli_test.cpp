@@ -5,9 +5,9 @@
 //   cli_test KISSM_BINARY WORK_DIR CASE
 //
 // CASE: usage | errors | malformed | demo | json | threads | realdata | refine_options | refine_register |
-// refine_command | refine_initial | refine_roundtrip | validity_options. Cases that need ../shared/data
-// (KISSM_DATA_DIR) return 77 (skipped) when it is absent; the refine and validity cases use the committed
-// pair of tests/data (KISSM_TEST_DATA).
+// refine_command | refine_initial | refine_roundtrip | validity_options | refine_rule_options. Cases that need
+// ../shared/data (KISSM_DATA_DIR) return 77 (skipped) when it is absent; the refine and validity cases use the
+// committed pair of tests/data (KISSM_TEST_DATA).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -232,17 +232,20 @@ void test_usage() {
     // The refinement options, with the defaults kissm_config_init gives.
     kissm_config defaults{};
     REQUIRE(kissm_config_init(&defaults, sizeof defaults) == KISSM_OK);
-    char expected[3][64];
+    char expected[5][64];
     std::snprintf(expected[0], sizeof expected[0], "(default %d)", defaults.refine_max_iterations);
     std::snprintf(expected[1], sizeof expected[1], "(default %g)", defaults.refine_max_distance_gain);
     std::snprintf(expected[2], sizeof expected[2], "(default %g)", defaults.min_overlap);
-    const char *options[3] = {"--refine-iterations", "--refine-distance", "--min-overlap"};
+    std::snprintf(expected[3], sizeof expected[3], "(default %g)", defaults.min_refine_condition);
+    std::snprintf(expected[4], sizeof expected[4], "(default %g)", defaults.refine_normal_radius_gain);
+    const char *options[5] = {"--refine-iterations", "--refine-distance", "--min-overlap", "--min-refine-condition",
+                              "--refine-normal-radius"};
     for (const char *command : {"register --help", "refine --help", "help refine"}) {
         r = run(command);
         CHECK_EQ_INT(r.code, 0);
         CHECK(r.err.empty());
         CHECK(contains(r.out, "--refine MODE"));
-        for (int i = 0; i < 3; ++i) {
+        for (int i = 0; i < 5; ++i) {
             const std::string line = help_line(r.out, options[i]);
             CHECK_MSG(contains(line, expected[i]), "'kissm %s': [%s] lacks %s", command, line.c_str(), expected[i]);
         }
@@ -796,14 +799,29 @@ std::string exact(double v) {
 }
 
 // A run's reason code, checked against its exit status and reason text.
-int reason_of(const Run &r, const char *what) {
-    const Json j = contract_json(r, false, what);
+int reason_of(const Run &r, const char *what, bool refine_command = false) {
+    const Json j = contract_json(r, refine_command, what);
     const int code = static_cast<int>(j.at("reason_code").number);
     CHECK_MSG(r.code == (code == KISSM_REASON_NONE ? 0 : 1), "%s: exit %d with reason %d (%s)", what, r.code, code,
               r.err.c_str());
     CHECK_MSG(j.at("reason").text == kissm_reason_string(code), "%s: reason '%s' for code %d", what,
               j.at("reason").text.c_str(), code);
     return code;
+}
+
+// A validity setting (`option`, after `command`) at exactly the value `measured` the `base` run reported under
+// `key` keeps the pose valid; one ulp toward `beyond` refuses it for `reason`, and only the decision moves: the
+// pose and the measure are the base run's.
+void check_decision_flips(const std::string &command, const std::string &option, const char *key, double measured,
+                          double beyond, int reason, const Run &base, bool refine_command = false) {
+    const std::string at = option + " at the measured " + key, past = option + " one ulp past the measured " + key;
+    CHECK_EQ_INT(reason_of(run(command + option + " " + exact(measured) + " --json"), at.c_str(), refine_command),
+                 KISSM_REASON_NONE);
+    const Run beyond_run = run(command + option + " " + exact(std::nextafter(measured, beyond)) + " --json");
+    CHECK_EQ_INT(reason_of(beyond_run, past.c_str(), refine_command), reason);
+    for (const char *k : {"transform", key}) {
+        CHECK_MSG(json_line_value(beyond_run.out, k) == json_line_value(base.out, k), "%s: %s moved", past.c_str(), k);
+    }
 }
 
 // --max-rotation-uncertainty, --refine-min-inliers and --min-inlier-coverage: the tool's and the library's
@@ -845,13 +863,8 @@ void test_validity_options() {
     const uint64_t inliers = static_cast<uint64_t>(b.at("final_inliers").number);
     CHECK_MSG(std::isfinite(u) && u > 0.0, "rotation_uncertainty %s", b.at("rotation_uncertainty").text.c_str());
     CHECK(b.at("inlier_coverage").is(Json::Type::Null));
-    CHECK_EQ_INT(reason_of(run(plain + "--max-rotation-uncertainty " + exact(u) + " --json"), "at u"),
-                 KISSM_REASON_NONE);
-    const Run below = run(plain + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json");
-    CHECK_EQ_INT(reason_of(below, "just below u"), KISSM_REASON_UNCERTAIN_ROTATION);
-    // Only the decision moves, not the pose.
-    CHECK(json_line_value(below.out, "transform") == json_line_value(base.out, "transform"));
-    CHECK(json_line_value(below.out, "rotation_uncertainty") == json_line_value(base.out, "rotation_uncertainty"));
+    check_decision_flips(plain, "--max-rotation-uncertainty", "rotation_uncertainty", u, 0.0,
+                         KISSM_REASON_UNCERTAIN_ROTATION, base);
     // Each rule ignores the other's settings.
     CHECK_EQ_INT(reason_of(run(reg + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json"),
                            "refined, strict rotation"),
@@ -876,11 +889,8 @@ void test_validity_options() {
     const double coverage = f.at("inlier_coverage").as_double();
     const uint64_t fine_inliers = static_cast<uint64_t>(f.at("final_inliers").number);
     CHECK_MSG(coverage > 0.0 && coverage < 1.0, "inlier_coverage %s", f.at("inlier_coverage").text.c_str());
-    CHECK_EQ_INT(reason_of(run(reg + "--min-inlier-coverage " + exact(coverage) + " --json"), "at the coverage"),
-                 KISSM_REASON_NONE);
-    const Run clustered = run(reg + "--min-inlier-coverage " + exact(std::nextafter(coverage, 2.0)) + " --json");
-    CHECK_EQ_INT(reason_of(clustered, "just above the coverage"), KISSM_REASON_CLUSTERED_INLIERS);
-    CHECK(json_line_value(clustered.out, "transform") == json_line_value(fine.out, "transform"));
+    check_decision_flips(reg, "--min-inlier-coverage", "inlier_coverage", coverage, 2.0, KISSM_REASON_CLUSTERED_INLIERS,
+                         fine);
     CHECK_EQ_INT(
         reason_of(run(reg + "--refine-min-inliers " + std::to_string(fine_inliers) + " --json"), "at the inliers"),
         KISSM_REASON_NONE);
@@ -1075,6 +1085,96 @@ void test_refine_roundtrip() {
               kissm_cli::translation_error(first.data(), second.data()));
 }
 
+// --min-refine-condition and --refine-normal-radius, which kissm_refine reads too: the tool's and the library's
+// range checks for both commands; the condition moves the decision exactly at the value the JSON reports
+// (register --refine and refine alike), never the pose; the normal radius moves the refined pose (not the
+// solver's), bit for bit the library's with that setting at every thread count; and a refinement capped at one
+// iteration from a perturbed start is not valid (NOT_CONVERGED).
+void test_refine_rule_options() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    kissm_config defaults{};
+    REQUIRE(kissm_config_init(&defaults, sizeof defaults) == KISSM_OK);
+    const std::string plain = "register " + pair_args(pair) + " --voxel 0.25 ";
+    const std::string reg = plain + "--refine gicp ";
+    const std::string ref = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path) + " ";
+
+    for (const std::string &command : {reg, ref}) {
+        for (const char *bad : {"abc", "nan", "inf", "1e999", "''"}) {
+            expect_usage_error(command + "--min-refine-condition " + bad, "--min-refine-condition");
+            expect_usage_error(command + "--refine-normal-radius " + bad, "--refine-normal-radius");
+        }
+        for (const char *bad : {"-0.01", "1.01"}) {
+            expect_usage_error(command + "--min-refine-condition " + bad,
+                               "--min-refine-condition: config.min_refine_condition");
+        }
+        for (const char *bad : {"0", "-1", "50.5"}) {
+            expect_usage_error(command + "--refine-normal-radius " + bad,
+                               "--refine-normal-radius: config.refine_normal_radius_gain");
+        }
+    }
+
+    // The refined rule's condition: exactly the measured one is enough, one ulp more is not.
+    const Run fine = run(reg + "--json");
+    CHECK_MSG(fine.code == 0, "register --refine gicp: exit %d (%s)", fine.code, fine.err.c_str());
+    const Json f = contract_json(fine, false, "register --refine gicp");
+    const double condition = f.at("refine_condition").as_double();
+    CHECK_MSG(condition >= defaults.min_refine_condition && condition < 1.0, "refine_condition %s",
+              f.at("refine_condition").text.c_str());
+    check_decision_flips(reg, "--min-refine-condition", "refine_condition", condition, 2.0, KISSM_REASON_UNCONSTRAINED,
+                         fine);
+    // Without refinement there is no condition to judge.
+    CHECK_EQ_INT(reason_of(run(plain + "--min-refine-condition 1 --json"), "unrefined, condition 1"),
+                 KISSM_REASON_NONE);
+    // kissm_refine's rule reads it too.
+    const Run prior = run(ref + "--json");
+    CHECK_MSG(prior.code == 0, "refine from the truth: exit %d (%s)", prior.code, prior.err.c_str());
+    const double prior_condition = contract_json(prior, true, "refine").at("refine_condition").as_double();
+    check_decision_flips(ref, "--min-refine-condition", "refine_condition", prior_condition, 2.0,
+                         KISSM_REASON_UNCONSTRAINED, prior, true);
+
+    // The refinement's planes: another radius, another refined pose from the same coarse one, as accurate.
+    const double gain = 0.75 * defaults.refine_normal_radius_gain;
+    const std::string radius = "--refine-normal-radius " + exact(gain) + " ";
+    const auto with_radius = [gain](kissm_config &c) { c.refine_normal_radius_gain = gain; };
+    const Run other = run(reg + radius + "--json");
+    CHECK_MSG(other.code == 0, "register %s: exit %d (%s)", radius.c_str(), other.code, other.err.c_str());
+    const Json o = contract_json(other, false, "--refine-normal-radius");
+    CHECK(json_line_value(other.out, "coarse_transform") == json_line_value(fine.out, "coarse_transform"));
+    CHECK_MSG(json_line_value(other.out, "transform") != json_line_value(fine.out, "transform"),
+              "--refine-normal-radius %g left the refined pose as it was", gain);
+    check_refined_beats_coarse(o, pair.truth, "--refine-normal-radius");
+    kissm_result lib{};
+    REQUIRE(library_result(pair.source, pair.target, 0.25, KISSM_REFINE_GICP, nullptr, &lib, with_radius));
+    for (const char *threads : {"1", "2"}) {
+        const std::string what = std::string("--refine-normal-radius --threads ") + threads;
+        check_matches_library(contract_json(run(reg + radius + "--json --threads " + threads), false, what.c_str()),
+                              lib, what.c_str());
+    }
+    // kissm_refine's planes too.
+    double initial[16];
+    perturbed(pair.truth, initial);
+    const std::string initial_path = work("perturbed.txt");
+    std::string error;
+    REQUIRE(kissm_cli::write_transform_file(initial_path, initial, &error));
+    const std::string from = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(initial_path) + " ";
+    const Run refined_default = run(from + "--json");
+    const Run refined_other = run(from + radius + "--json");
+    CHECK_MSG(refined_other.code == 0, "refine %s: exit %d (%s)", radius.c_str(), refined_other.code,
+              refined_other.err.c_str());
+    CHECK(json_line_value(refined_other.out, "transform") != json_line_value(refined_default.out, "transform"));
+    REQUIRE(library_result(pair.source, pair.target, 0.25, KISSM_REFINE_GICP, initial, &lib, with_radius));
+    check_matches_library(contract_json(refined_other, true, "refine --refine-normal-radius"), lib,
+                          "refine --refine-normal-radius");
+
+    // Stopped by its cap while still moving: kept, reported, not valid.
+    const Run capped = run(from + "--refine-iterations 1 --json");
+    CHECK_EQ_INT(reason_of(capped, "refine capped at 1 iteration", true), KISSM_REASON_NOT_CONVERGED);
+    const Json c = contract_json(capped, true, "refine capped at 1 iteration");
+    CHECK(!c.at("refine_converged").boolean && c.at("refine_iterations").text == "1");
+    CHECK(json_line_value(capped.out, "transform") != json_line_value(capped.out, "initial_transform"));
+}
+
 } // namespace
 
 int main(int argc, char **argv) {
@@ -1107,7 +1207,8 @@ int main(int argc, char **argv) {
                  {"refine_command", test_refine_command},
                  {"refine_initial", test_refine_initial},
                  {"refine_roundtrip", test_refine_roundtrip},
-                 {"validity_options", test_validity_options}};
+                 {"validity_options", test_validity_options},
+                 {"refine_rule_options", test_refine_rule_options}};
     for (const auto &c : cases) {
         if (which != c.name) continue;
         c.run();

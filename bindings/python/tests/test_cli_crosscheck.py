@@ -140,13 +140,15 @@ VALIDITY_SETTINGS = {
     "max_rotation_uncertainty": (False, "KISSM_REASON_UNCERTAIN_ROTATION"),
     "min_inlier_coverage": (True, "KISSM_REASON_CLUSTERED_INLIERS"),
     "refine_min_inliers": (True, "KISSM_REASON_TOO_FEW_INLIERS"),
+    "min_refine_condition": (True, "KISSM_REASON_UNCONSTRAINED"),
 }
 
 
 @pytest.mark.parametrize("setting", list(VALIDITY_SETTINGS))
 def test_cli_validity_flags_match_config_fields(cli: Path, pair, pair_files, setting: str) -> None:
-    """`--max-rotation-uncertainty`, `--min-inlier-coverage`, `--refine-min-inliers` are the Config fields: set
-    one step past what the pair measures, both refuse the pose for the same reason, with the same numbers."""
+    """`--max-rotation-uncertainty`, `--min-inlier-coverage`, `--refine-min-inliers`, `--min-refine-condition` are
+    the Config fields: set one step past what the pair measures, both refuse the pose for the same reason, with the
+    same numbers."""
     refined, reason = VALIDITY_SETTINGS[setting]
     mode = "gicp" if refined else "none"
     measured = kissm.register(pair.source, pair.target, pair.voxel_size, refine=mode)
@@ -155,9 +157,29 @@ def test_cli_validity_flags_match_config_fields(cli: Path, pair, pair_files, set
         "max_rotation_uncertainty": float(np.nextafter(measured.rotation_uncertainty, 0.0)),
         "min_inlier_coverage": float(np.nextafter(measured.inlier_coverage, 1.0)),
         "refine_min_inliers": measured.num_final_inliers + 1,
+        "min_refine_condition": float(np.nextafter(measured.refine_condition, 1.0)),
     }[setting]
     flags = ["--refine", mode, "--" + setting.replace("_", "-"), repr(value)]
     expected = run_cli(cli, *pair_files, pair.voxel_size, flags)
     result = kissm.register(pair.source, pair.target, pair.voxel_size, refine=mode, **{setting: value})
     assert not result.valid and result.reason_code == getattr(_ffi.lib, reason)
     assert_matches_cli(result, expected, mode)
+
+
+def test_cli_refine_normal_radius_is_the_config_field(cli: Path, pair, pair_files, tmp_path: Path) -> None:
+    """`--refine-normal-radius GAIN` is Config.refine_normal_radius_gain, for `register --refine` and `kissm refine`
+    alike: the same refined pose, bit for bit, and not the default's."""
+    gain = 0.75 * kissm.Config().refine_normal_radius_gain
+    flags = ["--refine", "gicp", "--refine-normal-radius", repr(gain)]
+    expected = run_cli(cli, *pair_files, pair.voxel_size, flags)
+    result = kissm.register(pair.source, pair.target, pair.voxel_size, refine="gicp", refine_normal_radius_gain=gain)
+    assert result.valid
+    assert_matches_cli(result, expected, "gicp")
+    default = kissm.register(pair.source, pair.target, pair.voxel_size, refine="gicp")
+    assert not np.array_equal(result.transform, default.transform)
+    initial = testdata.pose(testdata.rotation_zyx(3.0), [0.2, -0.15, 0.05]) @ pair.transform
+    write_transform(tmp_path / "initial.txt", initial)
+    extra = ["--initial", str(tmp_path / "initial.txt"), "--refine-normal-radius", repr(gain)]
+    expected = run_cli(cli, *pair_files, pair.voxel_size, extra, command_name="refine")
+    refined = kissm.refine(pair.source, pair.target, initial, pair.voxel_size, refine_normal_radius_gain=gain)
+    assert_matches_cli(refined, expected, "gicp")

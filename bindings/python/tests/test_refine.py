@@ -215,6 +215,32 @@ def test_refine_features_checks_its_arguments(pair, prior) -> None:
             other.refine_features(features, features, prior)
 
 
+def test_refine_normal_radius_gain_moves_the_refined_pose_only(pair, coarse, refined, prior) -> None:
+    """The planes refinement aligns: another neighbourhood, another refined pose (as accurate) from the same coarse
+    pose, deterministic across thread counts; features computed with another value are refused."""
+    gain = 0.75 * kissm.Config().refine_normal_radius_gain
+    results = [
+        kissm.register(pair.source, pair.target, VOXEL, refine="gicp", refine_normal_radius_gain=gain, num_threads=n)
+        for n in (1, 2)
+    ]
+    assert_same_result(results[0], results[1], ignore=TIME_FIELDS)
+    other = results[0]
+    assert other.valid and bits(other.coarse_transform) == bits(coarse.transform)
+    assert bits(other.transform) != bits(refined["gicp"].transform)
+    rre, rte = errors(other.transform, pair.transform)
+    assert rre < 0.1 and rte < 0.01, (rre, rte)
+    from_prior = kissm.refine(pair.source, pair.target, prior, VOXEL, refine_normal_radius_gain=gain)
+    assert bits(from_prior.transform) != bits(kissm.refine(pair.source, pair.target, prior, VOXEL).transform)
+    assert from_prior.valid and errors(from_prior.transform, pair.transform)[0] < 0.1
+    with kissm.Matcher(voxel_size=VOXEL) as a, kissm.Matcher(voxel_size=VOXEL, refine_normal_radius_gain=gain) as b:
+        source, target = a.compute_features(pair.source), a.compute_features(pair.target)
+        with pytest.raises(kissm.FeaturesMismatchError, match="^kissm_register_features: source features"):
+            b.register_features(source, target)
+        with pytest.raises(kissm.FeaturesMismatchError, match="^kissm_refine_features: source features"):
+            b.refine_features(source, target, prior)
+        assert b.refine_features(b.compute_features(pair.source), b.compute_features(pair.target), prior).valid
+
+
 def test_module_refine_equals_matcher_refine(pair, prior) -> None:
     with kissm.Matcher(voxel_size=VOXEL, num_threads=2) as matcher:
         expected = matcher.refine(pair.source, pair.target, prior)

@@ -68,9 +68,10 @@ def test_inlier_coverage_is_the_inliers_spread_over_the_overlaps(pair, refined) 
     points = pair.source @ refined.rotation.T + refined.translation
     all_extent = math.sqrt(float(np.linalg.eigvalsh(np.cov(points.T, bias=True)).max()))
     assert 0.5 * all_extent < spread <= 1.05 * all_extent  # the overlap (87 % of the voxels) spans most of it
-    assert bits(kissm.register(pair.source, pair.target, VOXEL, refine="point_to_plane").inlier_coverage) == bits(
-        coverage
-    )  # the solver's inliers and (to the last bit here) the same overlap
+    # the same solver inliers over the same overlapped voxels seen from the other cost's pose (about 0.02 degrees
+    # and 4 mm away since refinement fits its own planes, refine_normal_radius_gain): the spread agrees to 1e-3
+    p2p = kissm.register(pair.source, pair.target, VOXEL, refine="point_to_plane").inlier_coverage
+    assert math.isclose(p2p, coverage, rel_tol=1e-3), (p2p, coverage)
 
 
 def test_max_rotation_uncertainty_decides_without_refinement(pair, coarse) -> None:

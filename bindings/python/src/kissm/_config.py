@@ -46,6 +46,7 @@ _FLOAT_FIELDS = (
     "min_overlap",
     "min_inlier_coverage",
     "min_refine_condition",
+    "refine_normal_radius_gain",
 )
 _INT_FIELDS = (
     "num_threads",
@@ -183,6 +184,10 @@ class Config:
     """With refinement (and :meth:`Matcher.refine`), ``Result.valid`` needs ``Result.refine_condition`` >= this
     (else reason "the refined pose is not constrained in every direction": a direction carrying less than this
     share of the strongest one's information slides, as along a corridor); in [0, 1]."""
+    refine_normal_radius_gain: float = _DEFAULTS["refine_normal_radius_gain"]
+    """Refinement aligns planes fitted to the neighbours within gain * voxel_size (at least 5 of them; a value above
+    ``normal_radius_gain`` acts as it); in (0, 50]. The planes are computed with the features, so :class:`Features`
+    of a Config with another value do not match (:class:`kissm.FeaturesMismatchError`)."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object

@@ -268,6 +268,16 @@ impl Config {
     pub fn refine_min_inliers(&self) -> usize {
         usize::try_from(self.raw.refine_min_inliers).unwrap_or(0)
     }
+    /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
+    /// [`Refinement::condition`](crate::Refinement::condition) at least this.
+    pub fn min_refine_condition(&self) -> f64 {
+        self.raw.min_refine_condition
+    }
+    /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at most
+    /// [`normal_radius_gain`](Config::normal_radius_gain)); computed with the features.
+    pub fn refine_normal_radius_gain(&self) -> f64 {
+        self.raw.refine_normal_radius_gain
+    }
 }
 
 impl Default for Config {
@@ -304,6 +314,8 @@ impl fmt::Debug for Config {
             .field("min_overlap", &self.raw.min_overlap)
             .field("min_inlier_coverage", &self.raw.min_inlier_coverage)
             .field("refine_min_inliers", &self.raw.refine_min_inliers)
+            .field("min_refine_condition", &self.raw.min_refine_condition)
+            .field("refine_normal_radius_gain", &self.raw.refine_normal_radius_gain)
             .finish()
     }
 }
@@ -483,6 +495,23 @@ impl ConfigBuilder {
     /// [`min_inliers`](ConfigBuilder::min_inliers) applies without refinement.
     pub fn refine_min_inliers(mut self, count: usize) -> Self {
         self.raw.refine_min_inliers = to_i32(count);
+        self
+    }
+    /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
+    /// [`Refinement::condition`](crate::Refinement::condition) at least this (below it:
+    /// [`Reason::Unconstrained`](crate::Reason::Unconstrained)): a direction carrying less than this share
+    /// of the strongest one's information slides, as along a corridor; in [0, 1] (default: the library's).
+    pub fn min_refine_condition(mut self, condition: f64) -> Self {
+        self.raw.min_refine_condition = condition;
+        self
+    }
+    /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at least 5 of them;
+    /// a value above [`normal_radius_gain`](ConfigBuilder::normal_radius_gain) acts as it); in (0, 50]
+    /// (default: the library's). They are computed with the features, so [`Features`](crate::Features) of
+    /// a matcher with another value do not match this one's
+    /// ([`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch)).
+    pub fn refine_normal_radius_gain(mut self, gain: f64) -> Self {
+        self.raw.refine_normal_radius_gain = gain;
         self
     }
 

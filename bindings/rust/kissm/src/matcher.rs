@@ -130,8 +130,9 @@ impl Matcher {
     /// made exactly rigid: the nearest rotation), its
     /// [`transform`](Registration::transform) the refined pose, its
     /// [`refinement`](Registration::refinement) is `Some`, and [`valid`](Registration::valid) says whether
-    /// the refined pose passes the refined rule (overlap and conditioning; otherwise
-    /// [`Reason::LowOverlap`](crate::Reason::LowOverlap) or [`Reason::Unconstrained`](crate::Reason::Unconstrained)).
+    /// the refined pose passes the refined rule (overlap, conditioning and convergence; otherwise
+    /// [`Reason::LowOverlap`](crate::Reason::LowOverlap), [`Reason::Unconstrained`](crate::Reason::Unconstrained)
+    /// or [`Reason::NotConverged`](crate::Reason::NotConverged)).
     /// Fails with [`ErrorKind::InvalidArgument`](crate::ErrorKind::InvalidArgument), the message naming
     /// `initial_transform`, when `initial` is not finite, its last row is not (0, 0, 0, 1), its rotation
     /// block is not a rotation (orthonormal to 1e-3, determinant +1) or a translation component exceeds 1e9;

@@ -30,8 +30,9 @@ pub enum Reason {
     /// [`Refinement::overlap`] below [`Config::min_overlap`](crate::Config::min_overlap), or fewer than 6
     /// correspondences.
     LowOverlap,
-    /// Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
-    /// [`Refinement::condition`] and [`Refinement::information`].
+    /// Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor):
+    /// [`Refinement::condition`] below [`Config::min_refine_condition`](crate::Config::min_refine_condition);
+    /// see also [`Refinement::information`].
     Unconstrained,
     /// Without refinement: the inliers pin the rotation down no better than
     /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)
@@ -41,6 +42,11 @@ pub enum Reason {
     /// [`Config::min_inlier_coverage`](crate::Config::min_inlier_coverage) of the aligned overlap
     /// ([`Refinement::inlier_coverage`] below it): one object may match itself in several poses.
     ClusteredInliers,
+    /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)): refinement was still moving the
+    /// pose at [`Config::refine_max_iterations`](crate::Config::refine_max_iterations)
+    /// ([`Refinement::converged`] is false): it was crossing from one basin to another, as refinements from
+    /// a wrong start do.
+    NotConverged,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -60,6 +66,7 @@ impl Reason {
             sys::KISSM_REASON_UNCONSTRAINED => Reason::Unconstrained,
             sys::KISSM_REASON_UNCERTAIN_ROTATION => Reason::UncertainRotation,
             sys::KISSM_REASON_CLUSTERED_INLIERS => Reason::ClusteredInliers,
+            sys::KISSM_REASON_NOT_CONVERGED => Reason::NotConverged,
             other => Reason::Other(other),
         }
     }
@@ -78,6 +85,7 @@ impl Reason {
             Reason::Unconstrained => sys::KISSM_REASON_UNCONSTRAINED,
             Reason::UncertainRotation => sys::KISSM_REASON_UNCERTAIN_ROTATION,
             Reason::ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
+            Reason::NotConverged => sys::KISSM_REASON_NOT_CONVERGED,
             Reason::Other(code) => code,
         }
     }
@@ -172,7 +180,9 @@ pub struct Refinement {
     /// clouds' unit); NaN when it found no correspondence.
     pub rmse: f64,
     /// Weakest over strongest direction of the information, with rotations taken as displacements at the
-    /// matched points' radius, in [0, 1]: near 0 the pose slides along some direction.
+    /// matched points' radius, in [0, 1]: near 0 the pose slides along some direction. A valid refined pose
+    /// needs at least [`Config::min_refine_condition`](crate::Config::min_refine_condition) (below it:
+    /// [`Reason::Unconstrained`]).
     pub condition: f64,
     /// Principal standard deviation of the solver's inliers over that of the source voxels the refined
     /// pose overlaps: how much of the overlap the global matches span (inliers on one compact object span
@@ -184,7 +194,8 @@ pub struct Refinement {
     pub correspondences: u64,
     /// Iterations run.
     pub iterations: u32,
-    /// Whether refinement stopped on its convergence test rather than its iteration cap.
+    /// Whether refinement stopped on its convergence test rather than its iteration cap; a refined pose
+    /// that did not is not valid ([`Reason::NotConverged`]).
     pub converged: bool,
 }
 

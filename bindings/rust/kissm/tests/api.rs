@@ -85,8 +85,10 @@ fn refine_defaults_are_the_library_ones() {
         assert_eq!(c.refine_rotation_epsilon().to_bits(), lib.refine_rotation_epsilon.to_bits());
         assert_eq!(c.refine_translation_epsilon_gain().to_bits(), lib.refine_translation_epsilon_gain.to_bits());
         assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
+        assert_eq!(c.refine_normal_radius_gain().to_bits(), lib.refine_normal_radius_gain.to_bits());
         // Every default is inside the range the builder documents (and the library validates).
         assert!((1..=1000).contains(&c.refine_max_iterations()));
+        assert!(c.refine_normal_radius_gain() > 0.0 && c.refine_normal_radius_gain() <= 50.0);
         assert!(c.refine_max_distance_gain() > 0.0 && c.refine_max_distance_gain() <= 100.0);
         assert!(c.refine_kernel_gain() > 0.0 && c.refine_kernel_gain() <= 100.0);
         for v in [c.refine_rotation_epsilon(), c.refine_translation_epsilon_gain(), c.min_overlap()] {
@@ -105,9 +107,11 @@ fn validity_settings_are_the_library_ones() {
         assert_eq!(c.min_inlier_coverage().to_bits(), lib.min_inlier_coverage.to_bits());
         assert_eq!(c.refine_min_inliers(), lib.refine_min_inliers as usize);
         assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
+        assert_eq!(c.min_refine_condition().to_bits(), lib.min_refine_condition.to_bits());
         // Inside the documented ranges.
         assert!(c.max_rotation_uncertainty() > 0.0 && c.max_rotation_uncertainty() <= 3.15);
         assert!((0.0..=1.0).contains(&c.min_inlier_coverage()));
+        assert!((0.0..=1.0).contains(&c.min_refine_condition()));
         assert!((3..=100_000).contains(&c.refine_min_inliers()));
         // The reserved field is zero and not a setting.
         assert_eq!(c.as_raw().reserved1, 0);
@@ -118,17 +122,28 @@ fn validity_settings_are_the_library_ones() {
 
 #[test]
 fn builder_sets_every_validity_field() {
-    let c = Config::builder().max_rotation_uncertainty(0.01).min_inlier_coverage(0.6).refine_min_inliers(25).build();
+    let c = Config::builder()
+        .max_rotation_uncertainty(0.01)
+        .min_inlier_coverage(0.6)
+        .refine_min_inliers(25)
+        .min_refine_condition(0.05)
+        .build();
     let c = c.unwrap();
     assert_eq!(c.max_rotation_uncertainty(), 0.01);
     assert_eq!(c.min_inlier_coverage(), 0.6);
     assert_eq!(c.refine_min_inliers(), 25);
+    assert_eq!(c.min_refine_condition(), 0.05);
     // Under their C names in the raw struct, next to a zero reserved field; the Debug output names them.
     let raw = c.as_raw();
     assert_eq!((raw.max_rotation_uncertainty, raw.min_inlier_coverage), (0.01, 0.6));
-    assert_eq!((raw.refine_min_inliers, raw.reserved1), (25, 0));
+    assert_eq!((raw.refine_min_inliers, raw.reserved1, raw.min_refine_condition), (25, 0, 0.05));
     let debug = format!("{c:?}");
-    for field in ["max_rotation_uncertainty: 0.01", "min_inlier_coverage: 0.6", "refine_min_inliers: 25"] {
+    for field in [
+        "max_rotation_uncertainty: 0.01",
+        "min_inlier_coverage: 0.6",
+        "refine_min_inliers: 25",
+        "min_refine_condition: 0.05",
+    ] {
         assert!(debug.contains(field), "{debug}");
     }
     // Every other field keeps the library's default.
@@ -137,6 +152,7 @@ fn builder_sets_every_validity_field() {
         .max_rotation_uncertainty(Config::default().max_rotation_uncertainty())
         .min_inlier_coverage(Config::default().min_inlier_coverage())
         .refine_min_inliers(Config::default().refine_min_inliers())
+        .min_refine_condition(Config::default().min_refine_condition())
         .build()
         .unwrap();
     assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
@@ -144,10 +160,11 @@ fn builder_sets_every_validity_field() {
     assert_eq!(format!("{:?}", Matcher::new(&c).unwrap().config()), debug);
     // The range ends are accepted.
     let ends = Config::builder().max_rotation_uncertainty(3.15).min_inlier_coverage(0.0).refine_min_inliers(3);
-    let ends = ends.build().unwrap();
+    let ends = ends.min_refine_condition(0.0).build().unwrap();
     assert_eq!((ends.max_rotation_uncertainty(), ends.refine_min_inliers()), (3.15, 3));
     let ends = ends.to_builder().max_rotation_uncertainty(1e-300).min_inlier_coverage(1.0).refine_min_inliers(100_000);
-    assert_eq!(ends.build().unwrap().refine_min_inliers(), 100_000);
+    let ends = ends.min_refine_condition(1.0).build().unwrap();
+    assert_eq!((ends.refine_min_inliers(), ends.min_refine_condition()), (100_000, 1.0));
 }
 
 #[test]
@@ -177,6 +194,7 @@ fn builder_sets_every_refine_field() {
         .refine_rotation_epsilon(2e-4)
         .refine_translation_epsilon_gain(5e-3)
         .min_overlap(0.4)
+        .refine_normal_radius_gain(1.25)
         .build()
         .unwrap();
     assert_eq!(c.refine_mode(), RefineMode::PointToPlane);
@@ -186,14 +204,17 @@ fn builder_sets_every_refine_field() {
     assert_eq!(c.refine_rotation_epsilon(), 2e-4);
     assert_eq!(c.refine_translation_epsilon_gain(), 5e-3);
     assert_eq!(c.min_overlap(), 0.4);
+    assert_eq!(c.refine_normal_radius_gain(), 1.25);
     // The raw struct holds them under the C names, and a matcher keeps them.
     let raw = c.as_raw();
     assert_eq!((raw.refine_mode, raw.refine_max_iterations), (sys::KISSM_REFINE_POINT_TO_PLANE, 7));
     assert_eq!((raw.refine_max_distance_gain, raw.refine_kernel_gain), (2.5, 0.75));
     assert_eq!((raw.refine_rotation_epsilon, raw.refine_translation_epsilon_gain, raw.min_overlap), (2e-4, 5e-3, 0.4));
+    assert_eq!(raw.refine_normal_radius_gain, 1.25);
     let m = Matcher::new(&c).unwrap();
     assert_eq!(format!("{:?}", m.config()), format!("{c:?}"));
     assert!(format!("{c:?}").contains("refine_mode: PointToPlane"), "{c:?}");
+    assert!(format!("{c:?}").contains("refine_normal_radius_gain: 1.25"), "{c:?}");
     // The range ends are accepted.
     let ends = Config::builder()
         .refine_max_iterations(1)
@@ -202,11 +223,13 @@ fn builder_sets_every_refine_field() {
         .refine_rotation_epsilon(0.0)
         .refine_translation_epsilon_gain(1.0)
         .min_overlap(1.0)
+        .refine_normal_radius_gain(50.0)
         .build()
         .unwrap();
     assert_eq!(ends.refine_max_iterations(), 1);
-    let ends = ends.to_builder().refine_max_iterations(1000).refine_rotation_epsilon(1.0).min_overlap(0.0).build();
-    assert_eq!(ends.unwrap().refine_max_iterations(), 1000);
+    let ends = ends.to_builder().refine_max_iterations(1000).refine_rotation_epsilon(1.0).min_overlap(0.0);
+    let ends = ends.refine_normal_radius_gain(1e-300).build().unwrap();
+    assert_eq!((ends.refine_max_iterations(), ends.refine_normal_radius_gain()), (1000, 1e-300));
 }
 
 #[test]
@@ -306,6 +329,15 @@ fn invalid_config_values_are_errors_not_panics() {
     invalid(b().refine_min_inliers(2), "config.refine_min_inliers");
     invalid(b().refine_min_inliers(100_001), "config.refine_min_inliers");
     invalid(b().refine_min_inliers(usize::MAX), "config.refine_min_inliers");
+    invalid(b().min_refine_condition(-0.01), "config.min_refine_condition");
+    invalid(b().min_refine_condition(1.01), "config.min_refine_condition");
+    invalid(b().min_refine_condition(f64::NAN), "config.min_refine_condition");
+    invalid(b().min_refine_condition(f64::INFINITY), "config.min_refine_condition");
+    invalid(b().refine_normal_radius_gain(0.0), "config.refine_normal_radius_gain");
+    invalid(b().refine_normal_radius_gain(-1.0), "config.refine_normal_radius_gain");
+    invalid(b().refine_normal_radius_gain(50.5), "config.refine_normal_radius_gain");
+    invalid(b().refine_normal_radius_gain(f64::NAN), "config.refine_normal_radius_gain");
+    invalid(b().refine_normal_radius_gain(f64::INFINITY), "config.refine_normal_radius_gain");
     // The reserved field is no setting; a raw config holding anything but 0 there is rejected.
     let mut raw = *Config::default().as_raw();
     raw.reserved1 = 1;
@@ -364,7 +396,7 @@ fn error_kinds_map_every_code() {
 #[test]
 fn reasons_round_trip() {
     let mut descriptions = std::collections::HashSet::new();
-    for code in 0..=10 {
+    for code in 0..=11 {
         let reason = Reason::from_code(code);
         assert_eq!(reason.code(), code);
         assert!(!matches!(reason, Reason::Other(_)));
@@ -380,7 +412,10 @@ fn reasons_round_trip() {
     assert_eq!(Reason::from_code(sys::KISSM_REASON_CLUSTERED_INLIERS), Reason::ClusteredInliers);
     assert_eq!(Reason::UncertainRotation.code(), 9);
     assert_eq!(Reason::ClusteredInliers.code(), 10);
-    assert_eq!(Reason::from_code(11), Reason::Other(11));
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_NOT_CONVERGED), Reason::NotConverged);
+    assert_eq!(Reason::NotConverged.code(), 11);
+    assert_eq!(Reason::NotConverged.to_string(), "refinement did not converge");
+    assert_eq!(Reason::from_code(12), Reason::Other(12));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);
@@ -486,6 +521,18 @@ fn features_from_another_config_are_rejected() {
     let err = a.register_features(&fa, &fb).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::FeaturesMismatch, "{err}");
     assert!(!err.message().is_empty());
+    // The refinement's planes are computed with the features: another refine_normal_radius_gain (at the same
+    // voxel size) gives features this matcher cannot use, for a registration and a refinement alike.
+    let gain = 0.5 * Config::default().refine_normal_radius_gain();
+    let mut c =
+        Matcher::new(&Config::builder().voxel_size(0.3).refine_normal_radius_gain(gain).build().unwrap()).unwrap();
+    let fc = c.compute_features(cloud).unwrap();
+    let err = a.register_features(&fa, &fc).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::FeaturesMismatch, "{err}");
+    assert_eq!(err.code(), sys::KISSM_ERR_FEATURES_MISMATCH);
+    let identity = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+    assert_eq!(a.refine_features(&fc, &fa, &identity).unwrap_err().kind(), ErrorKind::FeaturesMismatch);
+    assert!(c.register_features(&fc, &fc).is_ok());
     let err = a.compute_features(&line(2)).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::TooFewPoints);
 }

@@ -2,12 +2,14 @@
 //! The validity rules' settings on the shared test scene (the committed pair of `tests/data`, or
 //! `KISSM_TEST_DATA`): each moves the decision exactly at the value the result reports, and only in its
 //! own rule, never the pose. Without refinement `max_rotation_uncertainty` against
-//! `Registration::rotation_uncertainty`; with refinement `refine_min_inliers` against the final inliers and
-//! `min_inlier_coverage` against `Refinement::inlier_coverage`.
+//! `Registration::rotation_uncertainty`; with refinement `refine_min_inliers` against the final inliers,
+//! `min_inlier_coverage` against `Refinement::inlier_coverage` and `min_refine_condition` against
+//! `Refinement::condition` (also in `Matcher::refine`'s rule); and a refinement stopped by its iteration cap
+//! (`Reason::NotConverged`).
 
 mod common;
 
-use common::{scene, Pose, Scene, SCENE_VOXEL};
+use common::{perturbed, scene, Pose, Scene, SCENE_VOXEL};
 use kissm::{Config, ConfigBuilder, Matcher, Reason, RefineMode, Registration};
 
 fn builder(mode: RefineMode) -> ConfigBuilder {
@@ -50,6 +52,14 @@ fn accurate(pair: &Scene, reg: &Registration, what: &str) {
     assert!(reg.valid, "{what}: an accurate pose is not valid: {}", reg.reason);
 }
 
+/// The shared scene and its GICP-refined registration under the default rules (accurate, so valid).
+fn refined_scene(test: &str) -> Option<(&'static Scene, Registration)> {
+    let pair = scene(test)?;
+    let base = register(builder(RefineMode::Gicp), pair);
+    accurate(pair, &base, "GICP");
+    Some((pair, base))
+}
+
 #[test]
 fn rotation_uncertainty_decides_an_unrefined_pose() {
     let Some(pair) = scene("rotation_uncertainty_decides_an_unrefined_pose") else { return };
@@ -80,9 +90,7 @@ fn rotation_uncertainty_decides_an_unrefined_pose() {
 
 #[test]
 fn the_refined_rule_needs_inliers_covering_the_overlap() {
-    let Some(pair) = scene("the_refined_rule_needs_inliers_covering_the_overlap") else { return };
-    let base = register(builder(RefineMode::Gicp), pair);
-    accurate(pair, &base, "GICP");
+    let Some((pair, base)) = refined_scene("the_refined_rule_needs_inliers_covering_the_overlap") else { return };
     let coverage = base.refinement.expect("refined").inlier_coverage;
     let inliers = base.final_inliers() as usize;
     assert!(coverage >= Config::default().min_inlier_coverage() && coverage < 1.0, "{coverage}");
@@ -111,4 +119,65 @@ fn the_refined_rule_needs_inliers_covering_the_overlap() {
     assert!(from_truth.refinement.expect("refined").inlier_coverage.is_nan());
     assert!(from_truth.rotation_uncertainty.is_nan());
     accurate(pair, &from_truth, "refine from the truth, with the refined rule's settings at their strictest");
+}
+
+#[test]
+fn the_refined_rules_need_a_conditioned_pose() {
+    let Some((pair, base)) = refined_scene("the_refined_rules_need_a_conditioned_pose") else { return };
+    let condition = base.refinement.expect("refined").condition;
+    assert!(condition >= Config::default().min_refine_condition() && condition < 1.0, "{condition}");
+
+    // The measured condition is enough, one ulp more is not.
+    let at = register(builder(RefineMode::Gicp).min_refine_condition(condition), pair);
+    let above = register(builder(RefineMode::Gicp).min_refine_condition(just_above(condition)), pair);
+    decision_flips(&base, &at, &above, Reason::Unconstrained, "min_refine_condition");
+    assert_eq!(above.reason.code(), kissm_sys::KISSM_REASON_UNCONSTRAINED);
+
+    // Without refinement there is no condition to judge.
+    let plain = register(builder(RefineMode::None).min_refine_condition(1.0), pair);
+    assert!(plain.refinement.is_none());
+    accurate(pair, &plain, "unrefined, with min_refine_condition 1");
+
+    // A refinement from a prior is judged by it too.
+    let refine = |b: ConfigBuilder| {
+        Matcher::new(&b.build().unwrap()).unwrap().refine(&pair.source, &pair.target, &pair.truth.to_matrix()).unwrap()
+    };
+    let from_truth = refine(builder(RefineMode::Gicp));
+    accurate(pair, &from_truth, "refine from the truth");
+    let condition = from_truth.refinement.expect("refined").condition;
+    let at = refine(builder(RefineMode::Gicp).min_refine_condition(condition));
+    let above = refine(builder(RefineMode::Gicp).min_refine_condition(just_above(condition)));
+    decision_flips(&from_truth, &at, &above, Reason::Unconstrained, "min_refine_condition, refine");
+}
+
+#[test]
+fn a_refinement_stopped_by_its_cap_is_not_valid() {
+    let Some(pair) = scene("a_refinement_stopped_by_its_cap_is_not_valid") else { return };
+    let start = perturbed(&pair.truth);
+    let (deg, dist) = pair.truth.errors(&start);
+    assert!(deg > 2.0 && dist > SCENE_VOXEL, "the start is {deg} deg, {dist} off");
+    let refine = |b: ConfigBuilder| {
+        Matcher::new(&b.build().unwrap()).unwrap().refine(&pair.source, &pair.target, &start.to_matrix()).unwrap()
+    };
+    // One iteration from a few degrees off is still moving when it stops: the pose is kept, not trusted.
+    let capped = refine(builder(RefineMode::Gicp).refine_max_iterations(1));
+    let fine = capped.refinement.expect("refined");
+    assert_eq!((fine.iterations, fine.converged), (1, false));
+    assert!(!capped.valid);
+    assert_eq!(capped.reason, Reason::NotConverged);
+    assert_eq!(capped.reason.code(), kissm_sys::KISSM_REASON_NOT_CONVERGED);
+    assert!(capped.has_pose() && capped.transform != start.to_matrix());
+    // Only convergence failed: the same refinement passes every other refined test.
+    assert!(fine.overlap >= Config::default().min_overlap(), "{}", fine.overlap);
+    assert!(fine.condition >= Config::default().min_refine_condition(), "{}", fine.condition);
+    // With the default cap the same start converges to the truth.
+    let done = refine(builder(RefineMode::Gicp));
+    assert!(done.refinement.expect("refined").converged);
+    accurate(pair, &done, "refine from the perturbed start");
+    // A registration refined for one iteration only is refused for the same reason when it was still moving.
+    let reg = register(builder(RefineMode::Gicp).refine_max_iterations(1), pair);
+    let fine = reg.refinement.expect("refined");
+    assert_eq!(fine.iterations, 1);
+    assert_eq!(reg.valid, fine.converged, "{}", reg.reason);
+    assert_eq!(reg.reason == Reason::NotConverged, !fine.converged, "{}", reg.reason);
 }
