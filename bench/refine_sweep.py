@@ -3,8 +3,8 @@
 """The evidence behind refinement's defaults (docs/parameters.md, "Refinement"): every pair of ../shared/data,
 raw and with the source turned by 3 random rotations, refined from kissm's own coarse pose under each setting
 given (or a default sweep), with the median and largest errors against the ground truth, iterations,
-convergence and the refinement's own time per dataset. Each setting refines the same coarse poses, from the
-same features.
+convergence and the refinement's own time per dataset. Each setting refines the same coarse poses (the solver's
+pose does not depend on refinement's settings), from features computed under the setting.
 
     python3 bench/refine_sweep.py [--data ../shared/data] [--threads 2] [SETTING ...]
 
@@ -38,6 +38,9 @@ DEFAULT_SWEEP = [
     "refine_mode=gicp,refine_max_distance_gain=5",
     "refine_mode=gicp,refine_kernel_gain=0.5",
     "refine_mode=gicp,refine_kernel_gain=2",
+    "refine_mode=gicp,refine_normal_radius_gain=1.5",
+    "refine_mode=gicp,refine_normal_radius_gain=2.5",
+    "refine_mode=gicp,refine_normal_radius_gain=3.5",
 ]
 
 
@@ -71,7 +74,7 @@ def main() -> int:
         print(f"no real data at {args.data}")
         return 1
     rng = np.random.default_rng(777)
-    cases = []  # (dataset, voxel, features source, features target, coarse pose, ground truth)
+    cases = []  # (dataset, voxel, source points, target points, coarse pose, ground truth)
     for p in realdata.load_pairs(args.data):
         src = kissm.read_points(p.source, format=p.source_format)
         tgt = kissm.read_points(p.target, format=p.target_format)
@@ -88,15 +91,16 @@ def main() -> int:
                 gt[:3, :3] = p.gt[:3, :3] @ turn.T
                 variants.append((src @ turn.T, gt))
             for points, gt in variants:
-                fs = m.compute_features(points)
-                coarse = m.register_features(fs, ft).coarse_transform
+                coarse = m.register_features(m.compute_features(points), ft).coarse_transform
                 if np.isfinite(coarse).all():
-                    cases.append((p.name.split("/")[0], p.kind.voxel, fs, ft, coarse, gt))
+                    cases.append((p.name.split("/")[0], p.kind.voxel, points, tgt, coarse, gt))
     for setting in args.settings or DEFAULT_SWEEP:
         config = parse(setting)
         rows: dict[str, list[tuple[float, ...]]] = collections.defaultdict(list)
-        for dataset, voxel, fs, ft, coarse, gt in cases:
+        for dataset, voxel, src, tgt, coarse, gt in cases:
             with kissm.Matcher(voxel_size=voxel, num_threads=args.threads, **config) as m:
+                # Features under the setting: refinement's planes are computed with them.
+                fs, ft = m.compute_features(src), m.compute_features(tgt)
                 times = []
                 for _ in range(3):
                     r = m.refine_features(fs, ft, coarse)
