@@ -160,7 +160,8 @@ pub struct kissm_config {
     pub min_normal_neighbors: i32,
     /// Cap on mutual matches kept (best ratio first); 3..100000. Default 5000.
     pub max_correspondences: i32,
-    /// valid needs at least this many final inliers; 3..100000. Default 15.
+    /** Without refinement, valid needs at least this many final inliers (refine_min_inliers applies with it);
+ 3..100000. Default 15.*/
     pub min_inliers: i32,
     /// KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT.
     pub nonfinite_policy: i32,
@@ -733,7 +734,8 @@ extern "C" {
         is #KISSM_REFINE_NONE). No descriptors, no global search.
 
  result->coarse_transform is the initial transform; result->transform the refined pose; valid = 1 when the
- refined pose passes the refined rule (overlap, conditioning) and otherwise 0 with a reason. Keypoint counts
+ refined pose passes the refined rule (overlap, conditioning, convergence) and otherwise 0 with a reason; it
+ trusts the prior (docs/refinement.md: from priors within about 10 degrees and 3 voxels it is right). Keypoint counts
  are 0 (no descriptors are computed) and time_features_ms is the time of the normals. The result is always
  fully overwritten.
  @param[in,out] matcher The matcher (its settings; one call at a time).
