@@ -9,9 +9,9 @@
 // where C = (n n^T + (I - n n^T) / eps) / 2 is the plane-regularised covariance of a voxel with normal n
 // (eps = 1e-3, as in the GICP paper), scaled so that for agreeing normals r is the distance to the plane in
 // metres in both modes. The normals are the planes the features stage fits in its normals' pass (radius
-// refine_normal_radius_gain * v, a subset of the same neighbours): no second neighbour search. Robust kernel: Cauchy weights w = 1 / (1 + r^2 / k^2)
-// recomputed at every iteration (IRLS). Each iteration solves the weighted Gauss-Newton system with
-// Levenberg-Marquardt damping (the step is kept only when it lowers the weighted cost of the iteration's
+// refine_normal_radius_gain * v, a subset of the same neighbours): no second neighbour search. Robust kernel: Cauchy
+// weights w = 1 / (1 + r^2 / k^2) recomputed at every iteration (IRLS). Each iteration solves the weighted Gauss-Newton
+// system with Levenberg-Marquardt damping (the step is kept only when it lowers the weighted cost of the iteration's
 // correspondences; otherwise the damping grows tenfold, up to 10 tries). Converged when a kept step turns
 // the pose by less than rotation_epsilon radians and moves it by less than translation_epsilon metres.
 //
