@@ -194,10 +194,16 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 #define KISSM_NONFINITE_DROP 1   /**< Such points are skipped and counted in the result. */
 /** @} */
 
-/** @name Where normals are oriented toward (kissm_config.viewpoint_mode) */
+/** @name How normals are oriented (kissm_config.viewpoint_mode) */
 /** @{ */
 #define KISSM_VIEWPOINT_FIXED 0        /**< kissm_config.viewpoint, in each cloud's own input frame (the sensor). */
-#define KISSM_VIEWPOINT_CLOUD_CENTER 1 /**< Each cloud's bounding-box centre (maps, no sensor). */
+#define KISSM_VIEWPOINT_CLOUD_CENTER 1 /**< Each cloud's bounding-box centre. */
+/** No viewpoint: the descriptors do not depend on the normals' signs at all, so features depend on no cloud's
+ * coordinate frame (docs/frames.md). */
+#define KISSM_VIEWPOINT_SIGN_FREE 2
+/** No viewpoint: each normal turned away from the centroid of its neighbours within the FPFH radius, a rule
+ * of the local shape alone, so features depend on no cloud's coordinate frame (docs/frames.md). */
+#define KISSM_VIEWPOINT_LOCAL 3
 /** @} */
 
 /** @name Fine registration after the solver (kissm_config.refine_mode) */
@@ -287,7 +293,8 @@ typedef struct kissm_config {
     int32_t min_inliers;
     /** KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT. */
     int32_t nonfinite_policy;
-    /** KISSM_VIEWPOINT_*. Default #KISSM_VIEWPOINT_FIXED. */
+    /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_FIXED (scans in their sensor frame);
+     * #KISSM_VIEWPOINT_LOCAL or #KISSM_VIEWPOINT_SIGN_FREE for clouds in any other frame (docs/frames.md). */
     int32_t viewpoint_mode;
     /** Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN. */
     int32_t log_level;

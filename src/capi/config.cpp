@@ -93,6 +93,24 @@ RefineMode refine_mode_of(int32_t code) {
     default: return RefineMode::None;
     }
 }
+constexpr int32_t viewpoint_code(ViewpointMode mode) {
+    switch (mode) {
+    case ViewpointMode::Fixed: return KISSM_VIEWPOINT_FIXED;
+    case ViewpointMode::CloudCenter: return KISSM_VIEWPOINT_CLOUD_CENTER;
+    case ViewpointMode::SignFree: return KISSM_VIEWPOINT_SIGN_FREE;
+    case ViewpointMode::Local: return KISSM_VIEWPOINT_LOCAL;
+    }
+    return KISSM_VIEWPOINT_FIXED;
+}
+
+ViewpointMode viewpoint_mode_of(int32_t code) {
+    switch (code) {
+    case KISSM_VIEWPOINT_CLOUD_CENTER: return ViewpointMode::CloudCenter;
+    case KISSM_VIEWPOINT_SIGN_FREE: return ViewpointMode::SignFree;
+    case KISSM_VIEWPOINT_LOCAL: return ViewpointMode::Local;
+    default: return ViewpointMode::Fixed;
+    }
+}
 static_assert(log_code(LogLevel::Error) == 1 && log_code(LogLevel::Debug) == 4, "log levels are pinned");
 
 constexpr int32_t kMaxThreads = 1024;
@@ -125,8 +143,7 @@ kissm_config default_config() {
 #undef KISSM_FROM_PARAMS
     for (int i = 0; i < 3; ++i) c.viewpoint[i] = p.viewpoint[static_cast<std::size_t>(i)];
     c.nonfinite_policy = p.nonfinite == NonFinitePolicy::Drop ? KISSM_NONFINITE_DROP : KISSM_NONFINITE_REJECT;
-    c.viewpoint_mode =
-        p.viewpoint_mode == ViewpointMode::CloudCenter ? KISSM_VIEWPOINT_CLOUD_CENTER : KISSM_VIEWPOINT_FIXED;
+    c.viewpoint_mode = viewpoint_code(p.viewpoint_mode);
     c.log_level = log_code(h.log_level);
     c.refine_mode = refine_code(p.refine_mode);
     return c;
@@ -158,7 +175,7 @@ kissm_config validated_config(const kissm_config *given) {
     require_int(c.max_correspondences, 3, kMaxCorrespondences, "max_correspondences");
     require_int(c.min_inliers, 3, kMaxCorrespondences, "min_inliers");
     require_int(c.nonfinite_policy, KISSM_NONFINITE_REJECT, KISSM_NONFINITE_DROP, "nonfinite_policy");
-    require_int(c.viewpoint_mode, KISSM_VIEWPOINT_FIXED, KISSM_VIEWPOINT_CLOUD_CENTER, "viewpoint_mode");
+    require_int(c.viewpoint_mode, KISSM_VIEWPOINT_FIXED, KISSM_VIEWPOINT_LOCAL, "viewpoint_mode");
     require_int(c.log_level, 0, KISSM_LOG_DEBUG, "log_level");
     require_int(c.refine_mode, KISSM_REFINE_NONE, KISSM_REFINE_POINT_TO_PLANE, "refine_mode");
     require_int(c.refine_max_iterations, 1, 1000, "refine_max_iterations");
@@ -183,8 +200,7 @@ Params to_params(const kissm_config &c) {
 #undef KISSM_TO_PARAMS
     p.viewpoint = {{c.viewpoint[0], c.viewpoint[1], c.viewpoint[2]}};
     p.nonfinite = c.nonfinite_policy == KISSM_NONFINITE_DROP ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
-    p.viewpoint_mode =
-        c.viewpoint_mode == KISSM_VIEWPOINT_CLOUD_CENTER ? ViewpointMode::CloudCenter : ViewpointMode::Fixed;
+    p.viewpoint_mode = viewpoint_mode_of(c.viewpoint_mode);
     p.refine_mode = refine_mode_of(c.refine_mode);
     return p;
 }

@@ -139,6 +139,15 @@ int32_t parse_refine_mode(const std::string &option, const std::string &text) {
     throw UsageError(option + ": unknown refinement '" + one_line(text) + "' (expected gicp, point-to-plane or none)");
 }
 
+int32_t parse_viewpoint_mode(const std::string &option, const std::string &text) {
+    if (text == "fixed") return KISSM_VIEWPOINT_FIXED;
+    if (text == "center" || text == "cloud-center" || text == "cloud_center") return KISSM_VIEWPOINT_CLOUD_CENTER;
+    if (text == "sign-free" || text == "sign_free") return KISSM_VIEWPOINT_SIGN_FREE;
+    if (text == "local") return KISSM_VIEWPOINT_LOCAL;
+    throw UsageError(option + ": unknown viewpoint mode '" + one_line(text) +
+                     "' (expected fixed, center, sign-free or local)");
+}
+
 const char *refine_mode_name(int32_t mode) {
     switch (mode) {
     case KISSM_REFINE_NONE: return "none";

@@ -62,6 +62,8 @@ const char *format_names();
 // A refinement mode name (none, gicp, point-to-plane; point_to_plane as golden.json spells it) to its
 // KISSM_REFINE_* value, and back (the names the JSON prints; "unknown" for other values).
 int32_t parse_refine_mode(const std::string &option, const std::string &text);
+// --viewpoint: fixed, center (cloud-center), sign-free or local.
+int32_t parse_viewpoint_mode(const std::string &option, const std::string &text);
 const char *refine_mode_name(int32_t mode);
 
 // The text with line breaks replaced by spaces, so that an error message stays on one line.

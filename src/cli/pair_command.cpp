@@ -220,6 +220,8 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
             opt.have_refine_min_inliers = true;
         } else if (!is_register && name == "--initial") {
             opt.initial = cur.value();
+        } else if (name == "--viewpoint") {
+            opt.viewpoint_mode = parse_viewpoint_mode(name, cur.value());
         } else if (name == "--refine") {
             opt.refine_mode = parse_refine_mode(name, cur.value());
             if (!is_register && opt.refine_mode == KISSM_REFINE_NONE) {
@@ -302,6 +304,7 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
     if (opt.have_min_refine_condition) config.min_refine_condition = opt.min_refine_condition;
     if (opt.have_refine_normal_radius) config.refine_normal_radius_gain = opt.refine_normal_radius_gain;
     if (opt.drop_nonfinite) config.nonfinite_policy = KISSM_NONFINITE_DROP;
+    if (opt.viewpoint_mode >= 0) config.viewpoint_mode = opt.viewpoint_mode;
     if (opt.viewpoint_center) config.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
     if (opt.verbose) {
         config.log_fn = log_to_stderr;

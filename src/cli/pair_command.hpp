@@ -34,6 +34,7 @@ struct PairOptions {
     int32_t refine_min_inliers = 0;
     bool drop_nonfinite = false;
     bool viewpoint_center = false;
+    int32_t viewpoint_mode = -1; // --viewpoint, -1 = the default
     bool json = false;
     bool verbose = false;
     int32_t refine_mode = KISSM_REFINE_NONE; // the command's default until --refine

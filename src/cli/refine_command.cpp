@@ -28,7 +28,8 @@ void print_refine_help(std::FILE *out) {
                       "  --voxel V               voxel size in the clouds' unit, > 0 (required)\n"
                       "  --threads N             worker threads, 0 = all hardware threads (default 0); the result\n"
                       "                          does not depend on N\n"
-                      "  --viewpoint-center      orient normals toward each cloud's centre (maps, merged clouds)\n"
+                      "  --viewpoint MODE        fixed (default), center, sign-free or local, as for 'kissm register'\n"
+                      "  --viewpoint-center      the same as --viewpoint center\n"
                       "\n");
     print_refinement_help(out, PairCommand::Refine, defaults);
     print_pair_output_help(out);

@@ -42,8 +42,11 @@ void print_register_help(std::FILE *out) {
                  "                          without refinement, a valid pose needs inliers that pin its rotation\n"
                  "                          down to RAD radians (rotation_uncertainty), in (0, 3.15]: few inliers,\n"
                  "                          or all on one compact object, do not\n"
-                 "  --viewpoint-center      orient normals toward each cloud's centre (maps, merged clouds)\n"
-                 "                          instead of the sensor at the frame origin (single scans)\n"
+                 "  --viewpoint MODE        how normals are oriented: fixed (toward the sensor at the frame\n"
+                 "                          origin: single scans in their sensor frame; the default), center\n"
+                 "                          (each cloud's centre), sign-free or local (no viewpoint: features\n"
+                 "                          that depend on no cloud's frame; docs/frames.md)\n"
+                 "  --viewpoint-center      the same as --viewpoint center\n"
                  "\n",
                  defaults.min_inliers, defaults.max_correspondences, defaults.max_rotation_uncertainty,
                  rad_to_deg(defaults.max_rotation_uncertainty));

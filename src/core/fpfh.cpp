@@ -17,7 +17,7 @@ inline void add_code(float *h, std::uint16_t code) {
 } // namespace
 
 UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                                 RunContext &ctx) {
+                                 NormalSigns signs, RunContext &ctx) {
     const std::size_t n = points.size();
     constexpr int D = kDescriptorDim;
     UninitVector<float> spfh;
@@ -62,7 +62,7 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
                 ++size;
             }
             batch.size = size;
-            batch_pair_codes(points[i], normals.normal[i], batch);
+            batch_pair_codes(points[i], normals.normal[i], signs, batch);
             float *hi = &spfh[i * D];
             for (std::size_t m = 0; m < size; ++m) {
                 const std::int32_t c = batch.code[m];
@@ -70,7 +70,7 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
                 if (c & kLaneFrame) add_code(hi, static_cast<std::uint16_t>(c));
                 std::uint16_t back = c & kLaneFrame ? static_cast<std::uint16_t>(c & (kLaneFrame | 0xFFF)) : 0;
                 if (c & kLaneTie) {
-                    back = pair_feature_bins(points[j], normals.normal[j], points[i], normals.normal[i], rev)
+                    back = pair_feature_bins(points[j], normals.normal[j], points[i], normals.normal[i], signs, rev)
                                ? pack_bins(rev)
                                : 0;
                 }
@@ -120,12 +120,13 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
 }
 
 Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power, RunContext &ctx) {
+                         NormalSigns signs, std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power,
+                         RunContext &ctx) {
     constexpr int D = kDescriptorDim;
 
     // SPFH is needed for every point that has a normal and neighbours a keypoint; computing it for all
     // points with a normal keeps the loops simple and costs little (almost all of them qualify).
-    const UninitVector<float> spfh = compute_spfh(points, nb, normals, ctx);
+    const UninitVector<float> spfh = compute_spfh(points, nb, normals, signs, ctx);
 
     Descriptors out;
     out.keypoint = std::move(keypoints);

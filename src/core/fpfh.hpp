@@ -18,7 +18,7 @@ KISSM_DETAIL_BEGIN
 // add no bin; dividing by the pairs counted makes every block sum to exactly 100.
 // Bitwise identical to evaluating every ordered pair with pair_feature_bins, for any thread count.
 UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                                 RunContext &ctx);
+                                 NormalSigns signs, RunContext &ctx);
 
 // SPFH of every point with a normal (neighbours without a normal are skipped), then FPFH of each keypoint:
 // its SPFH plus the mean of its neighbours' SPFH weighted by (voxel_size / distance)^weight_power, each 11-bin block
@@ -27,6 +27,7 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
 // (weight_power 1 up to the factor v; the pipeline uses 2, see pipeline.cpp), the mean runs over the
 // neighbours other than the point itself, and the paper does not rescale the blocks afterwards.
 Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &nb, const Normals &normals,
-                         std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power, RunContext &ctx);
+                         NormalSigns signs, std::vector<std::uint32_t> keypoints, float voxel_size, int weight_power,
+                         RunContext &ctx);
 
 KISSM_DETAIL_END

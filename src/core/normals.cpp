@@ -104,8 +104,16 @@ NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighbor
             cov /= static_cast<double>(count);
             Eigen::Vector3d normal;
             if (!plane_normal(cov, params.max_linearity, normal)) continue;
-            const Eigen::Vector3d to_view = params.viewpoint.cast<double>() - points[i].cast<double>();
-            if (normal.dot(to_view) < 0.0) normal = -normal;
+            if (params.orientation == NormalOrientation::TowardViewpoint) {
+                const Eigen::Vector3d to_view = params.viewpoint.cast<double>() - points[i].cast<double>();
+                if (normal.dot(to_view) < 0.0) normal = -normal;
+            } else if (params.orientation == NormalOrientation::AwayFromNeighbours) {
+                // Offsets from the point, in double and in row order: no cancellation, the same at any thread count.
+                const Eigen::Vector3d p = points[i].cast<double>();
+                Eigen::Vector3d to_centroid = Eigen::Vector3d::Zero();
+                for (std::size_t t = 0; t < size; ++t) to_centroid += points[row[t]].cast<double>() - p;
+                if (normal.dot(to_centroid) > 0.0) normal = -normal;
+            }
             out.normal[i] = normal.cast<float>();
             out.valid[i] = 1;
         }

@@ -16,15 +16,24 @@
 
 KISSM_DETAIL_BEGIN
 
+// How a normal's sign is chosen. TowardViewpoint: n . (viewpoint - p) >= 0. AwayFromNeighbours: n . (c - p) <= 0,
+// c the centroid of all of p's neighbours (the FPFH radius, the point itself included): outward on convex
+// shapes, a rule of the local shape alone, so it does not depend on the cloud's frame (when c - p is
+// perpendicular to n to the last bit the eigenvector's sign stays). Unoriented: the eigenvector's sign as the
+// solver gives it, for sign-free descriptors.
+enum class NormalOrientation { TowardViewpoint, AwayFromNeighbours, Unoriented };
+
 struct NormalParams {
     float normal_radius;
     int min_neighbors;    // tau_num
     double max_linearity; // tau_lin
     Vec3f viewpoint;      // in the cloud's local frame
+    NormalOrientation orientation = NormalOrientation::TowardViewpoint;
 };
 
 // A point gets a normal when it has at least tau_num neighbours within the FPFH radius and within the normal
-// radius (itself included) and its linearity (l1 - l2) / l1 is at most tau_lin. Normals face the viewpoint.
+// radius (itself included) and its linearity (l1 - l2) / l1 is at most tau_lin. Normals are oriented as
+// params.orientation says.
 Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
                          RunContext &ctx);
 

@@ -25,15 +25,16 @@ int bin_of(float value, float lo, float hi) {
     return b < kBinsPerFeature ? b : kBinsPerFeature - 1;
 }
 
-// Bin of the angle atan2(y, x) in [-pi, pi] split into 11 equal sectors, without calling atan2 (a large
-// part of the pair feature's cost; docs/performance.md, "Pair features"): the sector boundaries -pi + 2 pi k / 11
-// for k = 1..5 lie in the lower half plane and k = 6..10 in the upper, and within a half plane "angle >= boundary" is
-// the sign of a cross product with the boundary direction.
+// Bin of the angle atan2(y, x) in [start, start + span] split into 11 equal sectors, without calling atan2 (a
+// large part of the pair feature's cost; docs/performance.md, "Pair features"). Two tables: the whole circle
+// [-pi, pi] for oriented normals, the right half plane [-pi/2, pi/2] (x >= 0) for sign-free pairs. In both,
+// boundaries k = 1..5 lie below the x axis and k = 6..10 above it, and within one of those halves (less than
+// pi wide) "angle >= boundary" is the sign of a cross product with the boundary direction.
 struct AngleBins {
     float c[kBinsPerFeature], s[kBinsPerFeature];
-    AngleBins() {
+    AngleBins(double start, double span) {
         for (int k = 0; k < kBinsPerFeature; ++k) {
-            const double a = -3.14159265358979323846 + 2.0 * 3.14159265358979323846 * k / kBinsPerFeature;
+            const double a = start + span * k / kBinsPerFeature;
             c[k] = static_cast<float>(std::cos(a));
             s[k] = static_cast<float>(std::sin(a));
         }
@@ -47,14 +48,15 @@ struct AngleBins {
     }
 };
 
-const AngleBins kAngleBins;
+constexpr double kPi = 3.14159265358979323846;
+const AngleBins kAngleBins(-kPi, 2.0 * kPi), kHalfAngleBins(-0.5 * kPi, kPi);
 
 // The pair feature, and whether the other order of the two points could give different bins: only when the
 // two normals make exactly the same angle with the line (or a comparison is NaN), because otherwise both
 // orders pick the same source point, and the reversed direction is an exact negation in float, so every
 // intermediate value is the same.
-inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3],
-                      bool &order_matters) {
+inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, NormalSigns signs,
+                      int bins[3], bool &order_matters) {
     order_matters = false;
     Vec3f d = p2 - p1;
     const float len2 = d.squaredNorm();
@@ -68,15 +70,34 @@ inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const V
     const Vec3f &u = swap ? n2 : n1;
     const Vec3f &nb = swap ? n1 : n2;
     if (swap) d = -d;
-    const float f3 = swap ? -c2 : c1;
+    float f3 = swap ? -c2 : c1;
     Vec3f v = d.cross(u);
     const float vlen2 = v.squaredNorm();
     if (!(vlen2 > 0.0f)) return false;
     v *= 1.0f / std::sqrt(vlen2);
     const Vec3f w = u.cross(v);
-    bins[0] = kAngleBins(w.dot(nb), u.dot(nb));
-    bins[1] = bin_of(v.dot(nb), -1.0f, 1.0f);
-    bins[2] = bin_of(f3, -1.0f, 1.0f);
+    float a = w.dot(nb), b = u.dot(nb), f2 = v.dot(nb);
+    if (signs == NormalSigns::Oriented) {
+        bins[0] = kAngleBins(a, b);
+        bins[1] = bin_of(f2, -1.0f, 1.0f);
+        bins[2] = bin_of(f3, -1.0f, 1.0f);
+        return true;
+    }
+    // The representative of the four sign choices: u turned toward the other point, then nb toward u.
+    // Turning u negates v and keeps w; turning nb negates every dot product with it.
+    if (f3 < 0.0f) f3 = -f3, b = -b, f2 = -f2;
+    if (b < 0.0f) b = -b, a = -a, f2 = -f2;
+    // Where f3 or b is zero (exactly planar synthetic scenes have many such pairs) the turn it decides is
+    // still open; the remaining choices are settled on a, then f2.
+    const bool f3_zero = f3 == 0.0f, b_zero = b == 0.0f;
+    if (f3_zero) a = std::fabs(a); // u and n_b both turned: only a changes sign
+    if (f3_zero && b_zero)
+        f2 = std::fabs(f2);
+    else if (b_zero && (a < 0.0f || (a == 0.0f && f2 < 0.0f)))
+        a = -a, f2 = -f2; // n_b turned
+    bins[0] = kHalfAngleBins(a, b);
+    bins[1] = bin_of(f2, -1.0f, 1.0f);
+    bins[2] = bin_of(f3, 0.0f, 1.0f);
     return true;
 }
 
@@ -85,7 +106,7 @@ inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const V
 #if KISSM_PAIR_FEATURES_SSE2
 // Intrinsics because GCC does not vectorise the plain loop: under its default -ftrapping-math the selects
 // become branches around comparisons and products that may trap, which it will not if-convert.
-void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBatch &batch) {
     // Padding lanes (copies of p itself) only produce codes nobody reads; NaNs in them are harmless.
     for (std::size_t m = batch.size; m < ((batch.size + 3) & ~std::size_t(3)); ++m) {
         batch.x[m] = p.x(), batch.y[m] = p.y(), batch.z[m] = p.z();
@@ -97,9 +118,11 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
     const __m128 sign = _mm_set1_ps(-0.0f);
     // Sector boundaries of the angle bins: lanes with y >= 0 use k = 6..10, the others k = 1..5.
     __m128 cl[5], sl[5], cu[5], su[5];
+    const bool sign_free = signs == NormalSigns::Ignored;
+    const AngleBins &angle_bins = sign_free ? kHalfAngleBins : kAngleBins;
     for (int k = 0; k < 5; ++k) {
-        cl[k] = _mm_set1_ps(kAngleBins.c[1 + k]), sl[k] = _mm_set1_ps(kAngleBins.s[1 + k]);
-        cu[k] = _mm_set1_ps(kAngleBins.c[6 + k]), su[k] = _mm_set1_ps(kAngleBins.s[6 + k]);
+        cl[k] = _mm_set1_ps(angle_bins.c[1 + k]), sl[k] = _mm_set1_ps(angle_bins.s[1 + k]);
+        cu[k] = _mm_set1_ps(angle_bins.c[6 + k]), su[k] = _mm_set1_ps(angle_bins.s[6 + k]);
     }
     // bin_of(value, -1, 1): t = (value - lo) / (hi - lo) * 11; t <= 0 or NaN gives 0, t >= 11 gives 10.
     // Clamping t to [0, 10.5] before the truncation gives the same bins.
@@ -114,8 +137,10 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
     auto dot = [](__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz) {
         return _mm_add_ps(_mm_mul_ps(ax, bx), _mm_add_ps(_mm_mul_ps(ay, by), _mm_mul_ps(az, bz)));
     };
-    auto bin_of = [&](__m128 value) {
-        __m128 t = _mm_mul_ps(_mm_div_ps(_mm_sub_ps(value, lo), range), bins);
+    // bin_of(f3, 0, 1) for sign-free pairs: the same operations with lo = 0 and hi - lo = 1.
+    const __m128 lo3 = sign_free ? zero : lo, range3 = sign_free ? one : range;
+    auto bin_of = [&](__m128 value, __m128 from, __m128 width) {
+        __m128 t = _mm_mul_ps(_mm_div_ps(_mm_sub_ps(value, from), width), bins);
         t = _mm_and_ps(_mm_cmpgt_ps(t, zero), t);
         return _mm_cvttps_epi32(_mm_min_ps(t, top));
     };
@@ -137,7 +162,7 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
         const __m128 bx = select(swap, n1x, n2x), by = select(swap, n1y, n2y), bz = select(swap, n1z, n2z);
         const __m128 flip = _mm_and_ps(swap, sign); // d = -d where swapped
         dx = _mm_xor_ps(dx, flip), dy = _mm_xor_ps(dy, flip), dz = _mm_xor_ps(dz, flip);
-        const __m128 f3 = select(swap, _mm_xor_ps(c2, sign), c1);
+        __m128 f3 = select(swap, _mm_xor_ps(c2, sign), c1);
         __m128 vx = _mm_sub_ps(_mm_mul_ps(dy, uz), _mm_mul_ps(dz, uy));
         __m128 vy = _mm_sub_ps(_mm_mul_ps(dz, ux), _mm_mul_ps(dx, uz));
         __m128 vz = _mm_sub_ps(_mm_mul_ps(dx, uy), _mm_mul_ps(dy, ux));
@@ -147,8 +172,22 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
         const __m128 wx = _mm_sub_ps(_mm_mul_ps(uy, vz), _mm_mul_ps(uz, vy));
         const __m128 wy = _mm_sub_ps(_mm_mul_ps(uz, vx), _mm_mul_ps(ux, vz));
         const __m128 wz = _mm_sub_ps(_mm_mul_ps(ux, vy), _mm_mul_ps(uy, vx));
-        const __m128 ay = dot(wx, wy, wz, bx, by, bz), ax = dot(ux, uy, uz, bx, by, bz);
-        const __m128 f2 = dot(vx, vy, vz, bx, by, bz);
+        __m128 ay = dot(wx, wy, wz, bx, by, bz), ax = dot(ux, uy, uz, bx, by, bz);
+        __m128 f2 = dot(vx, vy, vz, bx, by, bz);
+        if (sign_free) { // the scalar code's two turns, as sign flips where the comparison holds
+            const __m128 turn_u = _mm_and_ps(_mm_cmplt_ps(f3, zero), sign);
+            f3 = _mm_xor_ps(f3, turn_u), ax = _mm_xor_ps(ax, turn_u), f2 = _mm_xor_ps(f2, turn_u);
+            const __m128 turn_b = _mm_and_ps(_mm_cmplt_ps(ax, zero), sign);
+            ax = _mm_xor_ps(ax, turn_b), ay = _mm_xor_ps(ay, turn_b), f2 = _mm_xor_ps(f2, turn_b);
+            const __m128 f3_zero = _mm_cmpeq_ps(f3, zero), b_zero = _mm_cmpeq_ps(ax, zero);
+            ay = select(f3_zero, _mm_andnot_ps(sign, ay), ay);
+            const __m128 both = _mm_and_ps(f3_zero, b_zero);
+            f2 = select(both, _mm_andnot_ps(sign, f2), f2);
+            const __m128 negative =
+                _mm_or_ps(_mm_cmplt_ps(ay, zero), _mm_and_ps(_mm_cmpeq_ps(ay, zero), _mm_cmplt_ps(f2, zero)));
+            const __m128 turn_b0 = _mm_and_ps(_mm_andnot_ps(f3_zero, _mm_and_ps(b_zero, negative)), sign);
+            ay = _mm_xor_ps(ay, turn_b0), f2 = _mm_xor_ps(f2, turn_b0);
+        }
 
         const __m128 upper = _mm_cmpge_ps(ay, zero);
         __m128i b0 = _mm_and_si128(_mm_castps_si128(upper), five);
@@ -159,7 +198,7 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
         }
         const __m128i at_origin = _mm_castps_si128(_mm_and_ps(_mm_cmpeq_ps(ay, zero), _mm_cmpeq_ps(ax, zero)));
         b0 = _mm_or_si128(_mm_and_si128(at_origin, five), _mm_andnot_si128(at_origin, b0));
-        const __m128i b1 = bin_of(f2), b2 = bin_of(f3);
+        const __m128i b1 = bin_of(f2, lo, range), b2 = bin_of(f3, lo3, range3);
         const __m128 has_len = _mm_cmpgt_ps(len2, zero);
         const __m128i frame = _mm_castps_si128(_mm_and_ps(has_len, _mm_cmpgt_ps(vlen2, zero)));
         const __m128i order_matters = _mm_castps_si128(_mm_and_ps(has_len, tie));
@@ -169,20 +208,21 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
     }
 }
 #else
-void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch) {
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBatch &batch) {
     int bins[3];
     for (std::size_t m = 0; m < batch.size; ++m) {
         bool order_matters;
         const Vec3f q(batch.x[m], batch.y[m], batch.z[m]), nq(batch.nx[m], batch.ny[m], batch.nz[m]);
-        const bool frame = pair_bins(p, n, q, nq, bins, order_matters);
+        const bool frame = pair_bins(p, n, q, nq, signs, bins, order_matters);
         batch.code[m] = (frame ? pack_bins(bins) : 0) | (order_matters ? kLaneTie : 0);
     }
 }
 #endif
 
-bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]) {
+bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, NormalSigns signs,
+                       int bins[3]) {
     bool order_matters;
-    return pair_bins(p1, n1, p2, n2, bins, order_matters);
+    return pair_bins(p1, n1, p2, n2, signs, bins, order_matters);
 }
 
 KISSM_DETAIL_END

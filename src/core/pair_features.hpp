@@ -24,11 +24,21 @@ KISSM_DETAIL_BEGIN
 
 constexpr int kBinsPerFeature = 11;
 
+// Whether the features may depend on the signs of the normals. Oriented: Eq. (A2) as it stands, for normals
+// turned toward a viewpoint. Ignored: each pair is first brought to one representative of its four sign
+// choices (the frame's normal u turned so that f3 = u . d >= 0, then n_b so that u . n_b >= 0), so flipping
+// either normal changes nothing and unoriented normals will do: f1 then lies in [-pi/2, pi/2] and f3 in
+// [0, 1], each still binned into 11 bins over its range. What is lost is only what the signs carried (a convex
+// edge and a concave one look alike); what is gained is features that do not depend on any viewpoint, so
+// on no cloud's frame (docs/frames.md).
+enum class NormalSigns { Oriented, Ignored };
+
 // Bins (0..10) of the three Darboux-frame angle features of a pair of oriented points; false when the pair
 // has no defined frame (coincident points, or a normal parallel to the connecting line). The source point
 // of the frame is the one whose normal makes the smaller angle with the connecting line, so the result
 // does not depend on the order of the two points.
-bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, int bins[3]);
+bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, NormalSigns signs,
+                       int bins[3]);
 
 // A pair's bins for the second point of the pair, parked in the edge's slot until that point's owner
 // collects them: 4 bits per feature, bit 12 set when the pair has a frame (0 = nothing to add).
@@ -64,6 +74,6 @@ constexpr std::int32_t kLaneFrame = kCodeValid, kLaneTie = kCodeValid << 1;
 // Fills batch.code[0, batch.size) with the codes of the pairs (p, n) - (batch point m, its normal): exactly
 // the bins pair_feature_bins gives for that order, kLaneFrame when the pair has a frame, kLaneTie when the
 // other order must be evaluated separately. Uses (and may overwrite) the padding lanes up to a multiple of 4.
-void batch_pair_codes(const Vec3f &p, const Vec3f &n, PairBatch &batch);
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBatch &batch);
 
 KISSM_DETAIL_END

@@ -15,7 +15,9 @@
 KISSM_DETAIL_BEGIN
 
 enum class NonFinitePolicy { Reject, Drop };
-enum class ViewpointMode { Fixed, CloudCenter };
+// SignFree: descriptors blind to the normals' signs (pair_features.hpp, NormalSigns). Local: each normal turned
+// away from its neighbourhood's centroid (normals.hpp). Neither depends on the cloud's frame.
+enum class ViewpointMode { Fixed, CloudCenter, SignFree, Local };
 // Stage 6 (refine.hpp): none, GICP (plane-to-plane) or point-to-plane.
 enum class RefineMode { None, Gicp, PointToPlane };
 

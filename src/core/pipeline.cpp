@@ -46,7 +46,7 @@ bool same_descriptor_settings(const Params &a, const Params &b) {
            a.fpfh_radius_gain == b.fpfh_radius_gain && a.max_linearity == b.max_linearity &&
            a.min_normal_neighbors == b.min_normal_neighbors && a.nonfinite == b.nonfinite &&
            a.viewpoint_mode == b.viewpoint_mode && a.refine_normal_radius_gain == b.refine_normal_radius_gain &&
-           (a.viewpoint_mode == ViewpointMode::CloudCenter || a.viewpoint == b.viewpoint);
+           (a.viewpoint_mode != ViewpointMode::Fixed || a.viewpoint == b.viewpoint);
 }
 
 namespace {
@@ -84,17 +84,22 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         np.min_neighbors = params.min_normal_neighbors;
         np.max_linearity = params.max_linearity;
         const Vec3d vp =
-            params.viewpoint_mode == ViewpointMode::CloudCenter
-                ? Vec3d(Vec3d::Zero()) // the local origin is the bounding-box centre
-                : Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin);
+            params.viewpoint_mode == ViewpointMode::Fixed
+                ? Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin)
+                : Vec3d(Vec3d::Zero()); // the local origin is the bounding-box centre
         np.viewpoint = vp.cast<float>();
+        np.orientation = params.viewpoint_mode == ViewpointMode::SignFree ? NormalOrientation::Unoriented
+                         : params.viewpoint_mode == ViewpointMode::Local  ? NormalOrientation::AwayFromNeighbours
+                                                                          : NormalOrientation::TowardViewpoint;
         NormalSets sets = estimate_normal_sets(pts, nb, np, static_cast<float>(params.refine_normal_radius()), ctx);
         f.normals = std::move(sets.normals);
         f.plane_normals = std::move(sets.planes);
         progress(0.6);
         if (with_descriptors) {
             std::vector<std::uint32_t> keypoints = select_keypoints(nb, f.normals, params.min_normal_neighbors);
-            f.descriptors = compute_fpfh(pts, nb, f.normals, std::move(keypoints),
+            const NormalSigns signs =
+                params.viewpoint_mode == ViewpointMode::SignFree ? NormalSigns::Ignored : NormalSigns::Oriented;
+            f.descriptors = compute_fpfh(pts, nb, f.normals, signs, std::move(keypoints),
                                          static_cast<float>(params.voxel_size), kFpfhWeightPower, ctx);
         }
     } else {

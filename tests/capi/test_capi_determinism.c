@@ -57,14 +57,20 @@ static void test_thread_counts(void) {
         CHECK_MSG(scn_result_equal(&g_reference, &r), "%s", what);
         report_difference(what, &g_reference, &r);
     }
-    /* the other viewpoint mode, too */
+    /* the other viewpoint modes, too */
     {
-        kissm_result a, b;
-        CHECK(run_once(1, KISSM_VIEWPOINT_CLOUD_CENTER, &s, &t, &a));
-        CHECK(run_once(4, KISSM_VIEWPOINT_CLOUD_CENTER, &s, &t, &b));
-        CHECK(a.valid == 1);
-        CHECK(scn_result_equal(&a, &b));
-        report_difference("cloud centre, 1 vs 4 threads", &a, &b);
+        const int32_t modes[3] = {KISSM_VIEWPOINT_CLOUD_CENTER, KISSM_VIEWPOINT_SIGN_FREE, KISSM_VIEWPOINT_LOCAL};
+        int k;
+        for (k = 0; k < 3; ++k) {
+            kissm_result a, b;
+            char label[64];
+            CHECK(run_once(1, modes[k], &s, &t, &a));
+            CHECK(run_once(4, modes[k], &s, &t, &b));
+            CHECK(a.valid == 1);
+            CHECK_MSG(scn_result_equal(&a, &b), "viewpoint mode %d", (int)modes[k]);
+            sprintf(label, "viewpoint mode %d, 1 vs 4 threads", (int)modes[k]);
+            report_difference(label, &a, &b);
+        }
     }
 }
 

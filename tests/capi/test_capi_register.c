@@ -355,6 +355,89 @@ static void test_other_scene(void) {
     scn_pair_free(&p);
 }
 
+/* The viewpoint-free modes: each cloud in a frame of its own, far from its sensor and turned, registers as in
+ * the sensor frames; and both clouds shifted by exact georeferenced offsets give bitwise the same rotation and
+ * counts (the recentred clouds are identical, and nothing else reads the frame). */
+static void test_frame_free_modes(void) {
+    const int32_t modes[2] = {KISSM_VIEWPOINT_SIGN_FREE, KISSM_VIEWPOINT_LOCAL};
+    const double axis_s[3] = {0.7, -0.2, 0.4}, move_s[3] = {45.0, -60.0, 12.0};
+    const double axis_t[3] = {-0.3, 0.9, 0.1}, move_t[3] = {-70.0, 20.0, -35.0};
+    const double shift[3] = {1e7, -3e6 + 0.25, 250.0};
+    int k, i;
+    for (k = 0; k < 2; ++k) {
+        kissm_config c = scn_config(VOXEL);
+        kissm_matcher *m = NULL;
+        scn_cloud s, t, s0, t0, s1, t1;
+        scn_pose fs, ft, fs_inv, tmp, truth;
+        kissm_result sensor, moved, base, shifted;
+        char label[64];
+        c.viewpoint_mode = modes[k];
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        {
+            kissm_points a = scn_points(&g_pair.source), b = scn_points(&g_pair.target);
+            register_pair(m, &a, &b, &sensor);
+        }
+        sprintf(label, "viewpoint mode %d, sensor frames", (int)modes[k]);
+        check_accuracy(label, &sensor, &g_pair.truth, VOXEL);
+        /* truth' = ft o truth o fs^-1 */
+        scn_cloud_init(&s);
+        scn_cloud_init(&t);
+        scn_cloud_copy(&s, &g_pair.source);
+        scn_cloud_copy(&t, &g_pair.target);
+        scn_pose_axis_angle(&fs, axis_s, 2.2, move_s);
+        scn_pose_axis_angle(&ft, axis_t, -1.4, move_t);
+        scn_cloud_apply(&s, &fs);
+        scn_cloud_apply(&t, &ft);
+        scn_pose_inverse(&fs, &fs_inv);
+        scn_pose_compose(&g_pair.truth, &fs_inv, &tmp);
+        scn_pose_compose(&ft, &tmp, &truth);
+        {
+            kissm_points a = scn_points(&s), b = scn_points(&t);
+            register_pair(m, &a, &b, &moved);
+        }
+        sprintf(label, "viewpoint mode %d, moved frames", (int)modes[k]);
+        check_accuracy(label, &moved, &truth, VOXEL);
+        CHECK_MSG(moved.num_final_inliers * 10 >= sensor.num_final_inliers * 7,
+                  "%s: %d inliers, %d in the sensor frames", label, (int)moved.num_final_inliers,
+                  (int)sensor.num_final_inliers);
+
+        scn_cloud_init(&s0);
+        scn_cloud_init(&t0);
+        scn_cloud_init(&s1);
+        scn_cloud_init(&t1);
+        scn_cloud_copy(&s0, &s);
+        scn_cloud_copy(&t0, &t);
+        scn_cloud_quantize(&s0, 1.0 / 1048576.0);
+        scn_cloud_quantize(&t0, 1.0 / 1048576.0);
+        scn_cloud_copy(&s1, &s0);
+        scn_cloud_copy(&t1, &t0);
+        scn_cloud_translate(&s1, shift[0], shift[1], shift[2]);
+        scn_cloud_translate(&t1, shift[0], shift[1], shift[2]);
+        {
+            kissm_points a = scn_points(&s0), b = scn_points(&t0);
+            register_pair(m, &a, &b, &base);
+        }
+        {
+            kissm_points a = scn_points(&s1), b = scn_points(&t1);
+            register_pair(m, &a, &b, &shifted);
+        }
+        CHECK_EQ_INT(base.valid, 1);
+        CHECK_EQ_INT(shifted.valid, 1);
+        for (i = 0; i < 9; ++i)
+            CHECK_MSG(base.rotation[i] == shifted.rotation[i], "%s: rotation[%d] differs", label, i);
+        CHECK_EQ_INT(base.num_source_keypoints, shifted.num_source_keypoints);
+        CHECK_EQ_INT(base.num_initial_correspondences, shifted.num_initial_correspondences);
+        CHECK_EQ_INT(base.num_final_inliers, shifted.num_final_inliers);
+        scn_cloud_free(&s);
+        scn_cloud_free(&t);
+        scn_cloud_free(&s0);
+        scn_cloud_free(&t0);
+        scn_cloud_free(&s1);
+        scn_cloud_free(&t1);
+        kissm_destroy(m);
+    }
+}
+
 int main(void) {
     scn_make_pair(&g_pair, 1, 25.0, 0.01);
     RUN_TEST(test_register_float64);
@@ -363,6 +446,7 @@ int main(void) {
     RUN_TEST(test_georeferenced_shift);
     RUN_TEST(test_swapped);
     RUN_TEST(test_other_scene);
+    RUN_TEST(test_frame_free_modes);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();
 }

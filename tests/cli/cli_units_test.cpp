@@ -260,6 +260,15 @@ void test_args() {
         CHECK(parse_refine_mode("--refine", refine_mode_name(mode)) == mode);
     }
     CHECK(std::strcmp(refine_mode_name(99), "unknown") == 0);
+    CHECK(parse_viewpoint_mode("--viewpoint", "fixed") == KISSM_VIEWPOINT_FIXED);
+    CHECK(parse_viewpoint_mode("--viewpoint", "center") == KISSM_VIEWPOINT_CLOUD_CENTER);
+    CHECK(parse_viewpoint_mode("--viewpoint", "cloud-center") == KISSM_VIEWPOINT_CLOUD_CENTER);
+    CHECK(parse_viewpoint_mode("--viewpoint", "sign-free") == KISSM_VIEWPOINT_SIGN_FREE);
+    CHECK(parse_viewpoint_mode("--viewpoint", "sign_free") == KISSM_VIEWPOINT_SIGN_FREE);
+    CHECK(parse_viewpoint_mode("--viewpoint", "local") == KISSM_VIEWPOINT_LOCAL);
+    for (const char *bad : {"", "LOCAL", "none", "sensor", "2"}) {
+        CHECK_MSG(throws_usage([&] { parse_viewpoint_mode("--viewpoint", bad); }), "'%s' accepted", bad);
+    }
     CHECK(one_line("a\nb\r\n") == "a b");
 
     ArgCursor cur("register", {"a", "--voxel=0.5", "--json", "--threads", "3", "--", "--b"});

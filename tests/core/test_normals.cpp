@@ -57,6 +57,36 @@ static void test_sphere_normals_radial() {
     CHECK_MSG(worst < 0.01, "worst 1 - cos = %g", worst);
 }
 
+// AwayFromNeighbours: outward on a sphere wherever the sphere is seen from outside or inside, and the same
+// normals (turned with the cloud) when the cloud is turned and moved: the rule reads only the local shape.
+static void test_normals_away_from_neighbours() {
+    TestRng rng(12);
+    std::vector<Vec3f> pts;
+    for (int i = 0; i < 20000; ++i) {
+        Vec3d d(rng.normal(), rng.normal(), rng.normal());
+        pts.push_back((Vec3d(1, -2, 0.5) + 3.0 * d.normalized()).cast<float>());
+    }
+    const Eigen::Matrix3f R = Eigen::AngleAxisf(2.1f, Vec3f(0.4f, 0.1f, -0.9f).normalized()).toRotationMatrix();
+    const Vec3f t(-7.0f, 3.0f, 11.0f);
+    std::vector<Vec3f> moved;
+    for (const Vec3f &p : pts) moved.push_back(R * p + t);
+    RunContext ctx(2, nullptr, Hooks());
+    NormalParams np{0.3f, 3, 0.99, Vec3f(100, 100, 100)}; // the viewpoint is not read
+    np.orientation = NormalOrientation::AwayFromNeighbours;
+    const Neighborhoods nb = radius_neighbors(pts, 0.5f, ctx), nb_moved = radius_neighbors(moved, 0.5f, ctx);
+    const Normals a = estimate_normals(pts, nb, np, ctx), b = estimate_normals(moved, nb_moved, np, ctx);
+    std::size_t valid = 0, outward = 0, same = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        if (!a.valid[i] || !b.valid[i]) continue;
+        ++valid;
+        outward += a.normal[i].dot(pts[i] - Vec3f(1, -2, 0.5f)) > 0.0f;
+        same += (R * a.normal[i]).dot(b.normal[i]) > 0.99f;
+    }
+    CHECK(valid > 19000);
+    CHECK_MSG(outward == valid, "%zu of %zu outward", outward, valid);
+    CHECK_MSG(same == valid, "%zu of %zu the same after the move", same, valid);
+}
+
 static void test_lines_and_sparse_points_get_no_normal() {
     std::vector<Vec3f> pts;
     for (int i = 0; i < 100; ++i) pts.emplace_back(0.1f * static_cast<float>(i), 0.0f, 0.0f); // a line
@@ -105,6 +135,7 @@ static void test_eigen3_closed_form() {
 int main() {
     RUN_TEST(test_plane_normals_face_viewpoint);
     RUN_TEST(test_sphere_normals_radial);
+    RUN_TEST(test_normals_away_from_neighbours);
     RUN_TEST(test_lines_and_sparse_points_get_no_normal);
     RUN_TEST(test_neighbors_match_brute_force);
     RUN_TEST(test_eigen3_closed_form);

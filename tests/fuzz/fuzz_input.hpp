@@ -67,7 +67,10 @@ inline kissm_config make_config(Bytes &in) {
     set_refinement(c, v / 10u);
     c.num_threads = 1 + (flags & 1);
     c.nonfinite_policy = (flags & 2) ? KISSM_NONFINITE_DROP : KISSM_NONFINITE_REJECT;
-    c.viewpoint_mode = (flags & 4) ? KISSM_VIEWPOINT_CLOUD_CENTER : KISSM_VIEWPOINT_FIXED;
+    // Bit 2 leaves the fixed viewpoint; which other mode, the gains byte says.
+    static const int32_t other_modes[] = {KISSM_VIEWPOINT_CLOUD_CENTER, KISSM_VIEWPOINT_SIGN_FREE,
+                                          KISSM_VIEWPOINT_LOCAL};
+    c.viewpoint_mode = (flags & 4) ? other_modes[gains % 3] : KISSM_VIEWPOINT_FIXED;
     c.ratio_test = (flags & 8) ? 1.0 : 0.9;
     c.min_inliers = 3 + (flags >> 4);
     c.normal_radius_gain = 1.0 + (gains & 7) * 0.5;

@@ -22,17 +22,28 @@ typedef struct {
     const char *name;
     int32_t scalar_type;
     double voxel_size;
-    int32_t refine_mode; /* KISSM_REFINE_* */
-    int is_refine_call;  /* kissm_refine from initial_transform() instead of kissm_register */
+    int32_t refine_mode;    /* KISSM_REFINE_* */
+    int is_refine_call;     /* kissm_refine from initial_transform() instead of kissm_register */
+    int32_t viewpoint_mode; /* KISSM_VIEWPOINT_* */
 } golden_case;
 
 static const golden_case kCases[] = {
-    {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0},
-    {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0},
-    {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0},
-    {"yard_float32_v0.3_point_to_plane", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_POINT_TO_PLANE, 0},
-    {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1},
+    {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED},
+    {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED},
+    {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED},
+    {"yard_float32_v0.3_point_to_plane", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_POINT_TO_PLANE, 0,
+     KISSM_VIEWPOINT_FIXED},
+    {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED},
+    {"yard_float64_v0.25_local", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_LOCAL},
+    {"yard_float32_v0.3_sign_free_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_SIGN_FREE},
 };
+
+static const char *viewpoint_name(int32_t mode) {
+    return mode == KISSM_VIEWPOINT_CLOUD_CENTER ? "cloud_center"
+           : mode == KISSM_VIEWPOINT_SIGN_FREE  ? "sign_free"
+           : mode == KISSM_VIEWPOINT_LOCAL      ? "local"
+                                                : "fixed";
+}
 
 static const char *refine_name(int32_t mode) {
     return mode == KISSM_REFINE_GICP ? "gicp" : mode == KISSM_REFINE_POINT_TO_PLANE ? "point_to_plane" : "none";
@@ -106,6 +117,7 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     config.voxel_size = gc->voxel_size;
     config.num_threads = threads;
     config.refine_mode = gc->refine_mode;
+    config.viewpoint_mode = gc->viewpoint_mode;
     result->struct_size = sizeof *result;
     status = kissm_create(&config, &matcher);
     if (status == KISSM_OK && gc->is_refine_call) {
@@ -184,6 +196,7 @@ static void write_golden(void) {
         printf("    {\n      \"name\": \"%s\",\n", kCases[c].name);
         printf("      \"call\": \"%s\",\n", kCases[c].is_refine_call ? "refine" : "register");
         printf("      \"refine\": \"%s\",\n", refine_name(kCases[c].refine_mode));
+        printf("      \"viewpoint\": \"%s\",\n", viewpoint_name(kCases[c].viewpoint_mode));
         printf("      \"scalar\": \"%s\",\n", kCases[c].scalar_type == KISSM_SCALAR_FLOAT32 ? "float32" : "float64");
         printf("      \"voxel_size\": %.17g,\n", kCases[c].voxel_size);
         if (kCases[c].is_refine_call) {

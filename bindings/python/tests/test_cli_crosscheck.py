@@ -90,6 +90,13 @@ def test_cli_config_flags_match_config_fields(cli: Path, pair, tmp_path: Path) -
     assert_matches_cli(result, expected)
 
 
+@pytest.mark.parametrize("mode", ["fixed", "cloud_center", "sign_free", "local"])
+def test_cli_viewpoint_option_matches_config(cli: Path, pair_files, pair, mode: str) -> None:
+    expected = run_cli(cli, *pair_files, pair.voxel_size, ["--viewpoint", mode.replace("_", "-")])
+    assert expected["valid"]
+    assert_matches_cli(kissm.register(pair.source, pair.target, pair.voxel_size, viewpoint_mode=mode), expected)
+
+
 @pytest.mark.parametrize("threads", [0, 3])
 def test_cli_threads_do_not_matter(cli: Path, demo_clouds: tuple[Path, Path], threads: int) -> None:
     source_path, target_path = demo_clouds

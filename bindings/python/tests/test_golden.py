@@ -56,7 +56,9 @@ def run_case(case: dict[str, Any], threads: int) -> kissm.Result:
         source, target = source.astype(np.float32), target.astype(np.float32)
     else:
         assert case["scalar"] == "float64", case["scalar"]
-    config = kissm.Config(voxel_size=case["voxel_size"], num_threads=threads, refine_mode=case["refine"])
+    config = kissm.Config(
+        voxel_size=case["voxel_size"], num_threads=threads, refine_mode=case["refine"], viewpoint_mode=case["viewpoint"]
+    )
     with kissm.Matcher(config) as matcher:
         if case["call"] == "refine":
             initial = np.array(case["initial_transform"], dtype=np.float64).reshape(4, 4)
@@ -69,8 +71,10 @@ def test_golden_file_lists_every_kind_of_case() -> None:
     """The cases this test must understand are all there (a new kind needs code here)."""
     calls = {(case["call"], case["refine"]) for case in GOLDEN["cases"]}
     assert {("register", "none"), ("register", "gicp"), ("register", "point_to_plane"), ("refine", "gicp")} <= calls
+    assert {"fixed", "sign_free", "local"} <= {case["viewpoint"] for case in GOLDEN["cases"]}
     for case in GOLDEN["cases"]:
         assert case["call"] in ("register", "refine") and case["refine"] in kissm._config.REFINE_MODES
+        assert case["viewpoint"] in kissm._config.VIEWPOINT_MODES
         assert ("initial_transform" in case) == (case["call"] == "refine")
         assert all(name in case for name in COUNTS + DOUBLES + ARRAYS), case["name"]
 

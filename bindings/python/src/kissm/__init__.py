@@ -73,7 +73,7 @@ NonFinitePolicy: TypeAlias = _config.NonFinitePolicy
 """The names of :attr:`Config.nonfinite_policy`: ``"reject"`` or ``"drop"``."""
 
 ViewpointMode: TypeAlias = _config.ViewpointMode
-"""The names of :attr:`Config.viewpoint_mode`: ``"fixed"`` or ``"cloud_center"``."""
+"""The names of :attr:`Config.viewpoint_mode`: ``"fixed"``, ``"cloud_center"``, ``"sign_free"`` or ``"local"``."""
 
 RefineMode: TypeAlias = _config.RefineMode
 """The names of :attr:`Config.refine_mode`: ``"none"``, ``"gicp"`` or ``"point_to_plane"``."""

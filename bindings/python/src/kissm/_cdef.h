@@ -69,6 +69,10 @@ const char *kissm_reason_string(int32_t reason);
 #define KISSM_VIEWPOINT_FIXED 0
 #define KISSM_VIEWPOINT_CLOUD_CENTER 1
 
+#define KISSM_VIEWPOINT_SIGN_FREE 2
+
+#define KISSM_VIEWPOINT_LOCAL 3
+
 #define KISSM_REFINE_NONE 0
 #define KISSM_REFINE_GICP 1
 #define KISSM_REFINE_POINT_TO_PLANE 2

@@ -12,12 +12,17 @@ from ._errors import check
 from ._ffi import ffi, lib
 
 NonFinitePolicy = Literal["reject", "drop"]
-ViewpointMode = Literal["fixed", "cloud_center"]
+ViewpointMode = Literal["fixed", "cloud_center", "sign_free", "local"]
 RefineMode = Literal["none", "gicp", "point_to_plane"]
 
 #: Python names of the C enumerations (the fields hold the names; the ints are accepted too).
 NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "drop": lib.KISSM_NONFINITE_DROP}
-VIEWPOINT_MODES: dict[str, int] = {"fixed": lib.KISSM_VIEWPOINT_FIXED, "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER}
+VIEWPOINT_MODES: dict[str, int] = {
+    "fixed": lib.KISSM_VIEWPOINT_FIXED,
+    "cloud_center": lib.KISSM_VIEWPOINT_CLOUD_CENTER,
+    "sign_free": lib.KISSM_VIEWPOINT_SIGN_FREE,
+    "local": lib.KISSM_VIEWPOINT_LOCAL,
+}
 REFINE_MODES: dict[str, int] = {
     "none": lib.KISSM_REFINE_NONE,
     "gicp": lib.KISSM_REFINE_GICP,
@@ -147,8 +152,10 @@ class Config:
     nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]
     """'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are skipped and counted)."""
     viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
-    """'fixed' (toward ``viewpoint``, in each cloud's frame: single scans) or 'cloud_center' (toward each cloud's
-    bounding-box centre: maps, merged clouds)."""
+    """How normals are oriented: 'fixed' (toward ``viewpoint``, in each cloud's frame: single scans in their
+    sensor frame), 'cloud_center' (toward each cloud's bounding-box centre), or, with no viewpoint at all, so that
+    features depend on no cloud's frame (scans in a world frame, maps; docs/frames.md): 'local' (each normal
+    turned away from its neighbours' centroid) or 'sign_free' (descriptors blind to the normals' signs)."""
     log_level: int = _DEFAULTS["log_level"]
     """Most verbose level passed to a log callback (0..4); kept for completeness: the Python package installs no log
     callback, and the library itself never prints."""

@@ -39,6 +39,8 @@ pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
 pub const KISSM_VIEWPOINT_CLOUD_CENTER: i32 = 1;
+pub const KISSM_VIEWPOINT_SIGN_FREE: i32 = 2;
+pub const KISSM_VIEWPOINT_LOCAL: i32 = 3;
 pub const KISSM_REFINE_NONE: i32 = 0;
 pub const KISSM_REFINE_GICP: i32 = 1;
 pub const KISSM_REFINE_POINT_TO_PLANE: i32 = 2;
@@ -165,7 +167,8 @@ pub struct kissm_config {
     pub min_inliers: i32,
     /// KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT.
     pub nonfinite_policy: i32,
-    /// KISSM_VIEWPOINT_*. Default #KISSM_VIEWPOINT_FIXED.
+    /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_FIXED (scans in their sensor frame);
+ #KISSM_VIEWPOINT_LOCAL or #KISSM_VIEWPOINT_SIGN_FREE for clouds in any other frame (docs/frames.md).*/
     pub viewpoint_mode: i32,
     /// Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN.
     pub log_level: i32,

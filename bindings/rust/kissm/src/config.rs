@@ -65,8 +65,14 @@ impl RefineMode {
 pub enum Viewpoint {
     /// A fixed sensor position, in each cloud's own input frame (single scans; the default is the origin).
     Fixed([f64; 3]),
-    /// Each cloud's bounding-box centre (maps and merged clouds, which have no single sensor position).
+    /// Each cloud's bounding-box centre.
     CloudCenter,
+    /// No viewpoint: descriptors that do not depend on the normals' signs, so on no cloud's frame
+    /// (`docs/frames.md`).
+    SignFree,
+    /// No viewpoint: each normal turned away from the centroid of its neighbours, a rule of the local shape
+    /// alone, so features depend on no cloud's frame (`docs/frames.md`).
+    Local,
 }
 
 impl Default for Viewpoint {
@@ -193,10 +199,11 @@ impl Config {
     }
     /// Where normals are oriented toward.
     pub fn viewpoint(&self) -> Viewpoint {
-        if self.raw.viewpoint_mode == sys::KISSM_VIEWPOINT_CLOUD_CENTER {
-            Viewpoint::CloudCenter
-        } else {
-            Viewpoint::Fixed(self.raw.viewpoint)
+        match self.raw.viewpoint_mode {
+            sys::KISSM_VIEWPOINT_CLOUD_CENTER => Viewpoint::CloudCenter,
+            sys::KISSM_VIEWPOINT_SIGN_FREE => Viewpoint::SignFree,
+            sys::KISSM_VIEWPOINT_LOCAL => Viewpoint::Local,
+            _ => Viewpoint::Fixed(self.raw.viewpoint),
         }
     }
     /// Neighbours needed for a normal and a descriptor.
@@ -410,6 +417,8 @@ impl ConfigBuilder {
                 self.raw.viewpoint = position;
             }
             Viewpoint::CloudCenter => self.raw.viewpoint_mode = sys::KISSM_VIEWPOINT_CLOUD_CENTER,
+            Viewpoint::SignFree => self.raw.viewpoint_mode = sys::KISSM_VIEWPOINT_SIGN_FREE,
+            Viewpoint::Local => self.raw.viewpoint_mode = sys::KISSM_VIEWPOINT_LOCAL,
         }
         self
     }

@@ -268,6 +268,9 @@ fn builder_sets_every_field() {
     let center = c.to_builder().viewpoint(Viewpoint::CloudCenter).build().unwrap();
     assert_eq!(center.viewpoint(), Viewpoint::CloudCenter);
     assert_eq!(center.min_inliers(), 12);
+    for v in [Viewpoint::SignFree, Viewpoint::Local] {
+        assert_eq!(c.to_builder().viewpoint(v).build().unwrap().viewpoint(), v);
+    }
     // The matcher keeps the config it was created with.
     let m = Matcher::new(&center).unwrap();
     assert_eq!(format!("{:?}", m.config()), format!("{center:?}"));

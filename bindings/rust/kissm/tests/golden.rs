@@ -8,7 +8,17 @@
 mod common;
 
 use common::Json;
-use kissm::{Config, Matcher, RefineMode, Registration};
+use kissm::{Config, Matcher, RefineMode, Registration, Viewpoint};
+
+fn viewpoint(name: &str) -> Viewpoint {
+    match name {
+        "fixed" => Viewpoint::Fixed([0.0; 3]),
+        "cloud_center" => Viewpoint::CloudCenter,
+        "sign_free" => Viewpoint::SignFree,
+        "local" => Viewpoint::Local,
+        other => panic!("golden.json: unknown viewpoint mode {other:?}"),
+    }
+}
 
 fn refine_mode(name: &str) -> RefineMode {
     match name {
@@ -109,10 +119,13 @@ fn golden_file_matches_bit_for_bit() {
     assert!(!cases.is_empty());
     let mut calls = std::collections::BTreeSet::new();
     let mut modes = std::collections::BTreeSet::new();
+    let mut views = std::collections::BTreeSet::new();
     for case in cases {
         let name = case.get("name").str();
         let mode = refine_mode(case.get("refine").str());
         let call = case.get("call").str();
+        let view = viewpoint(case.get("viewpoint").str());
+        views.insert(format!("{view:?}"));
         calls.insert(call.to_string());
         modes.insert(format!("{mode:?}"));
         let float32 = match case.get("scalar").str() {
@@ -125,6 +138,7 @@ fn golden_file_matches_bit_for_bit() {
                 .voxel_size(case.get("voxel_size").num())
                 .num_threads(threads)
                 .refine_mode(mode)
+                .viewpoint(view)
                 .build()
                 .unwrap();
             let mut matcher = Matcher::new(&config).unwrap();
@@ -154,4 +168,5 @@ fn golden_file_matches_bit_for_bit() {
     // The file covers what it promises (a regenerated file with fewer kinds of cases fails here).
     assert!(calls.contains("register") && calls.contains("refine"), "calls {calls:?}");
     assert_eq!(modes.len(), 3, "refine modes {modes:?}");
+    assert!(views.len() >= 3, "viewpoint modes {views:?}");
 }

@@ -1,0 +1,118 @@
+# SPDX-License-Identifier: MIT
+"""The viewpoint-free modes on real scans (../shared/data, skipped when absent): clouds given in frames far from
+their sensors, scan-to-map in a world frame, and exact georeferenced shifts (docs/frames.md)."""
+
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import kissm
+
+from conftest import data_dir
+from realdata import RealPair, load_pairs, pair_names
+from testdata import rotation_error_deg
+
+MODES = ["sign_free", "local"]
+NAMES = pair_names(data_dir()) or ["(no real data)"]
+
+
+@pytest.fixture(scope="module")
+def real_pairs(real_data: Path) -> dict[str, RealPair]:
+    return {p.name: p for p in load_pairs(real_data)}
+
+
+@functools.cache
+def _points(path: Path, fmt: str) -> np.ndarray:
+    return kissm.read_points(path, format=fmt)
+
+
+def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    axis = axis / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+
+
+def _frame(rng: np.random.Generator, distance: float) -> np.ndarray:
+    t = np.eye(4)
+    t[:3, :3] = _axis_angle(rng.normal(size=3), rng.uniform(0.5, math.pi))
+    step = rng.normal(size=3)
+    t[:3, 3] = step / np.linalg.norm(step) * distance
+    return t
+
+
+def _apply(t: np.ndarray, points: np.ndarray) -> np.ndarray:
+    return points @ t[:3, :3].T + t[:3, 3]
+
+
+def _errors(result: kissm.Result, truth: np.ndarray, at: np.ndarray) -> tuple[float, float]:
+    """Rotation error (degrees) and the distance between where the result and the truth put the point `at`."""
+    t = result.transform
+    return rotation_error_deg(t[:3, :3], truth[:3, :3]), float(np.linalg.norm(_apply(t, at) - _apply(truth, at)))
+
+
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("name", NAMES)
+def test_moved_frames(real_pairs: dict[str, RealPair], name: str, mode: str) -> None:
+    """Each cloud in a frame of its own, 40-80 m (LiDAR; 80-160 voxels otherwise) from its sensor and turned:
+    LiDAR registers as in the sensor frames, and no pair is ever valid and wrong."""
+    pair = real_pairs[name]
+    rng = np.random.default_rng(sum(map(ord, name)))
+    scale = 1.0 if pair.is_lidar else 2.0 * pair.kind.voxel
+    fs, ft = _frame(rng, rng.uniform(40, 80) * scale), _frame(rng, rng.uniform(40, 80) * scale)
+    source = _apply(fs, _points(pair.source, pair.source_format))
+    target = _apply(ft, _points(pair.target, pair.target_format))
+    truth = ft @ pair.gt @ np.linalg.inv(fs)
+    r = kissm.register(source, target, voxel_size=pair.kind.voxel, num_threads=2, viewpoint_mode=mode)
+    rre, rte = _errors(r, truth, source.mean(axis=0))
+    right = rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m
+    report = f"{name} ({mode}): valid {r.valid}, {rre:.3f} deg, {rte:.4f} m, {r.num_final_inliers} inliers"
+    assert right or not r.valid, report
+    if pair.is_lidar:
+        assert r.valid and right, report
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_scan_to_map_in_world_frame(real_data: Path, mode: str) -> None:
+    """Each KITTI 07 keyframe, in its sensor frame, against the other four merged in the world frame."""
+    root = real_data / "kitti07_keyframes_gtsam_points"
+    if not root.is_dir():
+        pytest.skip(f"no KITTI 07 keyframes under {real_data}")
+    chain = [np.eye(4)]
+    for k in range(1, 5):
+        chain.append(chain[-1] @ np.loadtxt(root / "pairs" / f"{k - 1:06d}__{k:06d}" / "gt_T_target_source.txt"))
+    clouds = [_points(root / f"{k:06d}" / "points.bin", "bin_xyz") for k in range(5)]
+    for k in range(5):
+        world_map = np.concatenate([_apply(chain[j], clouds[j]) for j in range(5) if j != k])
+        r = kissm.register(clouds[k], world_map, voxel_size=0.5, num_threads=2, viewpoint_mode=mode)
+        rre, rte = _errors(r, chain[k], clouds[k].mean(axis=0))
+        assert r.valid and rre < 5.0 and rte < 2.0, f"keyframe {k} ({mode}): {rre:.3f} deg, {rte:.4f} m, {r!r}"
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_exact_georeferenced_shift_is_bitwise(real_pairs: dict[str, RealPair], mode: str) -> None:
+    """LiDAR scans (float32 coordinates) moved by whole metres up to 1e7 are exact in float64: the library sees
+    the same recentred clouds, so rotation, counts and errors are bitwise those of the unshifted pair."""
+    lidar = [p for p in real_pairs.values() if p.is_lidar]
+    if not lidar:
+        pytest.skip("no LiDAR pairs in the data")
+    shift = np.array([1e7, -3e6, 250.0])
+    for pair in lidar[:3]:
+        source, target = _points(pair.source, pair.source_format), _points(pair.target, pair.target_format)
+        assert np.array_equal(source.astype(np.float32).astype(np.float64), source)  # exact after the shift
+        a = kissm.register(source, target, voxel_size=pair.kind.voxel, num_threads=2, viewpoint_mode=mode)
+        b = kissm.register(
+            source + shift, target + shift, voxel_size=pair.kind.voxel, num_threads=2, viewpoint_mode=mode
+        )
+        assert np.array_equal(a.rotation, b.rotation), pair.name
+        assert (a.valid, a.num_final_inliers, a.num_source_keypoints) == (
+            b.valid,
+            b.num_final_inliers,
+            b.num_source_keypoints,
+        ), pair.name
+        # t' = t + s - R s
+        np.testing.assert_allclose(b.translation, a.translation + shift - a.rotation @ shift, rtol=0, atol=1e-6)
