@@ -34,17 +34,7 @@ import kissm
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "bindings" / "python" / "tests"))
 import realdata  # noqa: E402  (the pairs and success thresholds of the real-data tests)
-
-
-def rotation_error_deg(a: np.ndarray, b: np.ndarray) -> float:
-    return math.degrees(math.acos(max(-1.0, min(1.0, (np.trace(a.T @ b) - 1.0) / 2.0))))
-
-
-def axis_angle(axis: np.ndarray, deg: float) -> np.ndarray:
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    a = math.radians(deg)
-    return np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * k @ k
+from validity_study import axis_angle, rotation_error_deg  # noqa: E402  (bench/ is the script's folder)
 
 
 def rigid(rot: np.ndarray, trans: np.ndarray) -> np.ndarray:

@@ -16,6 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/testdata.py, t
 import kissm  # noqa: E402
 
 import testdata  # noqa: E402
+from realdata import RealPair, load_pairs  # noqa: E402
 
 TESTS_DIR = Path(__file__).resolve().parent
 PACKAGE_ROOT = TESTS_DIR.parent  # bindings/python
@@ -53,6 +54,12 @@ def real_data() -> Path:
     if not (root / "index.tsv").is_file():
         pytest.skip(f"real data not found ({root}/index.tsv); set KISSM_DATA_DIR or provide ../shared/data")
     return root
+
+
+@pytest.fixture(scope="session")
+def real_pairs(real_data: Path) -> dict[str, RealPair]:
+    """The pairs of the real data's index.tsv, by name."""
+    return {p.name: p for p in load_pairs(real_data)}
 
 
 @pytest.fixture(scope="session")

@@ -5,6 +5,7 @@ real-data test (SPEC section 7)."""
 from __future__ import annotations
 
 import csv
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,3 +81,11 @@ def pair_names(root: Path, lidar_only: bool = False) -> list[str]:
         return [p.name for p in load_pairs(root) if p.is_lidar or not lidar_only]
     except OSError:
         return []
+
+
+@functools.cache
+def read_cached(path: Path, fmt: str) -> np.ndarray:
+    """A cloud read once per process (``kissm.read_points``), for the tests that share it."""
+    import kissm
+
+    return kissm.read_points(path, format=fmt)

@@ -4,7 +4,6 @@ their sensors, scan-to-map in a world frame, and exact georeferenced shifts (doc
 
 from __future__ import annotations
 
-import functools
 import math
 from pathlib import Path
 
@@ -14,21 +13,11 @@ import pytest
 import kissm
 
 from conftest import data_dir
-from realdata import RealPair, load_pairs, pair_names
+from realdata import RealPair, pair_names, read_cached
 from testdata import rotation_error_deg
 
 MODES = ["sign_free", "local"]
 NAMES = pair_names(data_dir()) or ["(no real data)"]
-
-
-@pytest.fixture(scope="module")
-def real_pairs(real_data: Path) -> dict[str, RealPair]:
-    return {p.name: p for p in load_pairs(real_data)}
-
-
-@functools.cache
-def _points(path: Path, fmt: str) -> np.ndarray:
-    return kissm.read_points(path, format=fmt)
 
 
 def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -64,8 +53,8 @@ def test_moved_frames(real_pairs: dict[str, RealPair], name: str, mode: str) -> 
     rng = np.random.default_rng(sum(map(ord, name)))
     scale = 1.0 if pair.is_lidar else 2.0 * pair.kind.voxel
     fs, ft = _frame(rng, rng.uniform(40, 80) * scale), _frame(rng, rng.uniform(40, 80) * scale)
-    source = _apply(fs, _points(pair.source, pair.source_format))
-    target = _apply(ft, _points(pair.target, pair.target_format))
+    source = _apply(fs, read_cached(pair.source, pair.source_format))
+    target = _apply(ft, read_cached(pair.target, pair.target_format))
     truth = ft @ pair.gt @ np.linalg.inv(fs)
     r = kissm.register(source, target, voxel_size=pair.kind.voxel, num_threads=2, viewpoint_mode=mode)
     rre, rte = _errors(r, truth, source.mean(axis=0))
@@ -85,7 +74,7 @@ def test_scan_to_map_in_world_frame(real_data: Path, mode: str) -> None:
     chain = [np.eye(4)]
     for k in range(1, 5):
         chain.append(chain[-1] @ np.loadtxt(root / "pairs" / f"{k - 1:06d}__{k:06d}" / "gt_T_target_source.txt"))
-    clouds = [_points(root / f"{k:06d}" / "points.bin", "bin_xyz") for k in range(5)]
+    clouds = [read_cached(root / f"{k:06d}" / "points.bin", "bin_xyz") for k in range(5)]
     for k in range(5):
         world_map = np.concatenate([_apply(chain[j], clouds[j]) for j in range(5) if j != k])
         r = kissm.register(clouds[k], world_map, voxel_size=0.5, num_threads=2, viewpoint_mode=mode)
@@ -102,7 +91,7 @@ def test_exact_georeferenced_shift_is_bitwise(real_pairs: dict[str, RealPair], m
         pytest.skip("no LiDAR pairs in the data")
     shift = np.array([1e7, -3e6, 250.0])
     for pair in lidar[:3]:
-        source, target = _points(pair.source, pair.source_format), _points(pair.target, pair.target_format)
+        source, target = read_cached(pair.source, pair.source_format), read_cached(pair.target, pair.target_format)
         assert np.array_equal(source.astype(np.float32).astype(np.float64), source)  # exact after the shift
         a = kissm.register(source, target, voxel_size=pair.kind.voxel, num_threads=2, viewpoint_mode=mode)
         b = kissm.register(

@@ -4,7 +4,6 @@ and bitwise against the kissm CLI. Skipped when the data is absent."""
 
 from __future__ import annotations
 
-import functools
 import math
 import subprocess
 from pathlib import Path
@@ -17,21 +16,11 @@ import kissm
 from cli_json import assert_matches_cli, run_cli
 from conftest import data_dir
 from helpers import assert_same_result
-from realdata import RealPair, load_pairs, pair_names
+from realdata import RealPair, pair_names, read_cached
 from testdata import rotation_error_deg
 
 NAMES = pair_names(data_dir()) or ["(no real data)"]
 LIDAR_NAMES = pair_names(data_dir(), lidar_only=True) or ["(no real LiDAR data)"]
-
-
-@pytest.fixture(scope="module")
-def real_pairs(real_data: Path) -> dict[str, RealPair]:
-    return {p.name: p for p in load_pairs(real_data)}
-
-
-@functools.cache
-def _points(path: Path, fmt: str) -> np.ndarray:
-    return kissm.read_points(path, format=fmt)
 
 
 _RESULTS: dict[str, kissm.Result] = {}
@@ -40,7 +29,7 @@ _RESULTS: dict[str, kissm.Result] = {}
 def _register(name: str, pair: RealPair) -> kissm.Result:
     """The Python registration of a pair (computed once, shared by the tests below)."""
     if name not in _RESULTS:
-        source, target = _points(pair.source, pair.source_format), _points(pair.target, pair.target_format)
+        source, target = read_cached(pair.source, pair.source_format), read_cached(pair.target, pair.target_format)
         _RESULTS[name] = kissm.register(source, target, voxel_size=pair.kind.voxel, num_threads=2)
     return _RESULTS[name]
 
@@ -49,7 +38,7 @@ def _register(name: str, pair: RealPair) -> kissm.Result:
 def test_real_pair_against_ground_truth(real_pairs: dict[str, RealPair], name: str) -> None:
     pair = real_pairs[name]
     result = _register(name, pair)
-    assert result.num_source_points == len(_points(pair.source, pair.source_format))
+    assert result.num_source_points == len(read_cached(pair.source, pair.source_format))
     rre = rotation_error_deg(result.rotation, pair.gt[:3, :3]) if result.valid else math.nan
     rte = float(np.linalg.norm(result.translation - pair.gt[:3, 3])) if result.valid else math.nan
     success = result.valid and rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m
@@ -73,7 +62,7 @@ def test_real_lidar_pair_refined_with_gicp(real_pairs: dict[str, RealPair], name
     truth than the global solver's, or leaves it within REFINE_SLACK of that."""
     pair = real_pairs[name]
     assert pair.is_lidar
-    source, target = _points(pair.source, pair.source_format), _points(pair.target, pair.target_format)
+    source, target = read_cached(pair.source, pair.source_format), read_cached(pair.target, pair.target_format)
     result = kissm.register(source, target, voxel_size=pair.kind.voxel, refine="gicp", num_threads=2)
     assert result.valid and result.refined, f"{name}: {result!r}"
     assert np.array_equal(result.coarse_transform, _register(name, pair).transform)  # the solver's pose, unchanged
