@@ -108,6 +108,19 @@ void scn_cloud_translate(scn_cloud *c, double dx, double dy, double dz) {
     }
 }
 
+void scn_shifted_copies(const scn_cloud *source, const scn_cloud *target, const double shift[3], scn_cloud *s0,
+                        scn_cloud *t0, scn_cloud *s1, scn_cloud *t1) {
+    scn_cloud_init(s0), scn_cloud_init(t0), scn_cloud_init(s1), scn_cloud_init(t1);
+    scn_cloud_copy(s0, source);
+    scn_cloud_copy(t0, target);
+    scn_cloud_quantize(s0, 1.0 / 1048576.0);
+    scn_cloud_quantize(t0, 1.0 / 1048576.0);
+    scn_cloud_copy(s1, s0);
+    scn_cloud_copy(t1, t0);
+    scn_cloud_translate(s1, shift[0], shift[1], shift[2]);
+    scn_cloud_translate(t1, shift[0], shift[1], shift[2]);
+}
+
 void scn_cloud_shuffle(scn_cloud *c, uint64_t seed) {
     uint64_t rng;
     size_t i;

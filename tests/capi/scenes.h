@@ -39,6 +39,10 @@ void scn_cloud_crop(scn_cloud *c, const double n[3], double d);
 /* Rounds every coordinate to a multiple of step (a power of two keeps shifted copies exact). */
 void scn_cloud_quantize(scn_cloud *c, double step);
 void scn_cloud_translate(scn_cloud *c, double dx, double dy, double dz);
+/* Georeferenced copies of a pair: s0, t0 = source, target snapped to a 2^-20 grid; s1, t1 = the same moved by
+ * shift, exactly (the library then sees identical recentred clouds). All four are initialised here. */
+void scn_shifted_copies(const scn_cloud *source, const scn_cloud *target, const double shift[3], scn_cloud *s0,
+                        scn_cloud *t0, scn_cloud *s1, scn_cloud *t1);
 /* Fisher-Yates shuffle with the given seed. */
 void scn_cloud_shuffle(scn_cloud *c, uint64_t seed);
 /* Float32 copy (count * 3 floats, malloc'ed; caller frees). */

@@ -332,15 +332,7 @@ static void test_georeferenced_shift(void) {
     kissm_matcher *m = make_matcher(KISSM_REFINE_GICP, VOXEL, 2);
     int i;
     REQUIRE(m != NULL);
-    scn_cloud_init(&s0), scn_cloud_init(&t0), scn_cloud_init(&s1), scn_cloud_init(&t1);
-    scn_cloud_copy(&s0, &g_pair.source);
-    scn_cloud_copy(&t0, &g_pair.target);
-    scn_cloud_quantize(&s0, 1.0 / 1048576.0);
-    scn_cloud_quantize(&t0, 1.0 / 1048576.0);
-    scn_cloud_copy(&s1, &s0);
-    scn_cloud_copy(&t1, &t0);
-    scn_cloud_translate(&s1, shift[0], shift[1], shift[2]);
-    scn_cloud_translate(&t1, shift[0], shift[1], shift[2]);
+    scn_shifted_copies(&g_pair.source, &g_pair.target, shift, &s0, &t0, &s1, &t1);
     perturbed(&g_pair.truth, axis, 2.0, pert, initial);
     scn_pose_from_matrix(initial, &start);
     /* p_t + s = R (p_s + s - s) + t + s: the prior in the shifted frames has t' = t + s - R s */

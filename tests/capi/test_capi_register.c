@@ -210,18 +210,7 @@ static void test_georeferenced_shift(void) {
     kissm_result base, shifted, fixed_vp;
     double expected_t[3];
     int i;
-    scn_cloud_init(&s0);
-    scn_cloud_init(&t0);
-    scn_cloud_init(&s1);
-    scn_cloud_init(&t1);
-    scn_cloud_copy(&s0, &g_pair.source);
-    scn_cloud_copy(&t0, &g_pair.target);
-    scn_cloud_quantize(&s0, 1.0 / 1048576.0);
-    scn_cloud_quantize(&t0, 1.0 / 1048576.0);
-    scn_cloud_copy(&s1, &s0);
-    scn_cloud_copy(&t1, &t0);
-    scn_cloud_translate(&s1, shift[0], shift[1], shift[2]);
-    scn_cloud_translate(&t1, shift[0], shift[1], shift[2]);
+    scn_shifted_copies(&g_pair.source, &g_pair.target, shift, &s0, &t0, &s1, &t1);
 
     c.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
     REQUIRE(kissm_create(&c, &m) == KISSM_OK);
@@ -401,18 +390,7 @@ static void test_frame_free_modes(void) {
                   "%s: %d inliers, %d in the sensor frames", label, (int)moved.num_final_inliers,
                   (int)sensor.num_final_inliers);
 
-        scn_cloud_init(&s0);
-        scn_cloud_init(&t0);
-        scn_cloud_init(&s1);
-        scn_cloud_init(&t1);
-        scn_cloud_copy(&s0, &s);
-        scn_cloud_copy(&t0, &t);
-        scn_cloud_quantize(&s0, 1.0 / 1048576.0);
-        scn_cloud_quantize(&t0, 1.0 / 1048576.0);
-        scn_cloud_copy(&s1, &s0);
-        scn_cloud_copy(&t1, &t0);
-        scn_cloud_translate(&s1, shift[0], shift[1], shift[2]);
-        scn_cloud_translate(&t1, shift[0], shift[1], shift[2]);
+        scn_shifted_copies(&s, &t, shift, &s0, &t0, &s1, &t1);
         {
             kissm_points a = scn_points(&s0), b = scn_points(&t0);
             register_pair(m, &a, &b, &base);
