@@ -405,9 +405,7 @@ class _Runner:
         # 2. the coarse estimate
         matcher = km.KISSMatcher(km.KISSMatcherConfig(v))
         solution = matcher.estimate(src_xyz, tgt_xyz)
-        coarse = np.eye(4)
-        coarse[:3, :3] = np.array(solution.rotation, dtype=np.float64).reshape(3, 3)
-        coarse[:3, 3] = np.array(solution.translation, dtype=np.float64).reshape(3)
+        coarse = reference_transform(solution)
         t2 = time.perf_counter()
         ref_engine = (matcher.get_processing_time() + matcher.get_extraction_time() + matcher.get_matching_time()
                       + matcher.get_solver_time()) * 1e3
@@ -439,6 +437,16 @@ class _Runner:
                      "gates_valid": bool(solution.valid) and inliers > chain["min_inliers"]
                      and overlap >= chain["min_overlap"], "src_points": src.size(), "tgt_points": tgt.size()},
         }
+
+
+def reference_transform(solution):
+    """The reference's RegistrationSolution as a 4x4 transform (float64)."""
+    import numpy as np
+
+    t = np.eye(4)
+    t[:3, :3] = np.array(solution.rotation, dtype=np.float64).reshape(3, 3)
+    t[:3, 3] = np.array(solution.translation, dtype=np.float64).reshape(3)
+    return t
 
 
 def _finite(value: float) -> float | None:

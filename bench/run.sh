@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # The benchmark in one command: sets up its own venv (kissm's Python binding built from this checkout, the
-# reference KISS-Matcher, Open3D, small_gicp, numpy, matplotlib) and runs bench/bench.py.
+# reference KISS-Matcher, Open3D, small_gicp, numpy, matplotlib) and runs bench/bench.py (with --maps:
+# bench/map_bench.py, the scan-to-map benchmark).
 #
 #   bash bench/run.sh                  # full run: threads 1 and 2, every pair raw + 2 rotations, scaling to 3M voxels;
 #                                      # writes docs/benchmarks.md, docs/img/*.png, bench/results/latest.json
@@ -9,6 +10,7 @@
 #   bash bench/run.sh --quick          # minutes: 1 rotation, 1 repeat, scaling to 100K voxels
 #   bash bench/run.sh --refine-only --out /tmp/refine   # 15 minutes: the refinement comparison alone (issue 14)
 #   bash bench/run.sh --setup-only     # only make the venv
+#   bash bench/run.sh --maps [...]     # the scan-to-map benchmark instead (bench/map_bench.py and its options)
 #   bash bench/run.sh --threads 2 --repeats 5 ...   # any bench.py option (python bench/bench.py --help)
 #
 # Environment: KISSM_BENCH_VENV (default bench/.venv), PYTHON (default python3), KISSM_DATA_DIR (default
@@ -21,9 +23,10 @@ venv=${KISSM_BENCH_VENV:-$here/bench/.venv}
 python=${PYTHON:-python3}
 
 setup_only=0
+maps=0
 args=()
 for a in "$@"; do
-  if [[ $a == --setup-only ]]; then setup_only=1; else args+=("$a"); fi
+  if [[ $a == --setup-only ]]; then setup_only=1; elif [[ $a == --maps ]]; then maps=1; else args+=("$a"); fi
 done
 
 # ---- Debian packages ---------------------------------------------------------------------------------
@@ -84,5 +87,9 @@ EOF
 ((setup_only)) && exit 0
 
 # ---- the run -----------------------------------------------------------------------------------------
+if ((maps)); then
+  export KISSM_BENCH_COMMAND="bash bench/run.sh --maps${args[*]:+ ${args[*]}}"
+  exec "$py" bench/map_bench.py "${args[@]}"
+fi
 export KISSM_BENCH_COMMAND="bash bench/run.sh${args[*]:+ ${args[*]}}"
 exec "$py" bench/bench.py "${args[@]}"

@@ -699,10 +699,20 @@ KISSM_API uint64_t kissm_features_num_voxels(const kissm_features *features);
  */
 KISSM_API uint64_t kissm_features_num_keypoints(const kissm_features *features);
 /**
+ * @brief Memory the features hold: voxels, normals, descriptors and their search index (and the voxels'
+ *        index when the matcher refines), in bytes.
+ * @param[in] features The features.
+ * @return The number of bytes; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_features_memory_bytes(const kissm_features *features);
+/**
  * @brief Registration of two described clouds: same pose, counts and validity as kissm_register() on the
  *        clouds the features were computed from.
  *
- * Voxelisation and feature times are reported as 0. The result is always fully overwritten.
+ * Voxelisation and feature times are reported as 0. The result is always fully overwritten. Features carry
+ * the search index of their descriptors, so a large cloud described once (a map) is not indexed again: the
+ * call costs about in proportion to the side with fewer keypoints, times the log of the other side's
+ * (docs/frames.md, "Scan-to-map cost").
  * @param[in,out] matcher The matcher (its settings; one call at a time).
  * @param[in] source Features of the cloud to move.
  * @param[in] target Features of the cloud it is registered against.

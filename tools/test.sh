@@ -45,6 +45,8 @@ run_suite bindings/python/package_test.sh
 # benchmark is `bash bench/run.sh`, never a timed test.
 echo "== bench/bench.py --smoke =="
 "$build/venv-python/bin/python" "$here/bench/bench.py" --smoke --out "$build/bench-smoke"
+echo "== bench/map_bench.py --smoke =="
+"$build/venv-python/bin/python" "$here/bench/map_bench.py" --smoke --out "$build/map-bench-smoke"
 
 echo "== tools/docs.sh =="
 bash "$here/tools/docs.sh"

@@ -29,6 +29,9 @@ void kissm_features_destroy(kissm_features *features) { delete features; }
 uint64_t kissm_features_num_points(const kissm_features *f) { return f ? f->data.num_points : 0; }
 uint64_t kissm_features_num_voxels(const kissm_features *f) { return f ? f->data.voxels.points.size() : 0; }
 uint64_t kissm_features_num_keypoints(const kissm_features *f) { return f ? f->data.descriptors.keypoint.size() : 0; }
+uint64_t kissm_features_memory_bytes(const kissm_features *f) {
+    return f ? sizeof(*f) + core::features_bytes(f->data) : 0;
+}
 
 int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source, const kissm_features *target,
                                 kissm_result *result) {

@@ -45,6 +45,11 @@ public:
         const float *block = &blocks_[slot / kLane * kDim * kLane + slot % kLane];
         for (int d = 0; d < kDim; ++d) out[d] = block[d * kLane];
     }
+    // Memory held, in bytes.
+    std::size_t bytes() const {
+        return sizeof(*this) + nodes_.capacity() * sizeof(Node) + blocks_.capacity() * sizeof(float) +
+               index_.capacity() * sizeof(std::uint32_t);
+    }
 
 private:
     static constexpr int kLane = 4; // points per block: one SSE2 register per dimension

@@ -118,12 +118,40 @@ void describe_voxels(const Params &params, const std::string &name, double progr
     }
 }
 
+// The descriptors' search indexes, built together (the trees side by side when there are threads); each
+// cloud's feature time gains its share of the build by keypoints.
+void index_descriptors(const std::vector<CloudFeatures *> &clouds, RunContext &ctx) {
+    Stopwatch clock;
+    std::vector<const Descriptors *> descriptors;
+    double keypoints = 0.0;
+    for (const CloudFeatures *f : clouds) {
+        descriptors.push_back(&f->descriptors);
+        keypoints += static_cast<double>(f->descriptors.keypoint.size());
+    }
+    std::vector<DescriptorIndex> built = DescriptorIndex::build(descriptors, ctx);
+    const double ms = clock.lap();
+    for (std::size_t c = 0; c < clouds.size(); ++c) {
+        clouds[c]->descriptor_index = std::move(built[c]);
+        if (keypoints > 0.0)
+            clouds[c]->time_features_ms += ms * static_cast<double>(clouds[c]->descriptors.keypoint.size()) / keypoints;
+    }
+}
+
 } // namespace
+
+std::size_t features_bytes(const CloudFeatures &f) {
+    return sizeof(f) + f.voxels.points.capacity() * sizeof(Vec3f) +
+           (f.normals.normal.capacity() + f.plane_normals.normal.capacity()) * sizeof(Vec3f) +
+           f.normals.valid.capacity() + f.plane_normals.valid.capacity() +
+           f.descriptors.keypoint.capacity() * sizeof(std::uint32_t) + f.descriptors.values.capacity() * sizeof(float) +
+           f.descriptor_index.bytes() + f.index.bytes();
+}
 
 CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
     CloudFeatures f;
     voxelize_cloud(view, params, name, 0.0, f, ctx);
     describe_voxels(params, name, 0.0, 1.0, true, f, ctx);
+    index_descriptors({&f}, ctx);
     return f;
 }
 
@@ -137,6 +165,7 @@ std::pair<CloudFeatures, CloudFeatures> describe_both(const PointsView &source, 
     voxelize_cloud(target, params, "target", 0.5, p.second, ctx);
     describe_voxels(params, "source", 0.0, 0.5, with_descriptors, p.first, ctx);
     describe_voxels(params, "target", 0.5, 1.0, with_descriptors, p.second, ctx);
+    if (with_descriptors) index_descriptors({&p.first, &p.second}, ctx);
     return p;
 }
 
@@ -238,7 +267,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     Stopwatch clock;
     ctx.checkpoint(Stage::Matching, 0.0);
     MatchParams mp{params.ratio_test, params.max_correspondences};
-    const std::vector<Correspondence> matches = match_descriptors(source.descriptors, target.descriptors, mp, ctx);
+    const std::vector<Correspondence> matches =
+        match_descriptors(IndexedDescriptors{&source.descriptors, &source.descriptor_index},
+                          IndexedDescriptors{&target.descriptors, &target.descriptor_index}, mp, ctx);
     r.num_initial_correspondences = matches.size();
     r.time_matching_ms = clock.lap();
     if (matches.size() < 3) {

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "cloud.hpp"
+#include "descriptor_index.hpp"
 #include "detail_namespace.hpp"
 #include "params.hpp"
 #include "point_index.hpp"
@@ -17,8 +18,9 @@
 
 KISSM_DETAIL_BEGIN
 
-// A cloud described once: voxels (local frame), their normals, keypoint descriptors and, when it was
-// described for refinement, the index of its voxels (so a map is indexed once). Immutable after construction.
+// A cloud described once: voxels (local frame), their normals, keypoint descriptors with their search index
+// and, when it was described for refinement, the index of its voxels (so a map is indexed once). Immutable
+// after construction.
 struct CloudFeatures {
     Params params; // the config it was computed under (descriptor-relevant fields are compared on use)
     std::uint64_t num_points = 0;
@@ -27,7 +29,8 @@ struct CloudFeatures {
     Normals normals;       // per voxel (the descriptors'); all invalid when the cloud had too few voxels
     Normals plane_normals; // per voxel, within refine_normal_radius: the planes refinement aligns
     Descriptors descriptors;
-    PointIndex index; // empty unless params.refine_mode != None
+    DescriptorIndex descriptor_index; // empty when there are no descriptors
+    PointIndex index;                 // empty unless params.refine_mode != None
     double time_voxelize_ms = 0.0;
     double time_features_ms = 0.0;
 };
@@ -65,6 +68,9 @@ struct Registration {
     double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0,
            time_refine_ms = 0;
 };
+
+// Memory held by the features, in bytes.
+std::size_t features_bytes(const CloudFeatures &f);
 
 // Throws Failure for unacceptable input (empty, too few points, non-finite under Reject, voxel range).
 CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx);

@@ -96,6 +96,7 @@ struct kissm_header_test_api {
     uint64_t (*features_num_points)(const kissm_features *);
     uint64_t (*features_num_voxels)(const kissm_features *);
     uint64_t (*features_num_keypoints)(const kissm_features *);
+    uint64_t (*features_memory_bytes)(const kissm_features *);
     int32_t (*register_features)(kissm_matcher *, const kissm_features *, const kissm_features *, kissm_result *);
     int32_t (*read_points)(const char *, int32_t, kissm_cloud **);
     void (*cloud_destroy)(kissm_cloud *);
@@ -124,6 +125,7 @@ const struct kissm_header_test_api kissm_header_test_api = {
     .features_num_points = kissm_features_num_points,
     .features_num_voxels = kissm_features_num_voxels,
     .features_num_keypoints = kissm_features_num_keypoints,
+    .features_memory_bytes = kissm_features_memory_bytes,
     .register_features = kissm_register_features,
     .read_points = kissm_read_points,
     .cloud_destroy = kissm_cloud_destroy,

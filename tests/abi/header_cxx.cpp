@@ -37,6 +37,7 @@ void kissm_features_destroy(kissm_features *features);
 uint64_t kissm_features_num_points(const kissm_features *features);
 uint64_t kissm_features_num_voxels(const kissm_features *features);
 uint64_t kissm_features_num_keypoints(const kissm_features *features);
+uint64_t kissm_features_memory_bytes(const kissm_features *features);
 int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source, const kissm_features *target,
                                 kissm_result *result);
 int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);

@@ -66,6 +66,10 @@ static void test_equal_to_register(void) {
     CHECK_EQ_INT(kissm_features_num_keypoints(fs), direct.num_source_keypoints);
     CHECK_EQ_INT(kissm_features_num_keypoints(ft), direct.num_target_keypoints);
     CHECK(kissm_features_num_keypoints(fs) > 100);
+    /* memory: at least the descriptors twice (rows and the index's copy by slot) and the voxels */
+    CHECK(kissm_features_memory_bytes(fs) > kissm_features_num_keypoints(fs) * 2 * 33 * sizeof(float) +
+                                                kissm_features_num_voxels(fs) * 3 * sizeof(float));
+    CHECK(kissm_features_memory_bytes(fs) < kissm_features_num_voxels(fs) * 1024);
 
     /* swapped features equal the swapped registration */
     scn_result_poison(&direct);

@@ -252,6 +252,7 @@ static void test_create_destroy(void) {
     CHECK_EQ_INT(kissm_features_num_points(NULL), 0);
     CHECK_EQ_INT(kissm_features_num_voxels(NULL), 0);
     CHECK_EQ_INT(kissm_features_num_keypoints(NULL), 0);
+    CHECK_EQ_INT(kissm_features_memory_bytes(NULL), 0);
     CHECK_EQ_INT(kissm_cloud_count(NULL), 0);
     CHECK(kissm_cloud_data(NULL) == NULL);
 }

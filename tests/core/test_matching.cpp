@@ -17,6 +17,13 @@ static Descriptors random_descriptors(TestRng &rng, std::size_t n) {
     return d;
 }
 
+// Both clouds indexed under `ctx`, then matched under it.
+static std::vector<Correspondence> match(const Descriptors &src, const Descriptors &tgt, const MatchParams &mp,
+                                         RunContext &ctx) {
+    const std::vector<DescriptorIndex> idx = DescriptorIndex::build({&src, &tgt}, ctx);
+    return match_descriptors(IndexedDescriptors{&src, &idx[0]}, IndexedDescriptors{&tgt, &idx[1]}, mp, ctx);
+}
+
 static void test_mutual_matches_found_and_threads_agree() {
     TestRng rng(14);
     const Descriptors src = random_descriptors(rng, 2000);
@@ -36,8 +43,8 @@ static void test_mutual_matches_found_and_threads_agree() {
     }
     RunContext one(1, nullptr, Hooks()), four(4, nullptr, Hooks());
     const MatchParams mp{0.9, 5000};
-    const auto m1 = match_descriptors(src, tgt, mp, one);
-    const auto m4 = match_descriptors(src, tgt, mp, four);
+    const auto m1 = match(src, tgt, mp, one);
+    const auto m4 = match(src, tgt, mp, four);
     REQUIRE(m1.size() == m4.size());
     CHECK(std::memcmp(m1.data(), m4.data(), m1.size() * sizeof(Correspondence)) == 0);
     std::size_t right = 0;
@@ -49,7 +56,7 @@ static void test_mutual_matches_found_and_threads_agree() {
     for (std::size_t i = 1; i < m1.size(); ++i) CHECK(m1[i - 1].source < m1[i].source);
 
     // The cap keeps the most distinctive matches.
-    const auto capped = match_descriptors(src, tgt, MatchParams{0.9, 100}, four);
+    const auto capped = match(src, tgt, MatchParams{0.9, 100}, four);
     CHECK_EQ_INT(capped.size(), 100);
     float worst_kept = 0.0f;
     for (const auto &c : capped) worst_kept = std::max(worst_kept, c.score);
@@ -71,15 +78,52 @@ static void test_identical_candidates_are_ambiguous() {
     tgt.values.assign(3 * kDescriptorDim, 1.0f);
     for (int c = 0; c < kDescriptorDim; ++c) tgt.values[2 * kDescriptorDim + c] = 50.0f;
     RunContext ctx(1, nullptr, Hooks());
-    CHECK(match_descriptors(src, tgt, MatchParams{0.9, 10}, ctx).empty());
+    CHECK(match(src, tgt, MatchParams{0.9, 10}, ctx).empty());
     // Without the ratio test the lower index wins the tie, deterministically.
-    const auto m = match_descriptors(src, tgt, MatchParams{1.0, 10}, ctx);
+    const auto m = match(src, tgt, MatchParams{1.0, 10}, ctx);
     REQUIRE(m.size() == 1);
     CHECK_EQ_INT(m[0].target, 0);
+}
+
+static void test_index_is_a_function_of_its_cloud() {
+    // One large side indexed once (one thread) and matched by several small ones (four threads) gives what
+    // indexing both fresh for every call gives, and the empty side matches nothing.
+    TestRng rng(31);
+    const Descriptors map = random_descriptors(rng, 20000);
+    RunContext one(1, nullptr, Hooks()), four(4, nullptr, Hooks());
+    const std::vector<DescriptorIndex> map_index = DescriptorIndex::build({&map}, one);
+    REQUIRE(!map_index[0].empty());
+    CHECK(map_index[0].bytes() > map.values.size() * sizeof(float));
+    for (int scan = 0; scan < 3; ++scan) {
+        Descriptors s;
+        for (std::size_t i = 0; i < 500; ++i) {
+            const std::size_t m = (static_cast<std::size_t>(scan) * 4001 + i * 37) % map.keypoint.size();
+            s.keypoint.push_back(static_cast<std::uint32_t>(i));
+            for (int c = 0; c < kDescriptorDim; ++c)
+                s.values.push_back(map.values[m * kDescriptorDim + c] + static_cast<float>(rng.uniform(-0.1, 0.1)));
+        }
+        const std::vector<DescriptorIndex> s_index = DescriptorIndex::build({&s}, four);
+        const auto reused = match_descriptors(IndexedDescriptors{&s, &s_index[0]},
+                                              IndexedDescriptors{&map, &map_index[0]}, MatchParams{0.9, 5000}, four);
+        const auto fresh = match(s, map, MatchParams{0.9, 5000}, one);
+        REQUIRE(reused.size() == fresh.size());
+        CHECK(std::memcmp(reused.data(), fresh.data(), fresh.size() * sizeof(Correspondence)) == 0);
+        std::size_t right = 0;
+        for (const auto &c : reused)
+            right += c.target == (static_cast<std::size_t>(scan) * 4001 + c.source * 37) % map.keypoint.size();
+        CHECK_MSG(right >= 490 && right == reused.size(), "%zu right of %zu", right, reused.size());
+    }
+    const Descriptors none;
+    const std::vector<DescriptorIndex> empty = DescriptorIndex::build({&none}, one);
+    CHECK(empty[0].empty());
+    CHECK(match_descriptors(IndexedDescriptors{&none, &empty[0]}, IndexedDescriptors{&map, &map_index[0]},
+                            MatchParams{0.9, 5000}, one)
+              .empty());
 }
 
 int main() {
     RUN_TEST(test_mutual_matches_found_and_threads_agree);
     RUN_TEST(test_identical_candidates_are_ambiguous);
+    RUN_TEST(test_index_is_a_function_of_its_cloud);
     return TEST_SUMMARY();
 }

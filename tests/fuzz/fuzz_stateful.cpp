@@ -53,6 +53,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             features[a] = nullptr;
             const int32_t st = kissm_features_compute(m, &pa, &features[a]);
             require(kissm_fuzz::expected_status(st) && (st == KISSM_OK) == (features[a] != nullptr));
+            // at least the voxels and every keypoint's descriptor twice (rows and the search index's copy)
+            if (features[a])
+                require(kissm_features_memory_bytes(features[a]) >=
+                        kissm_features_num_voxels(features[a]) * 12 + kissm_features_num_keypoints(features[a]) * 264);
             break;
         }
         case 2: { // register from features: same as the direct call when both exist

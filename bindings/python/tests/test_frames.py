@@ -65,21 +65,60 @@ def test_moved_frames(real_pairs: dict[str, RealPair], name: str, mode: str) -> 
         assert r.valid and right, report
 
 
-@pytest.mark.parametrize("mode", MODES)
-def test_scan_to_map_in_world_frame(real_data: Path, mode: str) -> None:
-    """Each KITTI 07 keyframe, in its sensor frame, against the other four merged in the world frame."""
+def _keyframes(real_data: Path) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The KITTI 07 keyframes (sensor frames) and their world poses, chained from keyframe 0."""
     root = real_data / "kitti07_keyframes_gtsam_points"
     if not root.is_dir():
         pytest.skip(f"no KITTI 07 keyframes under {real_data}")
     chain = [np.eye(4)]
     for k in range(1, 5):
         chain.append(chain[-1] @ np.loadtxt(root / "pairs" / f"{k - 1:06d}__{k:06d}" / "gt_T_target_source.txt"))
-    clouds = [read_cached(root / f"{k:06d}" / "points.bin", "bin_xyz") for k in range(5)]
+    return chain, [read_cached(root / f"{k:06d}" / "points.bin", "bin_xyz") for k in range(5)]
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_scan_to_map_in_world_frame(real_data: Path, mode: str) -> None:
+    """Each KITTI 07 keyframe, in its sensor frame, against the other four merged in the world frame."""
+    chain, clouds = _keyframes(real_data)
     for k in range(5):
         world_map = np.concatenate([_apply(chain[j], clouds[j]) for j in range(5) if j != k])
         r = kissm.register(clouds[k], world_map, voxel_size=0.5, num_threads=2, viewpoint_mode=mode)
         rre, rte = _errors(r, chain[k], clouds[k].mean(axis=0))
         assert r.valid and rre < 5.0 and rte < 2.0, f"keyframe {k} ({mode}): {rre:.3f} deg, {rte:.4f} m, {r!r}"
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_map_described_once_serves_every_scan(real_data: Path, mode: str) -> None:
+    """A map (keyframes 0, 2, 4 in the world frame) described once; keyframes 1 and 3 registered against it from
+    their features: right, and bitwise what a full registration against the map gives."""
+    chain, clouds = _keyframes(real_data)
+    world_map = np.concatenate([_apply(chain[j], clouds[j]) for j in (0, 2, 4)])
+    with kissm.Matcher(voxel_size=0.5, num_threads=2, viewpoint_mode=mode) as matcher:
+        map_features = matcher.compute_features(world_map)
+        assert map_features.memory_bytes > 264 * map_features.num_keypoints
+        for k in (1, 3):
+            reused = matcher.register_features(matcher.compute_features(clouds[k]), map_features)
+            full = matcher.register(clouds[k], world_map)
+            assert np.array_equal(reused.transform, full.transform), k
+            assert reused.num_final_inliers == full.num_final_inliers and reused.valid == full.valid, k
+            rre, rte = _errors(reused, chain[k], clouds[k].mean(axis=0))
+            assert reused.valid and rre < 2.0 and rte < 0.5, f"keyframe {k} ({mode}): {rre:.3f} deg, {rte:.4f} m"
+
+
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("seed", [1, 2])
+def test_map_to_map_in_far_apart_world_frames(real_data: Path, mode: str, seed: int) -> None:
+    """Two merged maps, keyframes 0-2 and keyframes 3-4 (they overlap where keyframes 2 and 3 do), each in a world
+    frame of its own: turned about a random axis and 300-800 m from the other's origin."""
+    chain, clouds = _keyframes(real_data)
+    rng = np.random.default_rng(seed)
+    frame_a, frame_b = _frame(rng, rng.uniform(300, 800)), _frame(rng, rng.uniform(300, 800))
+    map_a = np.concatenate([_apply(frame_a @ chain[j], clouds[j]) for j in (0, 1, 2)])
+    map_b = np.concatenate([_apply(frame_b @ chain[j], clouds[j]) for j in (3, 4)])
+    truth = frame_a @ np.linalg.inv(frame_b)  # map b's frame into map a's
+    r = kissm.register(map_b, map_a, voxel_size=0.5, num_threads=2, viewpoint_mode=mode)
+    rre, rte = _errors(r, truth, map_b.mean(axis=0))
+    assert r.valid and rre < 2.0 and rte < 0.5, f"seed {seed} ({mode}): {rre:.3f} deg, {rte:.4f} m, {r!r}"
 
 
 @pytest.mark.parametrize("mode", MODES)

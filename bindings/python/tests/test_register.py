@@ -123,6 +123,8 @@ def test_features_path_equals_register(pair, result) -> None:
         assert source.num_points == len(pair.source) and source.num_voxels == result.num_source_voxels
         assert source.num_keypoints == result.num_source_keypoints
         assert target.num_keypoints == result.num_target_keypoints
+        # the descriptors twice (rows and the search index's copy) are the bulk of it
+        assert 2 * 33 * 4 * source.num_keypoints < source.memory_bytes < 1024 * source.num_voxels
         via_features = matcher.register_features(source, target)
     assert_same_result(via_features, result)
     assert via_features.time_voxelize_ms == via_features.time_features_ms == 0.0

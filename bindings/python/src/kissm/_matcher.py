@@ -53,7 +53,7 @@ class Features:
     serialisation): pickle the points and recompute.
     """
 
-    __slots__ = ("_ptr", "num_points", "num_voxels", "num_keypoints", "__weakref__")
+    __slots__ = ("_ptr", "num_points", "num_voxels", "num_keypoints", "memory_bytes", "__weakref__")
     _ptr: Any
     num_points: int
     """Points given."""
@@ -61,6 +61,8 @@ class Features:
     """Occupied voxels."""
     num_keypoints: int
     """Voxels with a descriptor."""
+    memory_bytes: int
+    """Memory the features hold (voxels, normals, descriptors and their search index), in bytes."""
 
     def __init__(self) -> None:
         raise TypeError("kissm.Features objects are made by Matcher.compute_features(cloud)")
@@ -72,6 +74,7 @@ class Features:
         self.num_points = int(lib.kissm_features_num_points(ptr))
         self.num_voxels = int(lib.kissm_features_num_voxels(ptr))
         self.num_keypoints = int(lib.kissm_features_num_keypoints(ptr))
+        self.memory_bytes = int(lib.kissm_features_memory_bytes(ptr))
         return self
 
     def __repr__(self) -> str:

@@ -812,10 +812,20 @@ extern "C" {
     pub fn kissm_features_num_keypoints(features: *const kissm_features) -> u64;
 }
 extern "C" {
+    /** @brief Memory the features hold: voxels, normals, descriptors and their search index (and the voxels'
+        index when the matcher refines), in bytes.
+ @param[in] features The features.
+ @return The number of bytes; 0 for NULL.*/
+    pub fn kissm_features_memory_bytes(features: *const kissm_features) -> u64;
+}
+extern "C" {
     /** @brief Registration of two described clouds: same pose, counts and validity as kissm_register() on the
         clouds the features were computed from.
 
- Voxelisation and feature times are reported as 0. The result is always fully overwritten.
+ Voxelisation and feature times are reported as 0. The result is always fully overwritten. Features carry
+ the search index of their descriptors, so a large cloud described once (a map) is not indexed again: the
+ call costs about in proportion to the side with fewer keypoints, times the log of the other side's
+ (docs/frames.md, "Scan-to-map cost").
  @param[in,out] matcher The matcher (its settings; one call at a time).
  @param[in] source Features of the cloud to move.
  @param[in] target Features of the cloud it is registered against.

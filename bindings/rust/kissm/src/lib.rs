@@ -39,7 +39,7 @@
 //!
 //! let source = kissm::read_points("source.ply")?;
 //! let target = kissm::read_points_with_format("target.bin", Format::BinXyz)?; // or &[[f32; 3]], &[[f64; 3]]
-//! let mut matcher = Matcher::new(&Config::builder().voxel_size(0.5).num_threads(2).build()?)?;
+//! let mut matcher = Matcher::new(&Config::builder().voxel_size(0.3).num_threads(2).build()?)?;
 //! let reg = matcher.register(&source, &target)?;        // Err(kissm::Error { code, message }) on bad input
 //! if reg.valid {
 //!     println!("{:?}", reg.transform);                  // [[f64; 4]; 4], maps source into target

@@ -306,6 +306,11 @@ impl Features {
         // SAFETY: live features.
         unsafe { sys::kissm_features_num_keypoints(self.raw.as_ptr()) }
     }
+    /// Memory the features hold (voxels, normals, descriptors and their search index), in bytes.
+    pub fn memory_bytes(&self) -> u64 {
+        // SAFETY: live features.
+        unsafe { sys::kissm_features_memory_bytes(self.raw.as_ptr()) }
+    }
 }
 
 impl Drop for Features {
@@ -321,6 +326,7 @@ impl fmt::Debug for Features {
             .field("num_points", &self.num_points())
             .field("num_voxels", &self.num_voxels())
             .field("num_keypoints", &self.num_keypoints())
+            .field("memory_bytes", &self.memory_bytes())
             .finish()
     }
 }

@@ -147,6 +147,9 @@ fn feature_reuse_matches_direct_registration() {
     assert_eq!(fs.num_points(), pair.source.len() as u64);
     assert_eq!(fs.num_voxels(), direct.counts.source_voxels);
     assert_eq!(ft.num_keypoints(), direct.counts.target_keypoints);
+    // the descriptors twice (rows and the search index's copy) are the bulk of it
+    assert!(ft.memory_bytes() > 2 * 33 * 4 * ft.num_keypoints());
+    assert!(ft.memory_bytes() < 1024 * ft.num_voxels());
     for _ in 0..2 {
         let reused = m.register_features(&fs, &ft).unwrap();
         assert!(reused.same_result(&direct), "{reused:?} vs {direct:?}");
