@@ -75,16 +75,15 @@ static void *work(void *arg) {
     return NULL;
 }
 
-static void test_parallel_matchers_equal_serial(void) {
-    worker workers[NUM_WORKERS];
+/* Starts NUM_WORKERS workers running fn (pair i % NUM_PAIRS, 1 + i % 3 threads), joins them and checks that
+ * each made `calls` calls, all OK and all equal to the serial run. */
+static void run_workers(worker *workers, void *(*fn)(void *), int calls, const char *label) {
     int i, started = 0;
-    for (i = 0; i < NUM_PAIRS; ++i) REQUIRE(register_pair(i, 1, &g_serial[i]));
-    for (i = 0; i < NUM_PAIRS; ++i) CHECK(g_serial[i].valid == 1); /* the comparison means something */
-    memset(workers, 0, sizeof(workers));
+    memset(workers, 0, NUM_WORKERS * sizeof(*workers));
     for (i = 0; i < NUM_WORKERS; ++i) {
         workers[i].pair = i % NUM_PAIRS;
-        workers[i].num_threads = 1 + i % 3; /* per-call pools of 1, 2 and 3 threads run side by side */
-        if (pthread_create(&workers[i].thread, NULL, work, &workers[i]) == 0)
+        workers[i].num_threads = 1 + i % 3;
+        if (pthread_create(&workers[i].thread, NULL, fn, &workers[i]) == 0)
             started++;
         else
             break;
@@ -92,12 +91,19 @@ static void test_parallel_matchers_equal_serial(void) {
     CHECK_EQ_INT(started, NUM_WORKERS);
     for (i = 0; i < started; ++i) pthread_join(workers[i].thread, NULL);
     for (i = 0; i < started; ++i) {
-        CHECK_MSG(workers[i].calls_ok == 2 * ROUNDS, "worker %d: %d of %d calls OK", i, workers[i].calls_ok,
-                  2 * ROUNDS);
-        CHECK_MSG(workers[i].equal == 2 * ROUNDS,
-                  "worker %d (pair %d, %d threads): %d of %d results equal the serial run", i, workers[i].pair,
-                  (int)workers[i].num_threads, workers[i].equal, 2 * ROUNDS);
+        CHECK_MSG(workers[i].calls_ok == calls, "%s %d: %d of %d calls OK", label, i, workers[i].calls_ok, calls);
+        CHECK_MSG(workers[i].equal == calls, "%s %d (pair %d, %d threads): %d of %d results equal the serial run",
+                  label, i, workers[i].pair, (int)workers[i].num_threads, workers[i].equal, calls);
     }
+}
+
+static void test_parallel_matchers_equal_serial(void) {
+    worker workers[NUM_WORKERS];
+    int i;
+    for (i = 0; i < NUM_PAIRS; ++i) REQUIRE(register_pair(i, 1, &g_serial[i]));
+    for (i = 0; i < NUM_PAIRS; ++i) CHECK(g_serial[i].valid == 1); /* the comparison means something */
+    /* per-call pools of 1, 2 and 3 threads run side by side */
+    run_workers(workers, work, 2 * ROUNDS, "worker");
 }
 
 static void test_fork_after_register(void) {
@@ -165,7 +171,7 @@ static void *refine_work(void *arg) {
 
 static void test_parallel_refine(void) {
     worker workers[NUM_WORKERS];
-    int i, mode, started = 0;
+    int i, mode;
     for (i = 0; i < NUM_PAIRS; ++i) {
         const double axis[3] = {0.0, 1.0, 1.0}, shift[3] = {0.2, 0.1, -0.1};
         scn_pose p, start;
@@ -198,24 +204,7 @@ static void test_parallel_refine(void) {
         }
         kissm_destroy(m);
     }
-    memset(workers, 0, sizeof(workers));
-    for (i = 0; i < NUM_WORKERS; ++i) {
-        workers[i].pair = i % NUM_PAIRS;
-        workers[i].num_threads = 1 + i % 3; /* odd: point-to-plane, even: GICP */
-        if (pthread_create(&workers[i].thread, NULL, refine_work, &workers[i]) == 0)
-            started++;
-        else
-            break;
-    }
-    CHECK_EQ_INT(started, NUM_WORKERS);
-    for (i = 0; i < started; ++i) pthread_join(workers[i].thread, NULL);
-    for (i = 0; i < started; ++i) {
-        CHECK_MSG(workers[i].calls_ok == 3 * ROUNDS, "refine worker %d: %d of %d calls OK", i, workers[i].calls_ok,
-                  3 * ROUNDS);
-        CHECK_MSG(workers[i].equal == 3 * ROUNDS,
-                  "refine worker %d (pair %d, %d threads): %d of %d equal the serial run", i, workers[i].pair,
-                  (int)workers[i].num_threads, workers[i].equal, 3 * ROUNDS);
-    }
+    run_workers(workers, refine_work, 3 * ROUNDS, "refine worker"); /* odd threads: point-to-plane, even: GICP */
     for (i = 0; i < NUM_PAIRS; ++i) {
         kissm_features_destroy(g_refine_source[i]);
         kissm_features_destroy(g_refine_target[i]);
