@@ -19,7 +19,9 @@
 
 #include "harness.h"
 #include "kissm.h"
-#include "splitmix64.h"
+#include "realdata.hpp"
+
+using namespace realdata;
 
 namespace {
 
@@ -38,67 +40,6 @@ const std::map<std::string, Kind> kKinds = {
 
 const int kRotations = 2; // rotated variants per pair, besides the raw pair
 
-struct Mat3 {
-    double m[9];
-};
-
-Mat3 axis_angle(double ax, double ay, double az, double angle) {
-    const double n = std::sqrt(ax * ax + ay * ay + az * az);
-    ax /= n, ay /= n, az /= n;
-    const double c = std::cos(angle), s = std::sin(angle), C = 1 - c;
-    return Mat3{{c + ax * ax * C, ax * ay * C - az * s, ax * az * C + ay * s, ay * ax * C + az * s, c + ay * ay * C,
-                 ay * az * C - ax * s, az * ax * C - ay * s, az * ay * C + ax * s, c + az * az * C}};
-}
-
-Mat3 mul(const Mat3 &a, const Mat3 &b) {
-    Mat3 r{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            for (int k = 0; k < 3; ++k) r.m[3 * i + j] += a.m[3 * i + k] * b.m[3 * k + j];
-    return r;
-}
-
-Mat3 transpose(const Mat3 &a) {
-    Mat3 r{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) r.m[3 * i + j] = a.m[3 * j + i];
-    return r;
-}
-
-double rotation_error_deg(const Mat3 &a, const Mat3 &b) {
-    const Mat3 d = mul(transpose(a), b);
-    const double c = (d.m[0] + d.m[4] + d.m[8] - 1.0) / 2.0;
-    return std::acos(std::max(-1.0, std::min(1.0, c))) * 180.0 / 3.14159265358979323846;
-}
-
-struct Rng { // splitmix64 seeded with the seed itself: the same numbers on every platform
-    std::uint64_t s;
-    double uniform() { return splitmix64_uniform(&s); }
-};
-
-std::map<std::string, std::string> read_pair_txt(const std::string &path) {
-    std::map<std::string, std::string> kv;
-    std::ifstream f(path);
-    std::string line;
-    while (std::getline(f, line)) {
-        const auto colon = line.find(':');
-        if (colon == std::string::npos) continue;
-        std::string value = line.substr(colon + 1);
-        while (!value.empty() && (value[0] == ' ' || value[0] == '\t')) value.erase(0, 1);
-        while (!value.empty() && (value.back() == '\r' || value.back() == ' ')) value.pop_back();
-        kv[line.substr(0, colon)] = value;
-    }
-    return kv;
-}
-
-int32_t format_id(const std::string &name) {
-    if (name == "ply") return KISSM_FORMAT_PLY;
-    if (name == "kitti_bin_xyzi_f32") return KISSM_FORMAT_KITTI_BIN;
-    if (name == "bin_xyz_f32") return KISSM_FORMAT_BIN_XYZ;
-    if (name == "npy_xyz") return KISSM_FORMAT_NPY;
-    return KISSM_FORMAT_AUTO;
-}
-
 double median(std::vector<double> v) {
     if (v.empty()) return NAN;
     std::sort(v.begin(), v.end());
@@ -109,30 +50,12 @@ const int32_t kModes[] = {KISSM_REFINE_NONE, KISSM_REFINE_GICP, KISSM_REFINE_POI
 const char *const kModeNames[] = {"coarse", "gicp", "p2plane"};
 constexpr int kNumModes = 3;
 
-std::vector<double> read_cloud(const std::string &path, int32_t format) {
-    kissm_cloud *cloud = nullptr;
-    std::vector<double> xyz;
-    if (kissm_read_points(path.c_str(), format, &cloud) != KISSM_OK) {
-        std::fprintf(stderr, "cannot read %s: %s\n", path.c_str(), kissm_last_error_message());
-        return xyz;
-    }
-    xyz.assign(kissm_cloud_data(cloud), kissm_cloud_data(cloud) + 3 * kissm_cloud_count(cloud));
-    kissm_cloud_destroy(cloud);
-    return xyz;
-}
-
 } // namespace
 
 int main() {
-    const char *dir = std::getenv("KISSM_DATA_DIR");
-    const std::string root = dir ? dir : "";
+    const std::string root = data_root();
+    if (root.empty()) return 77;
     std::ifstream index(root + "/index.tsv");
-    if (root.empty() || !index) {
-        std::printf("SKIPPED: real data not found (KISSM_DATA_DIR=%s has no index.tsv); "
-                    "these tests need ../shared/data\n",
-                    root.c_str());
-        return 77;
-    }
     std::string line;
     std::getline(index, line);
     std::vector<std::string> header;
