@@ -86,7 +86,7 @@ void DescriptorProjection::apply(const float *descriptor, float *out) const {
 }
 
 std::size_t DescriptorIndex::bytes() const {
-    return sizeof(*this) + (tree_ ? tree_->bytes() : 0) + by_slot_.capacity() * sizeof(float);
+    return (tree_ ? tree_->bytes() : 0) + by_slot_.capacity() * sizeof(float);
 }
 
 std::vector<DescriptorIndex> DescriptorIndex::build(const std::vector<const Descriptors *> &clouds, RunContext &ctx) {

@@ -39,7 +39,7 @@ public:
     // The descriptor in tree slot `slot` (33 floats); laid out by slot so that a search's candidates, which
     // sit in a few neighbouring leaves, are read from neighbouring memory.
     const float *slot_descriptor(std::size_t slot) const { return &by_slot_[slot * kDescriptorDim]; }
-    std::size_t bytes() const;
+    std::size_t bytes() const; // heap memory held (the tree, itself on the heap, whole)
 
     // Indexes of several clouds' descriptors (empty descriptors give an empty index). The principal axes and
     // projections use every thread; the trees, one thread each, are built side by side.

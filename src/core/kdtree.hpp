@@ -45,7 +45,7 @@ public:
         const float *block = &blocks_[slot / kLane * kDim * kLane + slot % kLane];
         for (int d = 0; d < kDim; ++d) out[d] = block[d * kLane];
     }
-    // Memory held, in bytes.
+    // Memory held, in bytes: the object and its arrays.
     std::size_t bytes() const {
         return sizeof(*this) + nodes_.capacity() * sizeof(Node) + blocks_.capacity() * sizeof(float) +
                index_.capacity() * sizeof(std::uint32_t);

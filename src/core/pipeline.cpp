@@ -140,7 +140,7 @@ void index_descriptors(const std::vector<CloudFeatures *> &clouds, RunContext &c
 } // namespace
 
 std::size_t features_bytes(const CloudFeatures &f) {
-    return sizeof(f) + f.voxels.points.capacity() * sizeof(Vec3f) +
+    return f.voxels.points.capacity() * sizeof(Vec3f) +
            (f.normals.normal.capacity() + f.plane_normals.normal.capacity()) * sizeof(Vec3f) +
            f.normals.valid.capacity() + f.plane_normals.valid.capacity() +
            f.descriptors.keypoint.capacity() * sizeof(std::uint32_t) + f.descriptors.values.capacity() * sizeof(float) +

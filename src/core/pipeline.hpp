@@ -69,7 +69,7 @@ struct Registration {
            time_refine_ms = 0;
 };
 
-// Memory held by the features, in bytes.
+// Heap memory held by the features, in bytes (the struct itself not included).
 std::size_t features_bytes(const CloudFeatures &f);
 
 // Throws Failure for unacceptable input (empty, too few points, non-finite under Reject, voxel range).
