@@ -245,6 +245,47 @@ std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs) {
     return pairs;
 }
 
+std::size_t rotation_inliers(const std::vector<IndexPair> &pairs, const std::vector<double> &w, std::size_t n,
+                             std::vector<std::uint8_t> &mask) {
+    std::vector<std::uint32_t> good(n, 0), total(n, 0);
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        ++total[pairs[k].first], ++total[pairs[k].second];
+        if (w[k] > 0.0) ++good[pairs[k].first], ++good[pairs[k].second];
+    }
+    mask.assign(n, 0);
+    std::size_t count = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        mask[k] = total[k] > 0 && 2 * good[k] >= total[k];
+        count += mask[k];
+    }
+    return count;
+}
+
+Eigen::Vector3d tls_translation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
+                                const Eigen::Matrix3d &R, const std::vector<std::uint8_t> &mask, std::size_t count,
+                                double beta) {
+    std::vector<Eigen::Vector3d> t_k;
+    for (std::size_t k = 0; k < a.size(); ++k)
+        if (mask[k] || count < 3) t_k.push_back(b[k] - R * a[k]);
+    Eigen::Vector3d t;
+    for (int axis = 0; axis < 3; ++axis) {
+        std::vector<double> vals(t_k.size());
+        for (std::size_t k = 0; k < t_k.size(); ++k) vals[k] = t_k[k][axis];
+        t[axis] = scalar_tls(std::move(vals), beta);
+    }
+    for (int it = 0; it < 10; ++it) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        std::size_t c = 0;
+        for (const auto &v : t_k)
+            if ((v - t).norm() <= beta) sum += v, ++c;
+        if (c == 0) break;
+        const Eigen::Vector3d next = sum / static_cast<double>(c);
+        if (next == t) break;
+        t = next;
+    }
+    return t;
+}
+
 SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
                         std::vector<IndexPair> pairs, const SolverParams &params, RunContext &ctx) {
     SolverOutput out;
@@ -265,37 +306,8 @@ SolverOutput solve_pose(const std::vector<Eigen::Vector3d> &a, const std::vector
     std::vector<double> w;
     if (!gnc_tls_rotation(ta, tb, 2.0 * beta, params, R, w, out.iterations, ctx)) return out;
 
-    // A correspondence is a rotation inlier when at least half of its measurements are.
-    std::vector<std::uint32_t> good(n, 0), total(n, 0);
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-        ++total[pairs[k].first], ++total[pairs[k].second];
-        if (w[k] > 0.0) ++good[pairs[k].first], ++good[pairs[k].second];
-    }
-    for (std::size_t k = 0; k < n; ++k) {
-        out.rotation_inlier[k] = total[k] > 0 && 2 * good[k] >= total[k];
-        out.num_rotation_inliers += out.rotation_inlier[k];
-    }
-
-    // Translation: per-axis TLS over the rotation inliers, then an L2 consensus mean.
-    std::vector<Eigen::Vector3d> t_k;
-    for (std::size_t k = 0; k < n; ++k)
-        if (out.rotation_inlier[k] || out.num_rotation_inliers < 3) t_k.push_back(b[k] - R * a[k]);
-    Eigen::Vector3d t;
-    for (int axis = 0; axis < 3; ++axis) {
-        std::vector<double> vals(t_k.size());
-        for (std::size_t k = 0; k < t_k.size(); ++k) vals[k] = t_k[k][axis];
-        t[axis] = scalar_tls(std::move(vals), beta);
-    }
-    for (int it = 0; it < 10; ++it) {
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        std::size_t count = 0;
-        for (const auto &v : t_k)
-            if ((v - t).norm() <= beta) sum += v, ++count;
-        if (count == 0) break;
-        const Eigen::Vector3d next = sum / static_cast<double>(count);
-        if (next == t) break;
-        t = next;
-    }
+    out.num_rotation_inliers = rotation_inliers(pairs, w, n, out.rotation_inlier);
+    Eigen::Vector3d t = tls_translation(a, b, R, out.rotation_inlier, out.num_rotation_inliers, beta);
 
     out.num_inliers = polish_pose(a, b, beta, R, t, out.inlier);
     out.rotation = R;

@@ -64,6 +64,17 @@ using IndexPair = std::pair<std::uint32_t, std::uint32_t>;
 // Pairs (k, (k + s) mod n) for a fixed set of strides; all pairs when that is no more than `max_pairs`.
 std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs);
 
+// A correspondence is a rotation inlier when at least half of its measurements (w > 0) are; measurements
+// pair correspondences, so one bad partner does not condemn a good correspondence. Returns the count.
+std::size_t rotation_inliers(const std::vector<IndexPair> &pairs, const std::vector<double> &w, std::size_t n,
+                             std::vector<std::uint8_t> &mask);
+
+// Translation for a known rotation: per-axis TLS of b - R a over the masked correspondences (all of them when
+// `count` < 3), then an L2 consensus mean over those within `beta`.
+Eigen::Vector3d tls_translation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
+                                const Eigen::Matrix3d &R, const std::vector<std::uint8_t> &mask, std::size_t count,
+                                double beta);
+
 // a, b: the correspondences (source, target). `pairs` are the translation-invariant measurements
 // (a_l - a_k, b_l - b_k) the rotation solver uses: compatible pairs from the pruning graph are mostly
 // inlier-inlier, so GNC sees far fewer outliers than the correspondences have. Empty = strided_pairs().
