@@ -7,6 +7,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/voxelize.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/neighbors.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/normals.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/ground.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pair_features.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/fpfh.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/kdtree.cpp
