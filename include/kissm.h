@@ -167,6 +167,10 @@ KISSM_API const char *kissm_last_error_message(void);
 /** Refinement was still moving the pose at kissm_config.refine_max_iterations (kissm_result.refine_converged
  * = 0): it was crossing from one basin to another, as refinements from a wrong start do. */
 #define KISSM_REASON_NOT_CONVERGED 11
+/** kissm_config.rotation_dof = 1 and the best rotation on the yaw solution's inliers turns kissm_config.up by
+ * more than kissm_config.max_rotation_uncertainty (kissm_result.tilt): the clouds' relative roll or pitch is
+ * not zero, so the yaw-only pose would be off by at least that much. */
+#define KISSM_REASON_TILTED 12
 
 /**
  * @brief Describes a reason code.
@@ -204,6 +208,26 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 /** No viewpoint: each normal turned away from the centroid of its neighbours within the FPFH radius, a rule
  * of the local shape alone, so features depend on no cloud's coordinate frame (docs/frames.md). */
 #define KISSM_VIEWPOINT_LOCAL 3
+/** @} */
+
+/** @name Geometric suppression before keypoints (kissm_config.suppression) */
+/** @{ */
+#define KISSM_SUPPRESS_NONE 0 /**< Every voxel may become a keypoint. */
+/** Ground voxels get no keypoint: a region-wise ground model around the sensor (kissm_config.viewpoint),
+ * perpendicular to kissm_config.up (docs/ground.md). They stay in the clouds refinement aligns. */
+#define KISSM_SUPPRESS_GROUND 1
+/** @} */
+
+/** @name Settings for common sensors (kissm_config_preset()) */
+/** @{ */
+/** Outdoor LiDAR on a car or ground robot, scans in the sensor frame: 0.3 m voxels, ground suppression. */
+#define KISSM_PRESET_LIDAR_VEHICLE 1
+/** Handheld, backpack or drone LiDAR (no ground assumption, any orientation): 0.3 m voxels, frame-free normals. */
+#define KISSM_PRESET_LIDAR_HANDHELD 2
+/** Indoor RGB-D fragments (rooms, metres across): 0.05 m voxels. */
+#define KISSM_PRESET_INDOOR_RGBD 3
+/** Objects on a turntable or scanned by hand (decimetres across): 0.006 m voxels. */
+#define KISSM_PRESET_OBJECT 4
 /** @} */
 
 /** @name Fine registration after the solver (kissm_config.refine_mode) */
@@ -342,6 +366,19 @@ typedef struct kissm_config {
      * normal_radius_gain: a larger value acts as normal_radius_gain); in (0, 50]. Computed with the features,
      * so features of another value do not match (#KISSM_ERR_FEATURES_MISMATCH). Default 2.0. */
     double refine_normal_radius_gain;
+    /** #KISSM_SUPPRESS_NONE or #KISSM_SUPPRESS_GROUND. Computed with the features, so features of another value
+     * do not match (#KISSM_ERR_FEATURES_MISMATCH). Default #KISSM_SUPPRESS_NONE. */
+    int32_t suppression;
+    /** Rotational degrees of freedom the solver estimates: 3, or 1 (yaw about kissm_config.up only, roll and
+     * pitch taken as zero; a pair that is clearly tilted ends valid = 0 with #KISSM_REASON_TILTED). Default 3. */
+    int32_t rotation_dof;
+    /** The up direction in each cloud's own frame (the same vector for both clouds; any finite vector of length
+     * above 1e-9, normalised), for suppression and rotation_dof = 1. Computed with the features when
+     * suppression is on. Default (0, 0, 1). */
+    double up[3];
+    /** Height of the sensor (kissm_config.viewpoint) above the ground along up, metres, for suppression; 0 =
+     * estimate it from the cloud; in [0, 1000]. Default 0. */
+    double sensor_height;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -369,6 +406,20 @@ KISSM_API int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
  * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
  */
 KISSM_API int32_t kissm_config_validate(const kissm_config *config);
+/**
+ * @brief Applies the settings of a common kind of data on top of *config: the voxel size and the options
+ *        that kind wants (docs/parameters.md, "Presets"); every other field keeps its value.
+ *
+ * Call it after kissm_config_init() and before your own changes. On error *config is unchanged.
+ * @param[in,out] config A config filled by kissm_config_init().
+ * @param[in] preset A KISSM_PRESET_* value.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p config is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE config->struct_size is too small or above 65536.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p preset is not a KISSM_PRESET_* value.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_config_preset(kissm_config *config, int32_t preset);
 
 /** @} */
 
@@ -524,6 +575,15 @@ typedef struct kissm_result {
     int32_t refine_iterations;
     /** 1 when refinement stopped on its convergence test rather than its iteration cap. */
     int32_t refine_converged;
+    /** Source voxels kissm_config.suppression kept from becoming keypoints (0 when it is off). */
+    uint64_t num_source_suppressed;
+    /** Target voxels kissm_config.suppression kept from becoming keypoints (0 when it is off). */
+    uint64_t num_target_suppressed;
+    /** Wall-clock ms: suppression, both clouds (part of time_features_ms; 0 when it is off). */
+    double time_suppression_ms;
+    /** With rotation_dof = 1: the angle (radians) by which the best unconstrained rotation on the yaw
+     * solution's inliers turns kissm_config.up, the evidence for #KISSM_REASON_TILTED. NaN otherwise. */
+    double tilt;
     /* New fields are only ever appended here. */
 } kissm_result;
 
@@ -644,6 +704,26 @@ KISSM_API void kissm_cancel(kissm_matcher *matcher);
  */
 KISSM_API int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
                                const double initial_transform[16], kissm_result *result);
+
+/**
+ * @brief Which points of a cloud the ground model of #KISSM_SUPPRESS_GROUND labels ground, under the matcher's
+ *        voxel_size, up, viewpoint (the sensor) and sensor_height, whatever its kissm_config.suppression.
+ *
+ * The model runs on the voxels, so every point of a voxel gets the voxel's label; points dropped as
+ * non-finite (#KISSM_NONFINITE_DROP) get 0. Deterministic: the same bytes for any num_threads. On error
+ * @p out_mask is unchanged.
+ * @param[in,out] matcher The matcher (its settings; one call at a time).
+ * @param[in] points The cloud, in its own frame; read during the call only.
+ * @param[out] out_mask points->count bytes: 1 for a ground point, else 0.
+ * @retval KISSM_OK Done (a cloud without ground gets all zeros).
+ * @retval KISSM_ERR_NULL_ARGUMENT @p matcher, @p points, points->data or @p out_mask is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT A kissm_points field is out of range.
+ * @retval KISSM_ERR_EMPTY_INPUT, KISSM_ERR_TOO_FEW_POINTS, KISSM_ERR_NONFINITE, KISSM_ERR_VOXEL_RANGE As
+ *         for kissm_register().
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_ground_mask(kissm_matcher *matcher, const kissm_points *points, uint8_t *out_mask);
 
 /** @} */
 

@@ -30,6 +30,7 @@ set(KISSM_CAPI_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/capi/result.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/matcher.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/features.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/ground.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/files.cpp
 )

@@ -40,7 +40,9 @@ namespace {
   X(min_inlier_coverage)                                                                                               \
   X(refine_min_inliers)                                                                                                \
   X(min_refine_condition)                                                                                              \
-  X(refine_normal_radius_gain)
+  X(refine_normal_radius_gain)                                                                                         \
+  X(rotation_dof)                                                                                                      \
+  X(sensor_height)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -114,6 +116,9 @@ ViewpointMode viewpoint_mode_of(int32_t code) {
 static_assert(log_code(LogLevel::Error) == 1 && log_code(LogLevel::Debug) == 4, "log levels are pinned");
 
 constexpr int32_t kMaxThreads = 1024;
+
+// hypot: no overflow for huge finite components (which normalise fine), no underflow for tiny ones.
+double up_length(const double up[3]) { return std::hypot(std::hypot(up[0], up[1]), up[2]); }
 constexpr int32_t kMaxCorrespondences = 100000;
 
 void require_range(double v, double lo, double hi, bool lo_open, const char *field) {
@@ -146,6 +151,8 @@ kissm_config default_config() {
     c.viewpoint_mode = viewpoint_code(p.viewpoint_mode);
     c.log_level = log_code(h.log_level);
     c.refine_mode = refine_code(p.refine_mode);
+    c.suppression = p.suppression == Suppression::Ground ? KISSM_SUPPRESS_GROUND : KISSM_SUPPRESS_NONE;
+    for (int i = 0; i < 3; ++i) c.up[i] = p.up[static_cast<std::size_t>(i)];
     return c;
 }
 
@@ -190,6 +197,17 @@ kissm_config validated_config(const kissm_config *given) {
     require_int(c.reserved1, 0, 0, "reserved1");
     require_range(c.min_refine_condition, 0.0, 1.0, false, "min_refine_condition");
     require_range(c.refine_normal_radius_gain, 0.0, 50.0, true, "refine_normal_radius_gain");
+    require_int(c.suppression, KISSM_SUPPRESS_NONE, KISSM_SUPPRESS_GROUND, "suppression");
+    if (c.rotation_dof != 1 && c.rotation_dof != 3)
+        fail(ErrorKind::InvalidArgument,
+             "config.rotation_dof is " + std::to_string(c.rotation_dof) + "; it must be 3 or 1 (yaw only)");
+    for (int i = 0; i < 3; ++i)
+        if (!std::isfinite(c.up[i]))
+            fail(ErrorKind::InvalidArgument, "config.up[" + std::to_string(i) + "] is not finite");
+    if (!(up_length(c.up) > 1e-9))
+        fail(ErrorKind::InvalidArgument, "config.up is (" + number(c.up[0]) + ", " + number(c.up[1]) + ", " +
+                                             number(c.up[2]) + "); it must have a length above 1e-9");
+    require_range(c.sensor_height, 0.0, 1000.0, false, "sensor_height");
     return c;
 }
 
@@ -202,7 +220,42 @@ Params to_params(const kissm_config &c) {
     p.nonfinite = c.nonfinite_policy == KISSM_NONFINITE_DROP ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
     p.viewpoint_mode = viewpoint_mode_of(c.viewpoint_mode);
     p.refine_mode = refine_mode_of(c.refine_mode);
+    p.suppression = c.suppression == KISSM_SUPPRESS_GROUND ? Suppression::Ground : Suppression::None;
+    const double up_norm = up_length(c.up);
+    p.up = {{c.up[0] / up_norm, c.up[1] / up_norm, c.up[2] / up_norm}};
     return p;
+}
+
+// The values docs/parameters.md ("Presets") gives the evidence for; anything else is the caller's.
+void apply_preset(int32_t preset, kissm_config &c) {
+    switch (preset) {
+    case KISSM_PRESET_LIDAR_VEHICLE:
+        c.voxel_size = 0.3;
+        c.suppression = KISSM_SUPPRESS_GROUND;
+        c.up[0] = 0.0, c.up[1] = 0.0, c.up[2] = 1.0;
+        c.viewpoint_mode = KISSM_VIEWPOINT_FIXED;
+        return;
+    case KISSM_PRESET_LIDAR_HANDHELD:
+        c.voxel_size = 0.3;
+        c.suppression = KISSM_SUPPRESS_NONE;
+        c.rotation_dof = 3;
+        c.viewpoint_mode = KISSM_VIEWPOINT_LOCAL; // no one sensor frame: maps, drones, handheld trajectories
+        return;
+    case KISSM_PRESET_INDOOR_RGBD:
+        c.voxel_size = 0.05;
+        c.suppression = KISSM_SUPPRESS_NONE;
+        c.rotation_dof = 3;
+        return;
+    case KISSM_PRESET_OBJECT:
+        c.voxel_size = 0.006;
+        c.suppression = KISSM_SUPPRESS_NONE;
+        c.rotation_dof = 3;
+        return;
+    default:
+        fail(ErrorKind::InvalidArgument,
+             "preset is " + std::to_string(preset) + "; it must be a KISSM_PRESET_* value (" +
+                 std::to_string(KISSM_PRESET_LIDAR_VEHICLE) + " to " + std::to_string(KISSM_PRESET_OBJECT) + ")");
+    }
 }
 
 Hooks hooks_of(const kissm_config &c) {
@@ -236,6 +289,19 @@ int32_t kissm_config_init(kissm_config *config, uint32_t struct_size) {
         check_struct_size("struct_size", struct_size, kConfigSizes);
         const kissm_config c = default_config();
         store_struct(config, struct_size, &c, sizeof c); // a newer caller's unknown tail: zero = default
+        return ok();
+    });
+}
+
+int32_t kissm_config_preset(kissm_config *config, int32_t preset) {
+    return guarded("kissm_config_preset", [&] {
+        require_non_null(config, "config");
+        check_struct_size("config->struct_size", config->struct_size, kConfigSizes);
+        const std::size_t known = std::min<std::size_t>(config->struct_size, sizeof(kissm_config));
+        kissm_config c = default_config();
+        std::memcpy(&c, config, known);
+        apply_preset(preset, c);
+        std::memcpy(config, &c, known); // a newer caller's fields this library does not know stay as they are
         return ok();
     });
 }

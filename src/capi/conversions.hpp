@@ -20,6 +20,8 @@ kissm_config default_config();
 kissm_config validated_config(const kissm_config *given);
 Params to_params(const kissm_config &config);
 Hooks hooks_of(const kissm_config &config);
+// Writes the fields KISSM_PRESET_* `preset` sets into c; fails (InvalidArgument) for an unknown preset.
+void apply_preset(int32_t preset, kissm_config &c);
 
 // The caller's points, checked (scalar type, count, stride); `name` is the argument's name for messages.
 PointsView points_view(const kissm_points *points, const char *name);

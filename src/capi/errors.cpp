@@ -133,6 +133,7 @@ const char *kissm_reason_string(int32_t reason) {
     case KISSM_REASON_UNCERTAIN_ROTATION: return "the inliers leave the rotation uncertain";
     case KISSM_REASON_CLUSTERED_INLIERS: return "the inliers cover too little of the overlap";
     case KISSM_REASON_NOT_CONVERGED: return "refinement did not converge";
+    case KISSM_REASON_TILTED: return "the clouds' relative roll or pitch is not zero (rotation_dof = 1)";
     default: return "unknown reason";
     }
 }

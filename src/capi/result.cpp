@@ -28,11 +28,12 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::UncertainRotation: return KISSM_REASON_UNCERTAIN_ROTATION;
     case Reason::ClusteredInliers: return KISSM_REASON_CLUSTERED_INLIERS;
     case Reason::NotConverged: return KISSM_REASON_NOT_CONVERGED;
+    case Reason::Tilted: return KISSM_REASON_TILTED;
     }
     return KISSM_REASON_NONE;
 }
 static_assert(reason_code(Reason::None) == 0 && reason_code(Reason::Degenerate) == 6 &&
-                  reason_code(Reason::NotConverged) == 11,
+                  reason_code(Reason::NotConverged) == 11 && reason_code(Reason::Tilted) == 12,
               "reason codes are pinned");
 
 // 4x4 row-major from R and t.
@@ -70,6 +71,7 @@ void reset_full(kissm_result *r) noexcept {
     r->refine_condition = nan;
     r->rotation_uncertainty = nan;
     r->inlier_coverage = nan;
+    r->tilt = nan;
 }
 
 } // namespace
@@ -129,6 +131,10 @@ void fill_result(const Registration &g, kissm_result *caller) {
     r->time_pruning_ms = g.time_pruning_ms;
     r->time_solver_ms = g.time_solver_ms;
     r->time_refine_ms = g.time_refine_ms;
+    r->num_source_suppressed = g.num_source_suppressed;
+    r->num_target_suppressed = g.num_target_suppressed;
+    r->time_suppression_ms = g.time_suppression_ms;
+    r->tilt = g.tilt;
     r->time_total_ms = g.time_voxelize_ms + g.time_features_ms + g.time_matching_ms + g.time_pruning_ms +
                        g.time_solver_ms + g.time_refine_ms;
     store_struct(caller, caller->struct_size, &full, sizeof full);

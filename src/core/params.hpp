@@ -20,6 +20,8 @@ enum class NonFinitePolicy { Reject, Drop };
 enum class ViewpointMode { Fixed, CloudCenter, SignFree, Local };
 // Stage 6 (refine.hpp): none, GICP (plane-to-plane) or point-to-plane.
 enum class RefineMode { None, Gicp, PointToPlane };
+// Before keypoints (ground.hpp): nothing, or the ground voxels around the sensor.
+enum class Suppression { None, Ground };
 
 struct Params {
     int num_threads = 0; // 0 = hardware concurrency
@@ -49,6 +51,10 @@ struct Params {
     double min_overlap = 0.2;                              // validity with refinement
     double min_inlier_coverage = 0.25;                     // validity with refinement
     double min_refine_condition = 0.01;                    // validity with refinement
+    Suppression suppression = Suppression::None;
+    int rotation_dof = 3;                      // 3, or 1: yaw about `up` only (yaw_solver.hpp)
+    std::array<double, 3> up{{0.0, 0.0, 1.0}}; // in each cloud's own frame; normalised at the boundary
+    double sensor_height = 0.0;                // metres above the ground; 0 = estimate
 
     double normal_radius() const { return normal_radius_gain * voxel_size; }
     double fpfh_radius() const { return fpfh_radius_gain * voxel_size; }

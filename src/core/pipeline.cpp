@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 
@@ -8,12 +9,14 @@
 #include "failure.hpp"
 #include "fpfh.hpp"
 #include "gnc_solver.hpp"
+#include "ground.hpp"
 #include "input.hpp"
 #include "kcore.hpp"
 #include "matching.hpp"
 #include "neighbors.hpp"
 #include "normals.hpp"
 #include "voxelize.hpp"
+#include "yaw_solver.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -46,26 +49,56 @@ bool same_descriptor_settings(const Params &a, const Params &b) {
            a.fpfh_radius_gain == b.fpfh_radius_gain && a.max_linearity == b.max_linearity &&
            a.min_normal_neighbors == b.min_normal_neighbors && a.nonfinite == b.nonfinite &&
            a.viewpoint_mode == b.viewpoint_mode && a.refine_normal_radius_gain == b.refine_normal_radius_gain &&
-           (a.viewpoint_mode != ViewpointMode::Fixed || a.viewpoint == b.viewpoint);
+           (a.viewpoint_mode != ViewpointMode::Fixed || a.viewpoint == b.viewpoint) && a.suppression == b.suppression &&
+           (a.suppression == Suppression::None ||
+            (a.up == b.up && a.viewpoint == b.viewpoint && a.sensor_height == b.sensor_height));
 }
 
 namespace {
+
+GroundParams ground_params(const Params &params, const Vec3d &cloud_origin) {
+    GroundParams g;
+    g.up = Vec3d(params.up[0], params.up[1], params.up[2]);
+    // The voxels are offsets from cloud_origin; the sensor is at `viewpoint` in the cloud's own frame.
+    g.sensor = Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - cloud_origin;
+    g.sensor_height = params.sensor_height;
+    g.voxel_size = params.voxel_size;
+    return g;
+}
+
+InputCloud gather_enough_points(const PointsView &view, const Params &params, const std::string &name,
+                                RunContext &ctx) {
+    InputCloud input = gather_points(view, params.nonfinite, name, ctx);
+    if (input.num_finite() == 0)
+        fail(ErrorKind::EmptyInput, name + " has no finite points (" + std::to_string(input.num_given) + " given)");
+    if (input.num_finite() < 4)
+        fail(ErrorKind::TooFewPoints,
+             name + " has " + std::to_string(input.num_finite()) + " finite points; at least 4 are needed");
+    return input;
+}
 
 void voxelize_cloud(const PointsView &view, const Params &params, const std::string &name, double progress,
                     CloudFeatures &f, RunContext &ctx) {
     f.params = params;
     Stopwatch clock;
     ctx.checkpoint(Stage::Voxelize, progress);
-    InputCloud input = gather_points(view, params.nonfinite, name, ctx);
+    InputCloud input = gather_enough_points(view, params, name, ctx);
     f.num_points = input.num_given;
     f.num_nonfinite = input.num_nonfinite;
-    if (input.num_finite() == 0)
-        fail(ErrorKind::EmptyInput, name + " has no finite points (" + std::to_string(input.num_given) + " given)");
-    if (input.num_finite() < 4)
-        fail(ErrorKind::TooFewPoints,
-             name + " has " + std::to_string(input.num_finite()) + " finite points; at least 4 are needed");
     f.voxels = voxelize(input, params.voxel_size, name, ctx);
     f.time_voxelize_ms = clock.lap();
+}
+
+// Paper Sec. III-B: ground voxels give floods of look-alike descriptors, so they lose their keypoints; they
+// keep their normals and stay in the cloud that refinement aligns.
+void suppress_ground(const Params &params, std::vector<std::uint32_t> &keypoints, CloudFeatures &f, RunContext &ctx) {
+    Stopwatch clock;
+    const std::vector<std::uint8_t> ground =
+        segment_ground(f.voxels.points, ground_params(params, f.voxels.origin), ctx);
+    f.num_suppressed = static_cast<std::uint64_t>(std::count(ground.begin(), ground.end(), std::uint8_t(1)));
+    keypoints.erase(std::remove_if(keypoints.begin(), keypoints.end(), [&](std::uint32_t k) { return ground[k] != 0; }),
+                    keypoints.end());
+    f.time_suppression_ms = clock.lap();
 }
 
 void describe_voxels(const Params &params, const std::string &name, double progress_from, double progress_to,
@@ -97,6 +130,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         progress(0.6);
         if (with_descriptors) {
             std::vector<std::uint32_t> keypoints = select_keypoints(nb, f.normals, params.min_normal_neighbors);
+            if (params.suppression == Suppression::Ground) suppress_ground(params, keypoints, f, ctx);
             const NormalSigns signs =
                 params.viewpoint_mode == ViewpointMode::SignFree ? NormalSigns::Ignored : NormalSigns::Oriented;
             f.descriptors = compute_fpfh(pts, nb, f.normals, signs, std::move(keypoints),
@@ -253,6 +287,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     r.num_source_voxels = source.voxels.points.size(), r.num_target_voxels = target.voxels.points.size();
     r.num_source_keypoints = source.descriptors.keypoint.size();
     r.num_target_keypoints = target.descriptors.keypoint.size();
+    r.num_source_suppressed = source.num_suppressed, r.num_target_suppressed = target.num_suppressed;
     r.noise_bound = params.solver_noise_bound();
     const std::uint64_t min_count = static_cast<std::uint64_t>(params.min_normal_neighbors) + 1;
     if (r.num_source_voxels < min_count || r.num_target_voxels < min_count) {
@@ -307,7 +342,16 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         pa[k] = a[core[k]].cast<double>();
         pb[k] = b[core[k]].cast<double>();
     }
-    SolverOutput sol = solve_pose(pa, pb, std::move(tim_pairs), sp, ctx);
+    // rotation_dof = 1: yaw about `up` only (yaw_solver.hpp); its tilt check keeps a tilted pair from a wrong pose.
+    const bool yaw_only = params.rotation_dof == 1;
+    const Eigen::Vector3d up(params.up[0], params.up[1], params.up[2]);
+    SolverOutput sol;
+    if (yaw_only) {
+        sol = solve_pose_yaw(pa, pb, tim_pairs, up, sp, ctx);
+        if (sol.solved) r.tilt = residual_tilt(pa, pb, tim_pairs, sol, up, sp, ctx);
+    } else {
+        sol = solve_pose(pa, pb, std::move(tim_pairs), sp, ctx);
+    }
     r.num_rotation_inliers = sol.num_rotation_inliers;
     if (!sol.solved) {
         r.reason = Reason::SolverFailed;
@@ -319,7 +363,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     std::vector<Eigen::Vector3d> all_a(a.size()), all_b(b.size());
     for (std::size_t k = 0; k < a.size(); ++k) all_a[k] = a[k].cast<double>(), all_b[k] = b[k].cast<double>();
     std::vector<std::uint8_t> inlier;
-    r.num_final_inliers = polish_pose(all_a, all_b, sp.noise_bound, sol.rotation, sol.translation, inlier);
+    r.num_final_inliers = yaw_only
+                              ? polish_pose_yaw(all_a, all_b, sp.noise_bound, up, sol.rotation, sol.translation, inlier)
+                              : polish_pose(all_a, all_b, sp.noise_bound, sol.rotation, sol.translation, inlier);
     r.inlier_ratio = static_cast<double>(r.num_final_inliers) / static_cast<double>(r.num_initial_correspondences);
     // Back to the callers' frames: p_t = R (p_s - o_s) + t_local + o_t.
     r.rotation = sol.rotation;
@@ -342,6 +388,11 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
                          r.num_final_inliers, inliers,
                          CoarseRule{static_cast<std::uint64_t>(params.min_inliers), params.max_rotation_uncertainty})
                    : Reason::SolverFailed;
+    // The tilt is a rotation error the yaw-only pose cannot remove, so it gets the bound of the rotation's
+    // uncertainty (docs/ground.md, "4-DoF"). NaN (nothing measurable) counts as tilted: a yaw pose is only
+    // trusted when the data confirm a small tilt.
+    const bool tilted = yaw_only && !(r.tilt <= params.max_rotation_uncertainty);
+    if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
     r.coarse_rotation = r.rotation;
     r.coarse_translation = r.translation;
     r.time_solver_ms = clock.lap();
@@ -356,6 +407,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     if (params.refine_mode != RefineMode::None && r.reason != Reason::SolverFailed) {
         refine_registration(source, target, r.coarse_rotation, r.coarse_translation, params, r, ctx);
         r.reason = refined_validity(r.num_final_inliers, inliers, refined_evidence(r), refined_rule(params));
+        // Refinement estimates all six degrees of freedom, but a yaw-only start that the data call tilted stays
+        // refused: the user asked for zero roll and pitch and the clouds disagree.
+        if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
     }
     return r;
 }
@@ -366,6 +420,7 @@ Registration register_points(const PointsView &source, const PointsView &target,
     Registration r = register_described(clouds.first, clouds.second, params, ctx);
     r.time_voxelize_ms = clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
     r.time_features_ms = clouds.first.time_features_ms + clouds.second.time_features_ms;
+    r.time_suppression_ms = clouds.first.time_suppression_ms + clouds.second.time_suppression_ms;
     return r;
 }
 
@@ -411,6 +466,20 @@ Registration refine_features(const CloudFeatures &source, const CloudFeatures &t
                              const Params &params, RunContext &ctx) {
     require_same_settings(source, target, params);
     return refine_described(source, target, initial_rotation, initial_translation, params, ctx);
+}
+
+std::vector<std::uint8_t> ground_mask(const PointsView &view, const Params &params, RunContext &ctx) {
+    ctx.checkpoint(Stage::Voxelize, 0.0);
+    const InputCloud input = gather_enough_points(view, params, "points", ctx);
+    const VoxelCloud voxels = voxelize(input, params.voxel_size, "points", ctx);
+    const std::vector<std::uint32_t> voxel = voxel_of_points(input, params.voxel_size, "points", ctx);
+    ctx.checkpoint(Stage::Features, 0.0);
+    const std::vector<std::uint8_t> ground = segment_ground(voxels.points, ground_params(params, voxels.origin), ctx);
+    std::vector<std::uint8_t> mask(voxel.size(), 0);
+    for (std::size_t i = 0; i < voxel.size(); ++i)
+        if (voxel[i] != kNoVoxel) mask[i] = ground[voxel[i]];
+    ctx.checkpoint(Stage::Features, 1.0);
+    return mask;
 }
 
 KISSM_DETAIL_END

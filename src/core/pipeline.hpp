@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "cloud.hpp"
 #include "descriptor_index.hpp"
@@ -31,8 +32,10 @@ struct CloudFeatures {
     Descriptors descriptors;
     DescriptorIndex descriptor_index; // empty when there are no descriptors
     PointIndex index;                 // empty unless params.refine_mode != None
+    std::uint64_t num_suppressed = 0; // voxels suppression kept from becoming keypoints
     double time_voxelize_ms = 0.0;
     double time_features_ms = 0.0;
+    double time_suppression_ms = 0.0; // part of time_features_ms
 };
 
 struct Registration {
@@ -65,8 +68,11 @@ struct Registration {
     double rotation_uncertainty = std::numeric_limits<double>::quiet_NaN(); // radians, see validity.hpp
     double inlier_coverage = std::numeric_limits<double>::quiet_NaN();      // see validity.hpp
     double overlap_spread = std::numeric_limits<double>::quiet_NaN();       // metres, of the refined overlap
+    // Suppression (ground.hpp) and the yaw-only solver (NaN unless rotation_dof = 1 solved).
+    std::uint64_t num_source_suppressed = 0, num_target_suppressed = 0;
+    double tilt = std::numeric_limits<double>::quiet_NaN(); // radians, see yaw_solver.hpp
     double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0,
-           time_refine_ms = 0;
+           time_refine_ms = 0, time_suppression_ms = 0;
 };
 
 // Heap memory held by the features, in bytes (the struct itself not included).
@@ -81,6 +87,9 @@ std::pair<CloudFeatures, CloudFeatures> describe_pair(const PointsView &source, 
 
 // True when features computed under `a` can be matched under `b` (same descriptor-relevant settings).
 bool same_descriptor_settings(const Params &a, const Params &b);
+
+// Per point of `view`: 1 when suppression's ground model labels its voxel ground (kissm_ground_mask()).
+std::vector<std::uint8_t> ground_mask(const PointsView &view, const Params &params, RunContext &ctx);
 
 Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
                                 RunContext &ctx);

@@ -27,6 +27,7 @@ enum class Reason {
     UncertainRotation,
     ClusteredInliers,
     NotConverged,
+    Tilted,
 };
 
 // What the solver's inliers say about its pose.

@@ -118,19 +118,36 @@ SortedTable in_key_order(VoxelTable &&table, std::uint64_t base) {
     return out;
 }
 
-} // namespace
+// The grid: cells anchored at the finite points' minimum corner, x-major keys.
+struct Grid {
+    Vec3d min;
+    double inv = 0.0;
+    std::uint64_t cells[3] = {0, 0, 0};
 
-VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx) {
-    VoxelCloud out;
-    const std::size_t n = static_cast<std::size_t>(input.num_given);
-    if (input.num_finite() == 0) return out;
-    out.origin = 0.5 * (input.min + input.max);
+    // The key of p's voxel; q its offset inside the voxel in units of 2^-30 voxels.
+    std::uint64_t key(const Vec3d &p, std::int64_t q[3]) const {
+        const Vec3d rel = (p - min) * inv;
+        std::uint64_t c[3];
+        for (int a = 0; a < 3; ++a) {
+            // rel >= 0 and below 2^22 (the extent check of grid_for), so truncation is floor; the clamp guards
+            // the top face against rounding.
+            const std::uint64_t ci = static_cast<std::uint64_t>(static_cast<std::int64_t>(rel[a]));
+            c[a] = ci < cells[a] ? ci : cells[a] - 1;
+            const double f = std::min(1.0, rel[a] - static_cast<double>(c[a]));
+            q[a] = static_cast<std::int64_t>(f * kFixedScale + 0.5);
+        }
+        return (c[0] * cells[1] + c[1]) * cells[2] + c[2];
+    }
+};
 
+Grid grid_for(const InputCloud &input, double voxel_size, const std::string &name) {
+    Grid g;
+    g.min = input.min;
+    g.inv = 1.0 / voxel_size;
     const Vec3d extent = input.max - input.min;
-    std::uint64_t cells[3];
     for (int a = 0; a < 3; ++a) {
-        cells[a] = cells_for(extent[a], voxel_size);
-        if (cells[a] > kMaxVoxelsPerAxis) {
+        g.cells[a] = cells_for(extent[a], voxel_size);
+        if (g.cells[a] > kMaxVoxelsPerAxis) {
             std::ostringstream msg;
             msg.precision(6);
             msg << "voxel_size " << voxel_size << " is too small for the " << name << "'s extent of " << extent[a]
@@ -140,8 +157,19 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
             fail(ErrorKind::VoxelRange, msg.str());
         }
     }
+    return g;
+}
 
-    const double inv = 1.0 / voxel_size;
+} // namespace
+
+VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx) {
+    VoxelCloud out;
+    const std::size_t n = static_cast<std::size_t>(input.num_given);
+    if (input.num_finite() == 0) return out;
+    out.origin = 0.5 * (input.min + input.max);
+    const Grid grid = grid_for(input, voxel_size, name);
+    const std::uint64_t *cells = grid.cells;
+
     // Fixed-chunk partial sums (a function of the input, not of the thread count), merged afterwards. A
     // chunk is small enough that a 70K-point scan still splits over a few threads.
     constexpr std::size_t kChunk = 16384;
@@ -151,18 +179,9 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
         const bool skip = input.skip_nonfinite;
         input.for_each_point(b, e, [&](std::size_t, const Vec3d &p) {
             if (skip && !InputCloud::finite(p)) return;
-            const Vec3d rel = (p - input.min) * inv;
-            std::uint64_t c[3];
             std::int64_t q[3];
-            for (int a = 0; a < 3; ++a) {
-                // rel >= 0 and below 2^22 (the extent check above), so truncation is floor; the clamp guards
-                // the top face against rounding.
-                const std::uint64_t ci = static_cast<std::uint64_t>(static_cast<std::int64_t>(rel[a]));
-                c[a] = ci < cells[a] ? ci : cells[a] - 1;
-                const double f = std::min(1.0, rel[a] - static_cast<double>(c[a]));
-                q[a] = static_cast<std::int64_t>(f * kFixedScale + 0.5);
-            }
-            table.add((c[0] * cells[1] + c[1]) * cells[2] + c[2], q);
+            const std::uint64_t key = grid.key(p, q);
+            table.add(key, q);
         });
         return table;
     });
@@ -237,6 +256,34 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
                 out.points[first_voxel[r] + v] = centroid.cast<float>();
             }
         }
+    });
+    return out;
+}
+
+std::vector<std::uint32_t> voxel_of_points(const InputCloud &input, double voxel_size, const std::string &name,
+                                           RunContext &ctx) {
+    const std::size_t n = static_cast<std::size_t>(input.num_given);
+    std::vector<std::uint32_t> out(n, kNoVoxel);
+    if (input.num_finite() == 0) return out;
+    const Grid grid = grid_for(input, voxel_size, name);
+    constexpr std::uint64_t kSkipped = ~std::uint64_t(0); // keys use at most 63 bits
+    std::vector<std::uint64_t> keys(n, kSkipped);
+    ctx.parallel_for(n, 16384, [&](std::size_t b, std::size_t e) {
+        input.for_each_point(b, e, [&](std::size_t i, const Vec3d &p) {
+            std::int64_t q[3];
+            if (!input.skip_nonfinite || InputCloud::finite(p)) keys[i] = grid.key(p, q);
+        });
+    });
+    // voxelize() emits voxels in key order, so a voxel's number is its key's rank among the distinct keys.
+    std::vector<std::uint64_t> distinct(keys);
+    std::sort(distinct.begin(), distinct.end());
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    if (!distinct.empty() && distinct.back() == kSkipped) distinct.pop_back();
+    ctx.parallel_for(n, 16384, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i)
+            if (keys[i] != kSkipped)
+                out[i] = static_cast<std::uint32_t>(std::lower_bound(distinct.begin(), distinct.end(), keys[i]) -
+                                                    distinct.begin());
     });
     return out;
 }

@@ -4,7 +4,9 @@
 // its input; it numbers no equation for the voxel centroid, which is here the mean of the voxel's points.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "cloud.hpp"
 #include "detail_namespace.hpp"
@@ -21,5 +23,12 @@ constexpr std::uint64_t kMaxVoxelsPerAxis = std::uint64_t(1) << 21;
 // integer sums of fixed-point offsets, so a permutation of the input gives a bitwise identical output.
 // Throws Failure(VoxelRange) when the extent needs more than kMaxVoxelsPerAxis voxels on an axis.
 VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx);
+
+constexpr std::uint32_t kNoVoxel = ~std::uint32_t(0);
+
+// For each point of `input`, the number of its voxel in voxelize(input, voxel_size, ...) (kNoVoxel for a
+// non-finite point the policy drops): how a per-voxel label reaches the caller's points.
+std::vector<std::uint32_t> voxel_of_points(const InputCloud &input, double voxel_size, const std::string &name,
+                                           RunContext &ctx);
 
 KISSM_DETAIL_END

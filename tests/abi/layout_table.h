@@ -16,9 +16,9 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 240)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 280)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 920)
+  X(kissm_result, KISSM_STRUCT_RESULT, 952)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -54,7 +54,11 @@
   X(kissm_config, refine_min_inliers, int32_t, 216, 4)                                                                 \
   X(kissm_config, reserved1, int32_t, 220, 4)                                                                          \
   X(kissm_config, min_refine_condition, double, 224, 8)                                                                \
-  X(kissm_config, refine_normal_radius_gain, double, 232, 8)
+  X(kissm_config, refine_normal_radius_gain, double, 232, 8)                                                           \
+  X(kissm_config, suppression, int32_t, 240, 4)                                                                        \
+  X(kissm_config, rotation_dof, int32_t, 244, 4)                                                                       \
+  X(kissm_config, up, double[3], 248, 24)                                                                              \
+  X(kissm_config, sensor_height, double, 272, 8)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \
@@ -104,7 +108,11 @@
   X(kissm_result, time_refine_ms, double, 896, 8)                                                                      \
   X(kissm_result, num_refine_correspondences, uint64_t, 904, 8)                                                        \
   X(kissm_result, refine_iterations, int32_t, 912, 4)                                                                  \
-  X(kissm_result, refine_converged, int32_t, 916, 4)
+  X(kissm_result, refine_converged, int32_t, 916, 4)                                                                   \
+  X(kissm_result, num_source_suppressed, uint64_t, 920, 8)                                                             \
+  X(kissm_result, num_target_suppressed, uint64_t, 928, 8)                                                             \
+  X(kissm_result, time_suppression_ms, double, 936, 8)                                                                 \
+  X(kissm_result, tilt, double, 944, 8)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 from typing import Any, TypeAlias
 
+import numpy as np
+
 from . import _config, _ffi, _matcher, _points, _read
 from ._config import Config
 from ._errors import (
@@ -78,6 +80,12 @@ ViewpointMode: TypeAlias = _config.ViewpointMode
 RefineMode: TypeAlias = _config.RefineMode
 """The names of :attr:`Config.refine_mode`: ``"none"``, ``"gicp"`` or ``"point_to_plane"``."""
 
+Suppression: TypeAlias = _config.Suppression
+"""The names of :attr:`Config.suppression`: ``"none"`` or ``"ground"``."""
+
+PRESETS: tuple[str, ...] = tuple(_config.PRESETS)
+"""The names :meth:`Config.preset` accepts (those of the ``kissm`` CLI's ``--preset``)."""
+
 TransformLike: TypeAlias = _matcher.TransformLike
 """What :func:`refine` and :meth:`Matcher.refine` accept as the initial pose: a (4, 4) array-like of real
 numbers mapping source points into the target frame. ``Any`` for type checkers."""
@@ -107,6 +115,18 @@ def register(
         return matcher.register(source, target)
 
 
+def ground_mask(points: PointsLike, voxel_size: float, **config: Any) -> np.ndarray:
+    """Which points of ``points`` (in the sensor's frame) are ground under the model of ``suppression='ground'``:
+    ``Matcher(voxel_size=voxel_size, **config).ground_mask(points)``, a bool array of ``len(points)``.
+
+    The model works on the voxels (every point of a voxel gets its voxel's label) around the sensor at
+    ``viewpoint`` (default the origin), perpendicular to ``up`` (default +z); ``sensor_height`` (metres, 0 =
+    estimate) helps on clouds whose nearby ground is hidden. Other keyword arguments are :class:`Config` fields.
+    """
+    with Matcher(voxel_size=voxel_size, **config) as matcher:
+        return matcher.ground_mask(points)
+
+
 def refine(
     source: PointsLike,
     target: PointsLike,
@@ -130,6 +150,7 @@ def refine(
 __all__ = [
     "FORMATS",
     "MIN_POINTS",
+    "PRESETS",
     "CancelledError",
     "Config",
     "EmptyInputError",
@@ -149,6 +170,7 @@ __all__ = [
     "RefineMode",
     "Result",
     "StructSizeError",
+    "Suppression",
     "TooFewPointsError",
     "TransformLike",
     "UnsupportedFormatError",
@@ -156,6 +178,7 @@ __all__ = [
     "VoxelRangeError",
     "__version__",
     "as_point_array",
+    "ground_mask",
     "library_path",
     "read_points",
     "refine",

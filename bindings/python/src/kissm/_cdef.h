@@ -61,6 +61,8 @@ const char *kissm_last_error_message(void);
 
 #define KISSM_REASON_NOT_CONVERGED 11
 
+#define KISSM_REASON_TILTED 12
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0
@@ -72,6 +74,18 @@ const char *kissm_reason_string(int32_t reason);
 #define KISSM_VIEWPOINT_SIGN_FREE 2
 
 #define KISSM_VIEWPOINT_LOCAL 3
+
+#define KISSM_SUPPRESS_NONE 0
+
+#define KISSM_SUPPRESS_GROUND 1
+
+#define KISSM_PRESET_LIDAR_VEHICLE 1
+
+#define KISSM_PRESET_LIDAR_HANDHELD 2
+
+#define KISSM_PRESET_INDOOR_RGBD 3
+
+#define KISSM_PRESET_OBJECT 4
 
 #define KISSM_REFINE_NONE 0
 #define KISSM_REFINE_GICP 1
@@ -162,11 +176,21 @@ typedef struct kissm_config {
     double min_refine_condition;
 
     double refine_normal_radius_gain;
+
+    int32_t suppression;
+
+    int32_t rotation_dof;
+
+    double up[3];
+
+    double sensor_height;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
 
 int32_t kissm_config_validate(const kissm_config *config);
+
+int32_t kissm_config_preset(kissm_config *config, int32_t preset);
 
 #define KISSM_SCALAR_FLOAT32 1
 #define KISSM_SCALAR_FLOAT64 2
@@ -267,6 +291,14 @@ typedef struct kissm_result {
     int32_t refine_iterations;
 
     int32_t refine_converged;
+
+    uint64_t num_source_suppressed;
+
+    uint64_t num_target_suppressed;
+
+    double time_suppression_ms;
+
+    double tilt;
 } kissm_result;
 
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
@@ -286,6 +318,8 @@ void kissm_cancel(kissm_matcher *matcher);
 
 int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *source, const kissm_points *target,
     const double initial_transform[16], kissm_result *result);
+
+int32_t kissm_ground_mask(kissm_matcher *matcher, const kissm_points *points, uint8_t *out_mask);
 
 typedef struct kissm_features kissm_features;
 

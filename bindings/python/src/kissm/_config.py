@@ -14,6 +14,7 @@ from ._ffi import ffi, lib
 NonFinitePolicy = Literal["reject", "drop"]
 ViewpointMode = Literal["fixed", "cloud_center", "sign_free", "local"]
 RefineMode = Literal["none", "gicp", "point_to_plane"]
+Suppression = Literal["none", "ground"]
 
 #: Python names of the C enumerations (the fields hold the names; the ints are accepted too).
 NONFINITE_POLICIES: dict[str, int] = {"reject": lib.KISSM_NONFINITE_REJECT, "drop": lib.KISSM_NONFINITE_DROP}
@@ -28,11 +29,21 @@ REFINE_MODES: dict[str, int] = {
     "gicp": lib.KISSM_REFINE_GICP,
     "point_to_plane": lib.KISSM_REFINE_POINT_TO_PLANE,
 }
+SUPPRESSIONS: dict[str, int] = {"none": lib.KISSM_SUPPRESS_NONE, "ground": lib.KISSM_SUPPRESS_GROUND}
+#: Names of the ``KISSM_PRESET_*`` settings (:meth:`Config.preset`).
+PRESETS: dict[str, int] = {
+    "lidar-vehicle": lib.KISSM_PRESET_LIDAR_VEHICLE,
+    "lidar-handheld": lib.KISSM_PRESET_LIDAR_HANDHELD,
+    "indoor-rgbd": lib.KISSM_PRESET_INDOOR_RGBD,
+    "object": lib.KISSM_PRESET_OBJECT,
+}
 _ENUMS: dict[str, dict[str, int]] = {
     "nonfinite_policy": NONFINITE_POLICIES,
     "viewpoint_mode": VIEWPOINT_MODES,
     "refine_mode": REFINE_MODES,
+    "suppression": SUPPRESSIONS,
 }
+_VECTOR_FIELDS = ("viewpoint", "up")
 
 _FLOAT_FIELDS = (
     "voxel_size",
@@ -52,6 +63,7 @@ _FLOAT_FIELDS = (
     "min_inlier_coverage",
     "min_refine_condition",
     "refine_normal_radius_gain",
+    "sensor_height",
 )
 _INT_FIELDS = (
     "num_threads",
@@ -61,6 +73,7 @@ _INT_FIELDS = (
     "log_level",
     "refine_max_iterations",
     "refine_min_inliers",
+    "rotation_dof",
 )
 
 
@@ -77,17 +90,18 @@ def _enum_name(field: str, value: int) -> str | int:
     return value
 
 
-def _library_defaults() -> dict[str, Any]:
-    c = _new_c_config()
+def _values_of(c: Any) -> dict[str, Any]:
+    """The settings of a C ``kissm_config *`` as Config fields."""
     values: dict[str, Any] = {name: float(getattr(c, name)) for name in _FLOAT_FIELDS}
     values.update({name: int(getattr(c, name)) for name in _INT_FIELDS})
-    values["viewpoint"] = tuple(float(v) for v in c.viewpoint)
+    for name in _VECTOR_FIELDS:
+        values[name] = tuple(float(v) for v in getattr(c, name))
     for field in _ENUMS:
         values[field] = _enum_name(field, int(getattr(c, field)))
     return values
 
 
-_DEFAULTS = _library_defaults()
+_DEFAULTS = _values_of(_new_c_config())
 
 
 def _as_int(field: str, value: Any) -> int:
@@ -195,6 +209,19 @@ class Config:
     """Refinement aligns planes fitted to the neighbours within gain * voxel_size (at least 5 of them; a value above
     ``normal_radius_gain`` acts as it); in (0, 50]. The planes are computed with the features, so :class:`Features`
     of a Config with another value do not match (:class:`kissm.FeaturesMismatchError`)."""
+    suppression: Suppression = _DEFAULTS["suppression"]
+    """Geometric suppression before keypoints: 'none', or 'ground' (the ground voxels around the sensor at
+    ``viewpoint``, perpendicular to ``up``, get no keypoint; they stay in the clouds refinement aligns;
+    docs/ground.md). Computed with the features."""
+    rotation_dof: int = _DEFAULTS["rotation_dof"]
+    """Rotational degrees of freedom: 3, or 1 (yaw about ``up`` only; a clearly tilted pair ends ``valid`` False
+    with reason "the clouds' relative roll or pitch is not zero")."""
+    up: tuple[float, float, float] = _DEFAULTS["up"]
+    """The up direction in each cloud's own frame (finite, length above 1e-9; normalised), for suppression and
+    ``rotation_dof=1``."""
+    sensor_height: float = _DEFAULTS["sensor_height"]
+    """Height of the sensor (``viewpoint``) above the ground along ``up``, metres, for suppression; 0 = estimate;
+    in [0, 1000]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object
@@ -204,14 +231,28 @@ class Config:
             set_field(self, name, _as_int(name, getattr(self, name)))
         for name in _ENUMS:
             set_field(self, name, _as_enum(name, getattr(self, name)))
-        try:
-            viewpoint = tuple(_as_float("viewpoint", v) for v in self.viewpoint)
-        except TypeError:
-            raise TypeError(f"Config.viewpoint must be 3 real numbers, not {self.viewpoint!r}") from None
-        if len(viewpoint) != 3:
-            raise ValueError(f"Config.viewpoint must have 3 coordinates, not {len(viewpoint)}")
-        set_field(self, "viewpoint", viewpoint)
+        for name in _VECTOR_FIELDS:
+            given = getattr(self, name)
+            try:
+                vector = tuple(_as_float(name, v) for v in given)
+            except TypeError:
+                raise TypeError(f"Config.{name} must be 3 real numbers, not {given!r}") from None
+            if len(vector) != 3:
+                raise ValueError(f"Config.{name} must have 3 coordinates, not {len(vector)}")
+            set_field(self, name, vector)
         check(lib.kissm_config_validate(self._to_c()))
+
+    @classmethod
+    def preset(cls, name: str, **changes: Any) -> Config:
+        """The settings for a common kind of data (``kissm_config_preset``), then ``changes``: 'lidar-vehicle'
+        (outdoor LiDAR on a car or ground robot: 0.3 m voxels, ground suppression), 'lidar-handheld' (handheld,
+        backpack or drone LiDAR: 0.3 m voxels, frame-free normals), 'indoor-rgbd' (0.05 m voxels) or 'object'
+        (0.006 m voxels). docs/parameters.md, "Presets", has the evidence."""
+        if name not in PRESETS:
+            raise ValueError(f"unknown preset {name!r}; use one of {', '.join(map(repr, PRESETS))}")
+        c = _new_c_config()
+        check(lib.kissm_config_preset(c, PRESETS[name]))
+        return cls(**{**_values_of(c), **changes})
 
     def _to_c(self) -> Any:
         """A fresh ``kissm_config *`` holding these settings (no callbacks)."""
@@ -226,8 +267,10 @@ class Config:
                 setattr(c, name, value)
             except OverflowError:
                 raise ValueError(f"config.{name} is {value}; it does not fit in a 32-bit int") from None
-        for i in range(3):
-            c.viewpoint[i] = self.viewpoint[i]
+        for name in _VECTOR_FIELDS:
+            target = getattr(c, name)
+            for i in range(3):
+                target[i] = getattr(self, name)[i]
         c.reserved1 = 0  # not a setting: the library refuses anything else (kept for a future field)
         return c
 

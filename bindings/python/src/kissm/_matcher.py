@@ -180,6 +180,22 @@ class Matcher:
                 raise_status(status)
         return Features._adopt(out[0])
 
+    def ground_mask(self, cloud: PointsLike) -> np.ndarray:
+        """Which points of ``cloud`` the ground model of ``suppression='ground'`` labels ground
+        (``kissm_ground_mask``), under this matcher's ``voxel_size``, ``up``, ``viewpoint`` and ``sensor_height``,
+        whatever its ``suppression``: a bool array of ``len(cloud)`` (points dropped as non-finite are False).
+
+        Raises:
+            TypeError, ValueError: as :meth:`register`.
+        """
+        view = points_view(cloud, "cloud")
+        mask = np.zeros(view.array.shape[0], dtype=np.uint8)
+        with self._call_lock:
+            status = lib.kissm_ground_mask(self._handle(), view.c, ffi.from_buffer("uint8_t[]", mask))
+            if status != 0:
+                raise_status(status)
+        return mask.astype(bool)
+
     def features(self, cloud: PointsLike) -> Features:
         """Deprecated alias of :meth:`compute_features` (the name of the C ``kissm_features_compute``)."""
         warnings.warn(

@@ -27,6 +27,8 @@ _COUNT_FIELDS = (
     "max_core_number",
     "num_refine_correspondences",
     "refine_iterations",
+    "num_source_suppressed",
+    "num_target_suppressed",
 )
 _FLOAT_FIELDS = (
     "inlier_ratio",
@@ -37,6 +39,7 @@ _FLOAT_FIELDS = (
     "refine_condition",
     "rotation_uncertainty",
     "inlier_coverage",
+    "tilt",
 )
 _TIME_FIELDS = (
     "time_voxelize_ms",
@@ -46,6 +49,7 @@ _TIME_FIELDS = (
     "time_solver_ms",
     "time_total_ms",
     "time_refine_ms",
+    "time_suppression_ms",
 )
 
 
@@ -200,6 +204,16 @@ class Result:
     """Whether refinement stopped on its convergence test rather than its iteration cap; a refined pose that did
     not is not valid (reason "refinement did not converge": it was still crossing between basins, as from a
     wrong start)."""
+    num_source_suppressed: int
+    """Source voxels ``Config.suppression`` kept from becoming keypoints (0 when it is 'none')."""
+    num_target_suppressed: int
+    """Target voxels ``Config.suppression`` kept from becoming keypoints (0 when it is 'none')."""
+    time_suppression_ms: float
+    """Milliseconds of suppression, both clouds (part of ``time_features_ms``; 0 when it is off)."""
+    tilt: float
+    """With ``Config.rotation_dof=1``: the angle (radians) by which the best unconstrained rotation on the yaw
+    solution's inliers turns ``Config.up``; above what the noise allows, the pair is not valid (reason "the
+    clouds' relative roll or pitch is not zero"). NaN otherwise."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:

@@ -35,12 +35,19 @@ pub const KISSM_REASON_UNCONSTRAINED: i32 = 8;
 pub const KISSM_REASON_UNCERTAIN_ROTATION: i32 = 9;
 pub const KISSM_REASON_CLUSTERED_INLIERS: i32 = 10;
 pub const KISSM_REASON_NOT_CONVERGED: i32 = 11;
+pub const KISSM_REASON_TILTED: i32 = 12;
 pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
 pub const KISSM_VIEWPOINT_CLOUD_CENTER: i32 = 1;
 pub const KISSM_VIEWPOINT_SIGN_FREE: i32 = 2;
 pub const KISSM_VIEWPOINT_LOCAL: i32 = 3;
+pub const KISSM_SUPPRESS_NONE: i32 = 0;
+pub const KISSM_SUPPRESS_GROUND: i32 = 1;
+pub const KISSM_PRESET_LIDAR_VEHICLE: i32 = 1;
+pub const KISSM_PRESET_LIDAR_HANDHELD: i32 = 2;
+pub const KISSM_PRESET_INDOOR_RGBD: i32 = 3;
+pub const KISSM_PRESET_OBJECT: i32 = 4;
 pub const KISSM_REFINE_NONE: i32 = 0;
 pub const KISSM_REFINE_GICP: i32 = 1;
 pub const KISSM_REFINE_POINT_TO_PLANE: i32 = 2;
@@ -214,10 +221,23 @@ pub struct kissm_config {
  normal_radius_gain: a larger value acts as normal_radius_gain); in (0, 50]. Computed with the features,
  so features of another value do not match (#KISSM_ERR_FEATURES_MISMATCH). Default 2.0.*/
     pub refine_normal_radius_gain: f64,
+    /** #KISSM_SUPPRESS_NONE or #KISSM_SUPPRESS_GROUND. Computed with the features, so features of another value
+ do not match (#KISSM_ERR_FEATURES_MISMATCH). Default #KISSM_SUPPRESS_NONE.*/
+    pub suppression: i32,
+    /** Rotational degrees of freedom the solver estimates: 3, or 1 (yaw about kissm_config.up only, roll and
+ pitch taken as zero; a pair that is clearly tilted ends valid = 0 with #KISSM_REASON_TILTED). Default 3.*/
+    pub rotation_dof: i32,
+    /** The up direction in each cloud's own frame (the same vector for both clouds; any finite vector of length
+ above 1e-9, normalised), for suppression and rotation_dof = 1. Computed with the features when
+ suppression is on. Default (0, 0, 1).*/
+    pub up: [f64; 3usize],
+    /** Height of the sensor (kissm_config.viewpoint) above the ground along up, metres, for suppression; 0 =
+ estimate it from the cloud; in [0, 1000]. Default 0.*/
+    pub sensor_height: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 240usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 280usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -321,6 +341,18 @@ const _: () = {
     [
         "Offset of field: kissm_config::refine_normal_radius_gain",
     ][::core::mem::offset_of!(kissm_config, refine_normal_radius_gain) - 232usize];
+    [
+        "Offset of field: kissm_config::suppression",
+    ][::core::mem::offset_of!(kissm_config, suppression) - 240usize];
+    [
+        "Offset of field: kissm_config::rotation_dof",
+    ][::core::mem::offset_of!(kissm_config, rotation_dof) - 244usize];
+    [
+        "Offset of field: kissm_config::up",
+    ][::core::mem::offset_of!(kissm_config, up) - 248usize];
+    [
+        "Offset of field: kissm_config::sensor_height",
+    ][::core::mem::offset_of!(kissm_config, sensor_height) - 272usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
@@ -354,6 +386,20 @@ extern "C" {
          does not know are not all zero.
  @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_config_validate(config: *const kissm_config) -> i32;
+}
+extern "C" {
+    /** @brief Applies the settings of a common kind of data on top of *config: the voxel size and the options
+        that kind wants (docs/parameters.md, "Presets"); every other field keeps its value.
+
+ Call it after kissm_config_init() and before your own changes. On error *config is unchanged.
+ @param[in,out] config A config filled by kissm_config_init().
+ @param[in] preset A KISSM_PRESET_* value.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p config is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE config->struct_size is too small or above 65536.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p preset is not a KISSM_PRESET_* value.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_config_preset(config: *mut kissm_config, preset: i32) -> i32;
 }
 /// @brief A borrowed, zero-copy view of the caller's xyz coordinates.
 #[repr(C)]
@@ -507,10 +553,19 @@ pub struct kissm_result {
     pub refine_iterations: i32,
     /// 1 when refinement stopped on its convergence test rather than its iteration cap.
     pub refine_converged: i32,
+    /// Source voxels kissm_config.suppression kept from becoming keypoints (0 when it is off).
+    pub num_source_suppressed: u64,
+    /// Target voxels kissm_config.suppression kept from becoming keypoints (0 when it is off).
+    pub num_target_suppressed: u64,
+    /// Wall-clock ms: suppression, both clouds (part of time_features_ms; 0 when it is off).
+    pub time_suppression_ms: f64,
+    /** With rotation_dof = 1: the angle (radians) by which the best unconstrained rotation on the yaw
+ solution's inliers turns kissm_config.up, the evidence for #KISSM_REASON_TILTED. NaN otherwise.*/
+    pub tilt: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 920usize];
+    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 952usize];
     ["Alignment of kissm_result"][::core::mem::align_of::<kissm_result>() - 8usize];
     [
         "Offset of field: kissm_result::struct_size",
@@ -635,6 +690,18 @@ const _: () = {
     [
         "Offset of field: kissm_result::refine_converged",
     ][::core::mem::offset_of!(kissm_result, refine_converged) - 916usize];
+    [
+        "Offset of field: kissm_result::num_source_suppressed",
+    ][::core::mem::offset_of!(kissm_result, num_source_suppressed) - 920usize];
+    [
+        "Offset of field: kissm_result::num_target_suppressed",
+    ][::core::mem::offset_of!(kissm_result, num_target_suppressed) - 928usize];
+    [
+        "Offset of field: kissm_result::time_suppression_ms",
+    ][::core::mem::offset_of!(kissm_result, time_suppression_ms) - 936usize];
+    [
+        "Offset of field: kissm_result::tilt",
+    ][::core::mem::offset_of!(kissm_result, tilt) - 944usize];
 };
 impl Default for kissm_result {
     fn default() -> Self {
@@ -762,6 +829,29 @@ extern "C" {
         target: *const kissm_points,
         initial_transform: *const f64,
         result: *mut kissm_result,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Which points of a cloud the ground model of #KISSM_SUPPRESS_GROUND labels ground, under the matcher's
+        voxel_size, up, viewpoint (the sensor) and sensor_height, whatever its kissm_config.suppression.
+
+ The model runs on the voxels, so every point of a voxel gets the voxel's label; points dropped as
+ non-finite (#KISSM_NONFINITE_DROP) get 0. Deterministic: the same bytes for any num_threads. On error
+ @p out_mask is unchanged.
+ @param[in,out] matcher The matcher (its settings; one call at a time).
+ @param[in] points The cloud, in its own frame; read during the call only.
+ @param[out] out_mask points->count bytes: 1 for a ground point, else 0.
+ @retval KISSM_OK Done (a cloud without ground gets all zeros).
+ @retval KISSM_ERR_NULL_ARGUMENT @p matcher, @p points, points->data or @p out_mask is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT A kissm_points field is out of range.
+ @retval KISSM_ERR_EMPTY_INPUT, KISSM_ERR_TOO_FEW_POINTS, KISSM_ERR_NONFINITE, KISSM_ERR_VOXEL_RANGE As
+         for kissm_register().
+ @retval KISSM_ERR_CANCELLED kissm_cancel() or the progress callback stopped the call.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_ground_mask(
+        matcher: *mut kissm_matcher,
+        points: *const kissm_points,
+        out_mask: *mut u8,
     ) -> i32;
 }
 /// @brief Immutable once created; may be used from several threads at once and outlive the matcher.
