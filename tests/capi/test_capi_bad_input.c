@@ -503,7 +503,13 @@ enum {
     F_MIN_INLIER_COVERAGE,
     F_REFINE_MIN_INLIERS,
     F_RESERVED1,
-    F_MIN_REFINE_CONDITION
+    F_MIN_REFINE_CONDITION,
+    F_SUPPRESSION,
+    F_ROTATION_DOF,
+    F_UP0,
+    F_UP2,
+    F_UP_ALL, /* all three components */
+    F_SENSOR_HEIGHT
 };
 
 typedef struct field_case {
@@ -543,6 +549,12 @@ static void set_field(kissm_config *c, int field, double v) {
     case F_REFINE_MIN_INLIERS: c->refine_min_inliers = (int32_t)v; break;
     case F_RESERVED1: c->reserved1 = (int32_t)v; break;
     case F_MIN_REFINE_CONDITION: c->min_refine_condition = v; break;
+    case F_SUPPRESSION: c->suppression = (int32_t)v; break;
+    case F_ROTATION_DOF: c->rotation_dof = (int32_t)v; break;
+    case F_UP0: c->up[0] = v; break;
+    case F_UP2: c->up[2] = v; break;
+    case F_UP_ALL: c->up[0] = c->up[1] = c->up[2] = v; break;
+    case F_SENSOR_HEIGHT: c->sensor_height = v; break;
     default: break;
     }
 }
@@ -644,6 +656,19 @@ static const field_case k_bad_fields[] = {
     {F_MIN_REFINE_CONDITION, -1e-9, "config.min_refine_condition"},
     {F_MIN_REFINE_CONDITION, 1.5, "config.min_refine_condition"},
     {F_MIN_REFINE_CONDITION, NAN, "config.min_refine_condition"},
+    /* ground-vehicle options */
+    {F_SUPPRESSION, -1, "config.suppression"},
+    {F_SUPPRESSION, 2, "config.suppression"},
+    {F_ROTATION_DOF, 0, "config.rotation_dof"},
+    {F_ROTATION_DOF, 2, "config.rotation_dof"},
+    {F_ROTATION_DOF, 6, "config.rotation_dof"},
+    {F_UP0, NAN, "config.up[0]"},
+    {F_UP2, INFINITY, "config.up[2]"},
+    {F_UP_ALL, 0.0, "config.up"},
+    {F_UP_ALL, 1e-12, "config.up"},
+    {F_SENSOR_HEIGHT, -0.1, "config.sensor_height"},
+    {F_SENSOR_HEIGHT, 1000.5, "config.sensor_height"},
+    {F_SENSOR_HEIGHT, NAN, "config.sensor_height"},
 };
 
 /* Documented boundary values that must be accepted. */
@@ -704,6 +729,14 @@ static const field_case k_good_fields[] = {
     {F_RESERVED1, 0, ""},
     {F_MIN_REFINE_CONDITION, 0.0, ""},
     {F_MIN_REFINE_CONDITION, 1.0, ""},
+    {F_SUPPRESSION, KISSM_SUPPRESS_NONE, ""},
+    {F_SUPPRESSION, KISSM_SUPPRESS_GROUND, ""},
+    {F_ROTATION_DOF, 1, ""},
+    {F_ROTATION_DOF, 3, ""},
+    {F_UP0, -1e300, ""}, /* normalised without overflow */
+    {F_UP_ALL, 1e-9 / 1.5, ""},
+    {F_SENSOR_HEIGHT, 0.0, ""},
+    {F_SENSOR_HEIGHT, 1000.0, ""},
 };
 
 static void test_config_fields(void) {

@@ -76,6 +76,13 @@ inline kissm_config make_config(Bytes &in) {
     c.normal_radius_gain = 1.0 + (gains & 7) * 0.5;
     c.fpfh_radius_gain = c.normal_radius_gain + 1.5 + ((gains >> 3) & 7) * 0.5;
     c.max_correspondences = 3 + (gains >> 6) * 300;
+    // The ground-vehicle options: suppression, yaw only, the up direction (one zero: refused) and sensor height.
+    const std::uint8_t ground = in.u8();
+    c.suppression = (ground & 1) ? KISSM_SUPPRESS_GROUND : KISSM_SUPPRESS_NONE;
+    c.rotation_dof = (ground & 2) ? 1 : 3;
+    static const double ups[4][3] = {{0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}, {0.3, -0.2, 0.9}, {0.0, 0.0, 0.0}};
+    for (int i = 0; i < 3; ++i) c.up[i] = ups[(ground >> 2) & 3][i];
+    c.sensor_height = (ground >> 4) * 0.25;
     return c;
 }
 

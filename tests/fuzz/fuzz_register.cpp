@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 // libFuzzer target for the whole pipeline through the public C API: a config and two clouds from the
 // bytes (fuzz_input.hpp), one fresh matcher, kissm_register, then kissm_refine of the same clouds from a
-// transform decoded from the remaining bytes (the identity when none are left). Invariants: the status is one
+// transform decoded from the remaining bytes (the identity when none are left), then kissm_ground_mask of the
+// source. Invariants: the status is one
 // a caller can get from such inputs (a transform that is not rigid is KISSM_ERR_INVALID_ARGUMENT unless a
 // points table was refused first); a failed call leaves a reset result; a valid pose is finite and a proper
 // rotation; the refinement's fields are "not run" or in range.
 #include <cstdio>
 #include <cstdlib>
+#include <vector>
 
 #include "fuzz_input.hpp"
 
@@ -48,6 +50,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
         std::abort();
     if (rst != KISSM_OK && !kissm_fuzz::result_reset(r)) std::abort();
     if (rst == KISSM_OK && !kissm_fuzz::refine_result_sane(r, config, initial)) std::abort();
+
+    // The ground model on the source: labels 0 or 1 on success, the caller's bytes untouched on failure.
+    std::vector<std::uint8_t> mask(static_cast<std::size_t>(s.count), 0xAB);
+    const int32_t gst = kissm_ground_mask(m, &s, mask.data());
+    if (!kissm_fuzz::expected_status(gst)) std::abort();
+    for (const std::uint8_t b : mask)
+        if ((gst == KISSM_OK && b > 1) || (gst != KISSM_OK && b != 0xAB)) std::abort();
     kissm_destroy(m);
     return 0;
 }
