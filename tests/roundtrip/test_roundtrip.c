@@ -25,17 +25,29 @@ typedef struct {
     int32_t refine_mode;    /* KISSM_REFINE_* */
     int is_refine_call;     /* kissm_refine from initial_transform() instead of kissm_register */
     int32_t viewpoint_mode; /* KISSM_VIEWPOINT_* */
+    int32_t suppression;    /* KISSM_SUPPRESS_* */
+    int32_t rotation_dof;   /* 3 or 1 */
 } golden_case;
 
 static const golden_case kCases[] = {
-    {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED},
-    {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED},
-    {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED},
+    {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE,
+     3},
+    {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE,
+     3},
+    {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
+     KISSM_SUPPRESS_NONE, 3},
     {"yard_float32_v0.3_point_to_plane", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_POINT_TO_PLANE, 0,
-     KISSM_VIEWPOINT_FIXED},
-    {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED},
-    {"yard_float64_v0.25_local", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_LOCAL},
-    {"yard_float32_v0.3_sign_free_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_SIGN_FREE},
+     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3},
+    {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED,
+     KISSM_SUPPRESS_NONE, 3},
+    {"yard_float64_v0.25_local", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_LOCAL,
+     KISSM_SUPPRESS_NONE, 3},
+    {"yard_float32_v0.3_sign_free_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_SIGN_FREE,
+     KISSM_SUPPRESS_NONE, 3},
+    {"yard_float64_v0.25_ground", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED,
+     KISSM_SUPPRESS_GROUND, 3},
+    {"yard_float32_v0.3_yaw_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
+     KISSM_SUPPRESS_NONE, 1},
 };
 
 static const char *viewpoint_name(int32_t mode) {
@@ -118,6 +130,8 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     config.num_threads = threads;
     config.refine_mode = gc->refine_mode;
     config.viewpoint_mode = gc->viewpoint_mode;
+    config.suppression = gc->suppression;
+    config.rotation_dof = gc->rotation_dof;
     result->struct_size = sizeof *result;
     status = kissm_create(&config, &matcher);
     if (status == KISSM_OK && gc->is_refine_call) {
@@ -142,9 +156,10 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     X(num_source_points) X(num_target_points) X(num_source_voxels) X(num_target_voxels)              \
     X(num_source_keypoints) X(num_target_keypoints) X(num_initial_correspondences)                   \
     X(num_pruned_correspondences) X(num_rotation_inliers) X(num_final_inliers) X(max_core_number)    \
-    X(num_refine_correspondences) X(refine_iterations) X(refine_converged)
+    X(num_refine_correspondences) X(refine_iterations) X(refine_converged) X(num_source_suppressed)     \
+    X(num_target_suppressed)
 /* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
-#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage)
+#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt)
 #define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36)
 /* clang-format on */
 
@@ -197,6 +212,8 @@ static void write_golden(void) {
         printf("      \"call\": \"%s\",\n", kCases[c].is_refine_call ? "refine" : "register");
         printf("      \"refine\": \"%s\",\n", refine_name(kCases[c].refine_mode));
         printf("      \"viewpoint\": \"%s\",\n", viewpoint_name(kCases[c].viewpoint_mode));
+        printf("      \"suppression\": \"%s\",\n", kCases[c].suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none");
+        printf("      \"rotation_dof\": %d,\n", (int)kCases[c].rotation_dof);
         printf("      \"scalar\": \"%s\",\n", kCases[c].scalar_type == KISSM_SCALAR_FLOAT32 ? "float32" : "float64");
         printf("      \"voxel_size\": %.17g,\n", kCases[c].voxel_size);
         if (kCases[c].is_refine_call) {

@@ -39,8 +39,18 @@ COUNTS = [
     "num_refine_correspondences",
     "refine_iterations",
     "refine_converged",
+    "num_source_suppressed",
+    "num_target_suppressed",
 ]
-DOUBLES = ["residual_rms", "overlap", "refine_rmse", "refine_condition", "rotation_uncertainty", "inlier_coverage"]
+DOUBLES = [
+    "residual_rms",
+    "overlap",
+    "refine_rmse",
+    "refine_condition",
+    "rotation_uncertainty",
+    "inlier_coverage",
+    "tilt",
+]
 ARRAYS = ["transform", "coarse_transform", "information"]
 
 
@@ -57,7 +67,12 @@ def run_case(case: dict[str, Any], threads: int) -> kissm.Result:
     else:
         assert case["scalar"] == "float64", case["scalar"]
     config = kissm.Config(
-        voxel_size=case["voxel_size"], num_threads=threads, refine_mode=case["refine"], viewpoint_mode=case["viewpoint"]
+        voxel_size=case["voxel_size"],
+        num_threads=threads,
+        refine_mode=case["refine"],
+        viewpoint_mode=case["viewpoint"],
+        suppression=case["suppression"],
+        rotation_dof=case["rotation_dof"],
     )
     with kissm.Matcher(config) as matcher:
         if case["call"] == "refine":
@@ -72,6 +87,8 @@ def test_golden_file_lists_every_kind_of_case() -> None:
     calls = {(case["call"], case["refine"]) for case in GOLDEN["cases"]}
     assert {("register", "none"), ("register", "gicp"), ("register", "point_to_plane"), ("refine", "gicp")} <= calls
     assert {"fixed", "sign_free", "local"} <= {case["viewpoint"] for case in GOLDEN["cases"]}
+    assert {"none", "ground"} <= {case["suppression"] for case in GOLDEN["cases"]}
+    assert {3, 1} <= {case["rotation_dof"] for case in GOLDEN["cases"]}
     for case in GOLDEN["cases"]:
         assert case["call"] in ("register", "refine") and case["refine"] in kissm._config.REFINE_MODES
         assert case["viewpoint"] in kissm._config.VIEWPOINT_MODES
