@@ -294,6 +294,30 @@ static void test_suppression_registration(void) {
     scn_pair_free(&pair);
 }
 
+/* Clouds that are all ground: every voxel suppressed, so no keypoint and valid = 0 with a reason. */
+static void test_all_ground(void) {
+    scn_pair pair;
+    kissm_config c = scn_config(VOXEL);
+    kissm_result r;
+    size_t i;
+    c.suppression = KISSM_SUPPRESS_GROUND;
+    scn_cloud_init(&pair.source);
+    scn_cloud_init(&pair.target);
+    for (i = 0; i < 40000; ++i) {
+        const double x = -15.0 + 30.0 * (double)(i % 200) / 200.0, y = -15.0 + 30.0 * (double)(i / 200) / 200.0;
+        scn_cloud_push(&pair.source, x, y, GROUND_Z + 0.01 * sin(7.0 * x + 3.0 * y));
+        scn_cloud_push(&pair.target, y, -x, GROUND_Z + 0.01 * cos(5.0 * x - 2.0 * y));
+    }
+    scn_pose_identity(&pair.truth);
+    run(c, &pair, &r);
+    CHECK_EQ_INT(r.valid, 0);
+    CHECK_MSG(r.reason == KISSM_REASON_TOO_FEW_FEATURES || r.reason == KISSM_REASON_TOO_FEW_CORRESPONDENCES,
+              "reason %d", (int)r.reason);
+    CHECK_MSG((double)r.num_source_suppressed > 0.8 * (double)r.num_source_voxels, "%llu of %llu suppressed",
+              (unsigned long long)r.num_source_suppressed, (unsigned long long)r.num_source_voxels);
+    scn_pair_free(&pair);
+}
+
 static void test_yaw_only(void) {
     scn_pair pair;
     kissm_config c = scn_config(VOXEL);
@@ -339,6 +363,7 @@ int main(void) {
     RUN_TEST(test_mask_bad_input);
     RUN_TEST(test_preset);
     RUN_TEST(test_suppression_registration);
+    RUN_TEST(test_all_ground);
     RUN_TEST(test_yaw_only);
     scn_cloud_free(&g_scene);
     return TEST_SUMMARY();

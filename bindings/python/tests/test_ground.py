@@ -143,3 +143,20 @@ def test_yaw_only_on_lidar(real_pairs: dict[str, RealPair], name: str) -> None:
     r, rre, rte = _run(pair, _turned_about(np.array([1.0, 0.0, 0.0]), 20.0), rotation_dof=1)
     assert not r.valid or (rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m), f"{name} tilted: {r!r}"
     assert not r.valid, f"{name}: a 20 degree tilt cannot be right under yaw only ({rre:.2f} deg)"
+
+
+def test_vehicle_preset_on_every_real_pair(real_pairs: dict[str, RealPair]) -> None:
+    """Every real pair (indoor fragments and bunny scans too) under the vehicle preset: a right pose or valid False
+    with a reason, never a wrong valid pose or an exception."""
+    config = kissm.Config.preset("lidar-vehicle", num_threads=2)
+    for name, pair in real_pairs.items():
+        source = read_cached(pair.source, pair.source_format)
+        target = read_cached(pair.target, pair.target_format)
+        with kissm.Matcher(config) as matcher:
+            r = matcher.register(source, target)
+        t = r.transform
+        rre = rotation_error_deg(t[:3, :3], pair.gt[:3, :3]) if r.has_pose else math.inf
+        rte = float(np.linalg.norm(t[:3, 3] - pair.gt[:3, 3])) if r.has_pose else math.inf
+        right = rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m
+        assert right or not r.valid, f"{name}: wrong pose reported valid ({rre:.2f} deg, {rte:.3f} m)"
+        assert r.valid or r.reason, name
