@@ -17,10 +17,11 @@
 //! `threads`, `valid`, `reason`, `reason_code`, `initial_transform` with `--initial`, `transform`,
 //! `rotation`, `translation`, `coarse_transform`, `refine`, `information`, `overlap`, `refine_rmse`,
 //! `refine_condition`, `inlier_coverage`, `refine_iterations`, `refine_converged`, `final_inliers`,
-//! `counts`, `inlier_ratio`, `residual_rms`, `noise_bound`, `inlier_extent`, `rotation_uncertainty`,
-//! `time_ms`, `read_ms`), the same layout and the same number format: the shortest of `%.15g`, `%.16g`
-//! and `%.17g` that reads back to the exact double, `null` for NaN and infinities (and for `information`
-//! when refinement did not run). Exit status: 0 valid pose, 1 not valid, 2 usage or input error.
+//! `counts` (with `source_suppressed`, `target_suppressed`), `inlier_ratio`, `residual_rms`, `noise_bound`,
+//! `inlier_extent`, `rotation_uncertainty`, `tilt`, `time_ms` (with `suppression`), `read_ms`), the same
+//! layout and the same number format: the shortest of `%.15g`, `%.16g` and `%.17g` that reads back to the
+//! exact double, `null` for NaN and infinities (and for `information` when refinement did not run). Exit
+//! status: 0 valid pose, 1 not valid, 2 usage or input error.
 
 use std::fmt::Write as _;
 use std::process::ExitCode;
@@ -252,11 +253,14 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("rotation_inliers", c.rotation_inliers),
         ("final_inliers", c.final_inliers),
         ("refine_correspondences", fine.map_or(0, |f| f.correspondences)),
+        ("source_suppressed", c.source_suppressed),
+        ("target_suppressed", c.target_suppressed),
     ]
     .map(|(key, value)| (key, value.to_string()));
     let times = [
         ("voxelize", t.voxelize_ms),
         ("features", t.features_ms),
+        ("suppression", t.suppression_ms),
         ("matching", t.matching_ms),
         ("pruning", t.pruning_ms),
         ("solver", t.solver_ms),
@@ -298,6 +302,7 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("noise_bound", json_number(reg.noise_bound)),
         ("inlier_extent", json_row(&reg.inlier_extent)),
         ("rotation_uncertainty", json_number(reg.rotation_uncertainty)),
+        ("tilt", json_number(reg.tilt)),
         ("time_ms", json_object(&times, 4)),
         ("read_ms", json_number(read_ms)),
     ]);

@@ -81,6 +81,122 @@ impl Default for Viewpoint {
     }
 }
 
+/// Geometric suppression before keypoints (`kissm_config.suppression`): voxels it picks get no descriptor, so
+/// they cannot flood the matching with look-alike correspondences. They stay in the clouds refinement
+/// aligns.
+///
+/// It is computed with the features, so [`Features`](crate::Features) of a matcher with another value do not
+/// match this one's ([`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Suppression {
+    /// Every voxel may become a keypoint (the default).
+    #[default]
+    None,
+    /// Ground voxels get no keypoint: a region-wise ground model around the sensor (the
+    /// [`Viewpoint::Fixed`] position), perpendicular to [`Config::up`], with the sensor
+    /// [`Config::sensor_height`] above the ground. [`Matcher::ground_mask`](crate::Matcher::ground_mask)
+    /// shows what it labels ground. For scans of a LiDAR on a vehicle, in the sensor's frame.
+    Ground,
+}
+
+impl Suppression {
+    /// The suppression of a `KISSM_SUPPRESS_*` code (`None` for a value the library does not define).
+    pub fn from_code(code: i32) -> Option<Suppression> {
+        match code {
+            sys::KISSM_SUPPRESS_NONE => Some(Suppression::None),
+            sys::KISSM_SUPPRESS_GROUND => Some(Suppression::Ground),
+            _ => None,
+        }
+    }
+
+    /// The `KISSM_SUPPRESS_*` code.
+    pub fn code(self) -> i32 {
+        match self {
+            Suppression::None => sys::KISSM_SUPPRESS_NONE,
+            Suppression::Ground => sys::KISSM_SUPPRESS_GROUND,
+        }
+    }
+}
+
+/// The settings for a common kind of data (`kissm_config_preset`, `docs/parameters.md`, "Presets"): the
+/// voxel size and the options that kind wants; every other field keeps its value.
+///
+/// [`Config::preset`] starts a builder from the library's defaults with a preset applied (as Python's
+/// `Config.preset(name)` does); [`ConfigBuilder::preset`] applies one on top of a builder's current values
+/// (as the C function does), so call it before your own changes:
+///
+/// ```
+/// use kissm::{Config, Preset, Suppression};
+/// let config = Config::preset(Preset::LidarVehicle).num_threads(2).build()?;
+/// assert_eq!((config.voxel_size(), config.suppression()), (0.3, Suppression::Ground));
+/// // The same as a builder step.
+/// let same = Config::builder().preset(Preset::LidarVehicle).num_threads(2).build()?;
+/// assert_eq!(format!("{config:?}"), format!("{same:?}"));
+/// # Ok::<(), kissm::Error>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Preset {
+    /// `"lidar-vehicle"`: outdoor LiDAR on a car or ground robot, scans in the sensor frame: 0.3 m voxels,
+    /// ground suppression ([`Suppression::Ground`], up +z, a fixed viewpoint).
+    LidarVehicle,
+    /// `"lidar-handheld"`: handheld, backpack or drone LiDAR (no ground assumption, any orientation): 0.3 m
+    /// voxels, frame-free normals ([`Viewpoint::Local`]), no suppression, 3 rotational degrees of freedom.
+    LidarHandheld,
+    /// `"indoor-rgbd"`: indoor RGB-D fragments (rooms, metres across): 0.05 m voxels, no suppression, 3
+    /// rotational degrees of freedom.
+    IndoorRgbd,
+    /// `"object"`: objects on a turntable or scanned by hand (decimetres across): 0.006 m voxels, no
+    /// suppression, 3 rotational degrees of freedom.
+    Object,
+}
+
+impl Preset {
+    /// Every preset, in the order of their codes.
+    pub const ALL: [Preset; 4] = [Preset::LidarVehicle, Preset::LidarHandheld, Preset::IndoorRgbd, Preset::Object];
+
+    /// The preset of a `KISSM_PRESET_*` code (`None` for a value the library does not define).
+    pub fn from_code(code: i32) -> Option<Preset> {
+        match code {
+            sys::KISSM_PRESET_LIDAR_VEHICLE => Some(Preset::LidarVehicle),
+            sys::KISSM_PRESET_LIDAR_HANDHELD => Some(Preset::LidarHandheld),
+            sys::KISSM_PRESET_INDOOR_RGBD => Some(Preset::IndoorRgbd),
+            sys::KISSM_PRESET_OBJECT => Some(Preset::Object),
+            _ => None,
+        }
+    }
+
+    /// The `KISSM_PRESET_*` code.
+    pub fn code(self) -> i32 {
+        match self {
+            Preset::LidarVehicle => sys::KISSM_PRESET_LIDAR_VEHICLE,
+            Preset::LidarHandheld => sys::KISSM_PRESET_LIDAR_HANDHELD,
+            Preset::IndoorRgbd => sys::KISSM_PRESET_INDOOR_RGBD,
+            Preset::Object => sys::KISSM_PRESET_OBJECT,
+        }
+    }
+
+    /// The name the Python binding and the documentation use, such as `"lidar-vehicle"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::LidarVehicle => "lidar-vehicle",
+            Preset::LidarHandheld => "lidar-handheld",
+            Preset::IndoorRgbd => "indoor-rgbd",
+            Preset::Object => "object",
+        }
+    }
+
+    /// The preset of a [`name`](Preset::name) (`None` for any other text).
+    pub fn from_name(name: &str) -> Option<Preset> {
+        Preset::ALL.into_iter().find(|p| p.name() == name)
+    }
+}
+
+impl fmt::Display for Preset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// A validated registration configuration.
 ///
 /// Built with [`Config::builder`], whose defaults are the C library's (`kissm_config_init`): voxel size
@@ -88,8 +204,10 @@ impl Default for Viewpoint {
 /// and solver noise bound gains 1.0 and 0.75, no noise bound cap, viewpoint at the origin, 3 normal
 /// neighbours, 5000 correspondences, 15 inliers, non-finite points rejected, all hardware threads, no
 /// refinement ([`RefineMode::None`]; the refinement settings and the validity rules' thresholds as
-/// `kissm.h` documents them, read from the library). Every length scales with the voxel size, so it is
-/// usually the only value to set.
+/// `kissm.h` documents them, read from the library), no suppression ([`Suppression::None`]), 3 rotational
+/// degrees of freedom, up +z and the sensor height estimated. Every length scales with the voxel size, so
+/// it is usually the only value to set; [`Config::preset`] sets it and the options a common kind of data
+/// wants.
 ///
 /// ```
 /// let config = kissm::Config::builder().voxel_size(0.5).num_threads(2).build()?;
@@ -135,9 +253,23 @@ impl Config {
         ConfigBuilder::new()
     }
 
+    /// A builder starting from the library's defaults with `preset` applied (`kissm_config_preset`): the
+    /// voxel size and options of a common kind of data, which the builder's setters may then change. The
+    /// same as `Config::builder().preset(preset)`; see [`Preset`].
+    ///
+    /// ```
+    /// use kissm::{Config, Preset};
+    /// let config = Config::preset(Preset::IndoorRgbd).min_inliers(20).build()?;
+    /// assert_eq!((config.voxel_size(), config.min_inliers()), (0.05, 20));
+    /// # Ok::<(), kissm::Error>(())
+    /// ```
+    pub fn preset(preset: Preset) -> ConfigBuilder {
+        ConfigBuilder::new().preset(preset)
+    }
+
     /// A builder starting from this configuration.
     pub fn to_builder(&self) -> ConfigBuilder {
-        ConfigBuilder { raw: self.raw, init_status: sys::KISSM_OK }
+        ConfigBuilder { raw: self.raw, pending: None }
     }
 
     /// Checks every field with `kissm_config_validate` (the same checks as creating a matcher).
@@ -285,6 +417,26 @@ impl Config {
     pub fn refine_normal_radius_gain(&self) -> f64 {
         self.raw.refine_normal_radius_gain
     }
+    /// Geometric suppression before keypoints; computed with the features. A raw config (see
+    /// [`Config::from_raw`]) holding no `KISSM_SUPPRESS_*` code reads as [`Suppression::None`] here;
+    /// creating a matcher from it fails.
+    pub fn suppression(&self) -> Suppression {
+        Suppression::from_code(self.raw.suppression).unwrap_or_default()
+    }
+    /// Rotational degrees of freedom the solver estimates: 3, or 1 (yaw about [`up`](Config::up) only).
+    pub fn rotation_dof(&self) -> usize {
+        usize::try_from(self.raw.rotation_dof).unwrap_or(0)
+    }
+    /// The up direction in each cloud's own frame, as given (the library normalises it), for
+    /// [`Suppression::Ground`] and [`rotation_dof`](Config::rotation_dof) 1.
+    pub fn up(&self) -> [f64; 3] {
+        self.raw.up
+    }
+    /// Height of the sensor above the ground along [`up`](Config::up), metres, for
+    /// [`Suppression::Ground`]; 0 = estimate it from the cloud.
+    pub fn sensor_height(&self) -> f64 {
+        self.raw.sensor_height
+    }
 }
 
 impl Default for Config {
@@ -323,6 +475,10 @@ impl fmt::Debug for Config {
             .field("refine_min_inliers", &self.raw.refine_min_inliers)
             .field("min_refine_condition", &self.raw.min_refine_condition)
             .field("refine_normal_radius_gain", &self.raw.refine_normal_radius_gain)
+            .field("suppression", &self.suppression())
+            .field("rotation_dof", &self.raw.rotation_dof)
+            .field("up", &self.raw.up)
+            .field("sensor_height", &self.raw.sensor_height)
             .finish()
     }
 }
@@ -347,7 +503,9 @@ impl fmt::Debug for Config {
 #[derive(Clone, Debug)]
 pub struct ConfigBuilder {
     raw: sys::kissm_config,
-    init_status: i32,
+    /// An error met by a step that calls the library (`kissm_config_init`, `kissm_config_preset`; neither
+    /// can fail on this crate's layout and enums), reported by [`build`](ConfigBuilder::build).
+    pending: Option<Error>,
 }
 
 impl Default for ConfigBuilder {
@@ -360,7 +518,29 @@ impl ConfigBuilder {
     /// A builder holding the library's defaults.
     pub fn new() -> ConfigBuilder {
         let (raw, init_status) = raw_defaults();
-        ConfigBuilder { raw, init_status }
+        let pending = (init_status != sys::KISSM_OK).then(|| {
+            Error::new(
+                init_status,
+                "kissm_config_init rejected this crate's kissm_config layout (library and bindings disagree)",
+            )
+        });
+        ConfigBuilder { raw, pending }
+    }
+
+    /// Applies `preset` on top of the current values (`kissm_config_preset`): the voxel size and the options
+    /// of a common kind of data; every other field keeps its value. Call it before your own changes, which
+    /// it would otherwise overwrite. See [`Preset`] and [`Config::preset`].
+    pub fn preset(mut self, preset: Preset) -> Self {
+        let mut raw = self.raw;
+        // SAFETY: raw is a complete kissm_config with struct_size set (by kissm_config_init, or the size of
+        // this crate's struct when that failed); the library writes at most struct_size bytes.
+        let status = unsafe { sys::kissm_config_preset(&mut raw, preset.code()) };
+        if status == sys::KISSM_OK {
+            self.raw = raw;
+        } else if self.pending.is_none() {
+            self.pending = Some(Error::last(status));
+        }
+        self
     }
 
     /// Worker threads, 0..=1024; 0 (the default) = all hardware threads. Results do not depend on it.
@@ -523,17 +703,47 @@ impl ConfigBuilder {
         self.raw.refine_normal_radius_gain = gain;
         self
     }
+    /// Geometric suppression before keypoints (default [`Suppression::None`]). [`Suppression::Ground`] uses
+    /// [`up`](ConfigBuilder::up), [`sensor_height`](ConfigBuilder::sensor_height) and the sensor at the
+    /// [`Viewpoint::Fixed`] position. Computed with the features, so [`Features`](crate::Features) of a
+    /// matcher with another value do not match this one's
+    /// ([`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch)).
+    pub fn suppression(mut self, suppression: Suppression) -> Self {
+        self.raw.suppression = suppression.code();
+        self
+    }
+    /// Rotational degrees of freedom the solver estimates: 3 (the default), or 1 (yaw about
+    /// [`up`](ConfigBuilder::up) only, roll and pitch taken as zero: ground vehicles). With 1, a pair that is
+    /// clearly tilted is not valid ([`Reason::Tilted`](crate::Reason::Tilted), with
+    /// [`Registration::tilt`](crate::Registration::tilt) the evidence). Any other value fails
+    /// [`build`](ConfigBuilder::build).
+    pub fn rotation_dof(mut self, dof: usize) -> Self {
+        self.raw.rotation_dof = to_i32(dof);
+        self
+    }
+    /// The up direction in each cloud's own frame (the same vector for both clouds), for
+    /// [`Suppression::Ground`] and [`rotation_dof`](ConfigBuilder::rotation_dof) 1: finite, of length above
+    /// 1e-9, normalised by the library (default (0, 0, 1)). Computed with the features when suppression is
+    /// on.
+    pub fn up(mut self, up: [f64; 3]) -> Self {
+        self.raw.up = up;
+        self
+    }
+    /// Height of the sensor (the [`Viewpoint::Fixed`] position) above the ground along
+    /// [`up`](ConfigBuilder::up), metres, for [`Suppression::Ground`]; 0 (the default) = estimate it from the
+    /// cloud; in [0, 1000]. Helps on clouds whose nearby ground is hidden.
+    pub fn sensor_height(mut self, metres: f64) -> Self {
+        self.raw.sensor_height = metres;
+        self
+    }
 
     /// Validates every field (`kissm_config_validate`) and returns the configuration, or an
     /// [`ErrorKind::InvalidArgument`](crate::ErrorKind::InvalidArgument) error whose message names the
     /// field.
     pub fn build(self) -> Result<Config, Error> {
         crate::check_library()?;
-        if self.init_status != sys::KISSM_OK {
-            return Err(Error::new(
-                self.init_status,
-                "kissm_config_init rejected this crate's kissm_config layout (library and bindings disagree)",
-            ));
+        if let Some(error) = self.pending {
+            return Err(error);
         }
         let config = Config { raw: self.raw };
         config.validate()?;

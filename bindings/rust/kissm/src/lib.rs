@@ -69,6 +69,10 @@
 //!   the same call, and [`Matcher::refine`] refines a known pose; [`Registration::refinement`] then holds
 //!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose, and how much of
 //!   the overlap the solver's inliers cover.
+//! - **LiDAR on vehicles**: [`Config::preset`] with [`Preset::LidarVehicle`] sets the voxel size and
+//!   [`Suppression::Ground`] (ground voxels get no keypoint; [`Matcher::ground_mask`] shows them);
+//!   [`ConfigBuilder::rotation_dof`] 1 estimates the yaw about [`Config::up`] only, and a clearly tilted
+//!   pair is then not valid ([`Reason::Tilted`], [`Registration::tilt`]).
 //! - **Results** are bitwise identical to the C library's (and the `kissm` tool's) on the same input,
 //!   whatever the thread count and whether the matcher is fresh or reused.
 //! - **Errors**: every failure is an [`Error`] with the C status code and the library's message naming
@@ -138,7 +142,7 @@ use kissm_sys as sys;
 
 #[allow(deprecated)] // the former name, kept as an alias
 pub use config::NonfinitePolicy;
-pub use config::{Config, ConfigBuilder, NonFinitePolicy, RefineMode, Viewpoint};
+pub use config::{Config, ConfigBuilder, NonFinitePolicy, Preset, RefineMode, Suppression, Viewpoint};
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher};
 pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};

@@ -219,6 +219,36 @@ impl Matcher {
         Ok(Registration::from_raw(&result))
     }
 
+    /// Which points of `cloud` the ground model of [`Suppression::Ground`](crate::Suppression::Ground)
+    /// labels ground (`kissm_ground_mask`), under this matcher's voxel size,
+    /// [`up`](Config::up), [`viewpoint`](Config::viewpoint) (the sensor) and
+    /// [`sensor_height`](Config::sensor_height), whatever its [`suppression`](Config::suppression): one
+    /// `bool` per point of `cloud`, in order, `true` for ground.
+    ///
+    /// The model runs on the voxels, so every point of a voxel gets its voxel's label; points dropped as
+    /// non-finite (under [`NonFinitePolicy::Drop`](crate::NonFinitePolicy::Drop)) are `false`, and a cloud
+    /// without ground gets all `false`. Deterministic: the same mask for any thread count. Accepts the
+    /// inputs of [`register`](Matcher::register) and fails as it does on a bad cloud (empty, too small,
+    /// rejected non-finite coordinates, a voxel size too small for its extent) or a cancellation.
+    ///
+    /// ```no_run
+    /// use kissm::{Config, Matcher, Preset};
+    /// # let scan: Vec<[f32; 3]> = Vec::new();
+    /// let mut matcher = Matcher::new(&Config::preset(Preset::LidarVehicle).build()?)?;
+    /// let ground = matcher.ground_mask(&scan)?;
+    /// let obstacles: Vec<[f32; 3]> = scan.iter().zip(&ground).filter(|&(_, &g)| !g).map(|(p, _)| *p).collect();
+    /// # Ok::<(), kissm::Error>(())
+    /// ```
+    pub fn ground_mask<P: AsPoints + ?Sized>(&mut self, cloud: &P) -> Result<Vec<bool>, Error> {
+        let cloud = cloud.as_points();
+        let mut mask = vec![0u8; cloud.len()];
+        // SAFETY: as in register; mask holds cloud.len() = points->count writable bytes, which the library
+        // fills only on success.
+        let status = unsafe { sys::kissm_ground_mask(self.ptr(), cloud.as_raw(), mask.as_mut_ptr()) };
+        Error::check(status)?;
+        Ok(mask.into_iter().map(|flag| flag != 0).collect())
+    }
+
     /// A handle that stops this matcher's running call from another thread. The matcher lives on until
     /// it and all its handles are dropped.
     pub fn cancel_handle(&self) -> CancelHandle {

@@ -47,6 +47,12 @@ pub enum Reason {
     /// ([`Refinement::converged`] is false): it was crossing from one basin to another, as refinements from
     /// a wrong start do.
     NotConverged,
+    /// With [`Config::rotation_dof`](crate::Config::rotation_dof) 1: the best unconstrained rotation on the
+    /// yaw solution's inliers turns [`Config::up`](crate::Config::up) by more than
+    /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)
+    /// ([`Registration::tilt`] above it): the clouds' relative roll or pitch is not zero, so the yaw-only
+    /// pose would be off by at least that much.
+    Tilted,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -67,6 +73,7 @@ impl Reason {
             sys::KISSM_REASON_UNCERTAIN_ROTATION => Reason::UncertainRotation,
             sys::KISSM_REASON_CLUSTERED_INLIERS => Reason::ClusteredInliers,
             sys::KISSM_REASON_NOT_CONVERGED => Reason::NotConverged,
+            sys::KISSM_REASON_TILTED => Reason::Tilted,
             other => Reason::Other(other),
         }
     }
@@ -86,6 +93,7 @@ impl Reason {
             Reason::UncertainRotation => sys::KISSM_REASON_UNCERTAIN_ROTATION,
             Reason::ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
             Reason::NotConverged => sys::KISSM_REASON_NOT_CONVERGED,
+            Reason::Tilted => sys::KISSM_REASON_TILTED,
             Reason::Other(code) => code,
         }
     }
@@ -133,6 +141,12 @@ pub struct Counts {
     pub rotation_inliers: u64,
     /// Pruned correspondences within the solver bound after rotation and translation.
     pub final_inliers: u64,
+    /// Source voxels [`Config::suppression`](crate::Config::suppression) kept from becoming keypoints (0
+    /// when it is [`Suppression::None`](crate::Suppression::None)).
+    pub source_suppressed: u64,
+    /// Target voxels [`Config::suppression`](crate::Config::suppression) kept from becoming keypoints (0
+    /// when it is off).
+    pub target_suppressed: u64,
 }
 
 /// Wall-clock milliseconds per stage (stages not run are 0). The only values that differ between
@@ -142,7 +156,7 @@ pub struct Counts {
 pub struct Timings {
     /// Input checks, recentring and voxelisation.
     pub voxelize_ms: f64,
-    /// Neighbour search, normals, FPFH descriptors.
+    /// Neighbour search, normals, FPFH descriptors (suppression included).
     pub features_ms: f64,
     /// Descriptor matching.
     pub matching_ms: f64,
@@ -154,6 +168,9 @@ pub struct Timings {
     pub refine_ms: f64,
     /// Sum of the stages (refinement included).
     pub total_ms: f64,
+    /// Suppression ([`Config::suppression`](crate::Config::suppression)), both clouds: part of
+    /// [`features_ms`](Timings::features_ms); 0 when it is off.
+    pub suppression_ms: f64,
 }
 
 /// What the fine registration found ([`Registration::refinement`]): present exactly when refinement ran,
@@ -244,6 +261,11 @@ pub struct Registration {
     /// inliers; NaN when no pose was estimated and after [`Matcher::refine`](crate::Matcher::refine) (no
     /// solver).
     pub rotation_uncertainty: f64,
+    /// With [`Config::rotation_dof`](crate::Config::rotation_dof) 1: the angle (radians) by which the best
+    /// unconstrained rotation on the yaw solution's inliers turns [`Config::up`](crate::Config::up), the
+    /// evidence for [`Reason::Tilted`] (a valid pose needs it within
+    /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)). NaN otherwise.
+    pub tilt: f64,
     /// Milliseconds per stage.
     pub timings: Timings,
 }
@@ -312,12 +334,15 @@ impl Registration {
                 max_core_number: r.max_core_number,
                 rotation_inliers: r.num_rotation_inliers,
                 final_inliers: r.num_final_inliers,
+                source_suppressed: r.num_source_suppressed,
+                target_suppressed: r.num_target_suppressed,
             },
             inlier_ratio: r.inlier_ratio,
             residual_rms: r.residual_rms,
             noise_bound: r.noise_bound,
             inlier_extent: r.inlier_extent,
             rotation_uncertainty: r.rotation_uncertainty,
+            tilt: r.tilt,
             timings: Timings {
                 voxelize_ms: r.time_voxelize_ms,
                 features_ms: r.time_features_ms,
@@ -326,6 +351,7 @@ impl Registration {
                 solver_ms: r.time_solver_ms,
                 refine_ms: r.time_refine_ms,
                 total_ms: r.time_total_ms,
+                suppression_ms: r.time_suppression_ms,
             },
         }
     }
@@ -381,8 +407,8 @@ impl Registration {
             && bits(&self.rotation, &other.rotation)
             && bits(&self.translation, &other.translation)
             && bits(
-                &[self.inlier_ratio, self.residual_rms, self.noise_bound, self.rotation_uncertainty],
-                &[other.inlier_ratio, other.residual_rms, other.noise_bound, other.rotation_uncertainty],
+                &[self.inlier_ratio, self.residual_rms, self.noise_bound, self.rotation_uncertainty, self.tilt],
+                &[other.inlier_ratio, other.residual_rms, other.noise_bound, other.rotation_uncertainty, other.tilt],
             )
             && bits(&self.inlier_extent, &other.inlier_extent)
             && same_refinement

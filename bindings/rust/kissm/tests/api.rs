@@ -6,9 +6,10 @@ mod common;
 
 use std::io::Write as _;
 
+use common::{moved, scene, Pose};
 use kissm::{
     AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonFinitePolicy, PointsView,
-    Reason, RefineMode, Refinement, Registration, Viewpoint,
+    Preset, Reason, RefineMode, Refinement, Registration, Suppression, Viewpoint,
 };
 use kissm_sys as sys;
 
@@ -399,7 +400,7 @@ fn error_kinds_map_every_code() {
 #[test]
 fn reasons_round_trip() {
     let mut descriptions = std::collections::HashSet::new();
-    for code in 0..=11 {
+    for code in 0..=12 {
         let reason = Reason::from_code(code);
         assert_eq!(reason.code(), code);
         assert!(!matches!(reason, Reason::Other(_)));
@@ -418,11 +419,331 @@ fn reasons_round_trip() {
     assert_eq!(Reason::from_code(sys::KISSM_REASON_NOT_CONVERGED), Reason::NotConverged);
     assert_eq!(Reason::NotConverged.code(), 11);
     assert_eq!(Reason::NotConverged.to_string(), "refinement did not converge");
-    assert_eq!(Reason::from_code(12), Reason::Other(12));
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_TILTED), Reason::Tilted);
+    assert_eq!(Reason::Tilted.code(), 12);
+    assert_eq!(Reason::Tilted.to_string(), "the clouds' relative roll or pitch is not zero (rotation_dof = 1)");
+    assert_eq!(Reason::from_code(13), Reason::Other(13));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);
     assert_eq!(Reason::None.to_string(), "none");
+}
+
+#[test]
+fn ground_defaults_are_the_library_ones() {
+    let lib = library_defaults();
+    for c in [Config::default(), Config::builder().build().unwrap()] {
+        assert_eq!(c.suppression(), Suppression::None);
+        assert_eq!(c.suppression().code(), lib.suppression);
+        assert_eq!(c.rotation_dof(), lib.rotation_dof as usize);
+        assert_eq!(c.rotation_dof(), 3);
+        assert_eq!(c.up(), lib.up);
+        assert_eq!(c.up(), [0.0, 0.0, 1.0]);
+        assert_eq!(c.sensor_height().to_bits(), lib.sensor_height.to_bits());
+        assert_eq!(c.sensor_height(), 0.0);
+        let debug = format!("{c:?}");
+        for field in ["suppression: None", "rotation_dof: 3", "up: [0.0, 0.0, 1.0]", "sensor_height: 0.0"] {
+            assert!(debug.contains(field), "{debug}");
+        }
+    }
+    assert_eq!(Suppression::default(), Suppression::None);
+}
+
+#[test]
+fn suppressions_map_their_codes() {
+    for (suppression, code) in
+        [(Suppression::None, sys::KISSM_SUPPRESS_NONE), (Suppression::Ground, sys::KISSM_SUPPRESS_GROUND)]
+    {
+        assert_eq!(suppression.code(), code);
+        assert_eq!(Suppression::from_code(code), Some(suppression));
+        let c = Config::builder().suppression(suppression).build().unwrap();
+        assert_eq!(c.suppression(), suppression);
+        assert_eq!(c.as_raw().suppression, code);
+    }
+    assert_eq!(Suppression::from_code(2), None);
+    assert_eq!(Suppression::from_code(-1), None);
+}
+
+#[test]
+fn builder_sets_every_ground_field() {
+    let c = Config::builder()
+        .suppression(Suppression::Ground)
+        .rotation_dof(1)
+        .up([0.0, 0.5, 2.0])
+        .sensor_height(1.73)
+        .build()
+        .unwrap();
+    assert_eq!(c.suppression(), Suppression::Ground);
+    assert_eq!(c.rotation_dof(), 1);
+    assert_eq!(c.up(), [0.0, 0.5, 2.0]); // as given: the library normalises its own copy
+    assert_eq!(c.sensor_height(), 1.73);
+    let raw = c.as_raw();
+    assert_eq!((raw.suppression, raw.rotation_dof, raw.up, raw.sensor_height), (1, 1, [0.0, 0.5, 2.0], 1.73));
+    let debug = format!("{c:?}");
+    for field in ["suppression: Ground", "rotation_dof: 1", "up: [0.0, 0.5, 2.0]", "sensor_height: 1.73"] {
+        assert!(debug.contains(field), "{debug}");
+    }
+    // A matcher keeps them; every other field keeps the library's default.
+    assert_eq!(format!("{:?}", Matcher::new(&c).unwrap().config()), debug);
+    let back = c
+        .to_builder()
+        .suppression(Suppression::None)
+        .rotation_dof(3)
+        .up([0.0, 0.0, 1.0])
+        .sensor_height(0.0)
+        .build()
+        .unwrap();
+    assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
+    // The range ends are accepted.
+    let ends = Config::builder().sensor_height(1000.0).up([1e-9, 1e-9, 0.0]).build().unwrap();
+    assert_eq!((ends.sensor_height(), ends.up()), (1000.0, [1e-9, 1e-9, 0.0]));
+    let ends = Config::builder().up([-1e300, 0.0, 0.0]).build().unwrap();
+    assert_eq!(ends.up(), [-1e300, 0.0, 0.0]);
+}
+
+#[test]
+fn invalid_ground_values_are_errors_not_panics() {
+    let b = Config::builder;
+    invalid(b().up([0.0, 0.0, 0.0]), "config.up");
+    invalid(b().up([1e-10, 0.0, 0.0]), "config.up");
+    invalid(b().up([f64::NAN, 0.0, 1.0]), "config.up[0]");
+    invalid(b().up([0.0, 0.0, f64::INFINITY]), "config.up[2]");
+    invalid(b().rotation_dof(2), "config.rotation_dof");
+    invalid(b().rotation_dof(0), "config.rotation_dof");
+    invalid(b().rotation_dof(6), "config.rotation_dof");
+    invalid(b().rotation_dof(usize::MAX), "config.rotation_dof");
+    invalid(b().sensor_height(-1.0), "config.sensor_height");
+    invalid(b().sensor_height(1000.5), "config.sensor_height");
+    invalid(b().sensor_height(f64::NAN), "config.sensor_height");
+    invalid(b().sensor_height(f64::INFINITY), "config.sensor_height");
+    // suppression cannot be out of range through the enum; a raw config can hold any code.
+    for code in [7, 2, -1] {
+        let mut raw = *Config::default().as_raw();
+        raw.suppression = code;
+        let config = Config::from_raw(raw);
+        assert_eq!(config.suppression(), Suppression::None);
+        let err = config.validate().unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::InvalidArgument, "{err}");
+        assert_eq!(err.code(), sys::KISSM_ERR_INVALID_ARGUMENT);
+        assert!(err.message().contains("config.suppression"), "{err}");
+        let err = Matcher::new(&config).unwrap_err();
+        assert!(err.message().contains("config.suppression"), "{err}");
+        let err = config.to_builder().build().unwrap_err();
+        assert!(err.message().contains("config.suppression"), "{err}");
+    }
+}
+
+#[test]
+fn presets_set_the_library_values() {
+    let vehicle = Config::preset(Preset::LidarVehicle).build().unwrap();
+    assert_eq!(vehicle.voxel_size(), 0.3);
+    assert_eq!(vehicle.suppression(), Suppression::Ground);
+    assert_eq!(vehicle.up(), [0.0, 0.0, 1.0]);
+    assert_eq!(vehicle.viewpoint(), Viewpoint::Fixed([0.0; 3]));
+    assert_eq!(vehicle.rotation_dof(), 3);
+    let handheld = Config::preset(Preset::LidarHandheld).build().unwrap();
+    assert_eq!((handheld.voxel_size(), handheld.suppression()), (0.3, Suppression::None));
+    assert_eq!(handheld.viewpoint(), Viewpoint::Local);
+    let rgbd = Config::preset(Preset::IndoorRgbd).build().unwrap();
+    assert_eq!((rgbd.voxel_size(), rgbd.suppression(), rgbd.rotation_dof()), (0.05, Suppression::None, 3));
+    let object = Config::preset(Preset::Object).build().unwrap();
+    assert_eq!((object.voxel_size(), object.suppression(), object.rotation_dof()), (0.006, Suppression::None, 3));
+
+    for (preset, code, name) in [
+        (Preset::LidarVehicle, sys::KISSM_PRESET_LIDAR_VEHICLE, "lidar-vehicle"),
+        (Preset::LidarHandheld, sys::KISSM_PRESET_LIDAR_HANDHELD, "lidar-handheld"),
+        (Preset::IndoorRgbd, sys::KISSM_PRESET_INDOOR_RGBD, "indoor-rgbd"),
+        (Preset::Object, sys::KISSM_PRESET_OBJECT, "object"),
+    ] {
+        assert_eq!(preset.code(), code);
+        assert_eq!(Preset::from_code(code), Some(preset));
+        assert_eq!((preset.name(), preset.to_string()), (name, name.to_string()));
+        assert_eq!(Preset::from_name(name), Some(preset));
+        // Exactly what kissm_config_preset writes on top of kissm_config_init's defaults.
+        let mut lib = library_defaults();
+        // SAFETY: lib is a complete kissm_config with struct_size set.
+        assert_eq!(unsafe { sys::kissm_config_preset(&mut lib, code) }, sys::KISSM_OK);
+        let config = Config::preset(preset).build().unwrap();
+        assert_eq!(format!("{config:?}"), format!("{:?}", Config::from_raw(lib)), "{name}");
+        // Config::preset is the builder step from the defaults; later setters win.
+        let step = Config::builder().preset(preset).build().unwrap();
+        assert_eq!(format!("{step:?}"), format!("{config:?}"));
+        let changed = Config::preset(preset).voxel_size(0.7).num_threads(2).build().unwrap();
+        assert_eq!((changed.voxel_size(), changed.num_threads()), (0.7, 2));
+        assert_eq!(changed.suppression(), config.suppression());
+    }
+    assert_eq!(Preset::ALL.map(Preset::code), [1, 2, 3, 4]);
+    assert_eq!(Preset::from_code(0), None);
+    assert_eq!(Preset::from_code(5), None);
+    assert_eq!(Preset::from_name("Lidar-Vehicle"), None);
+    // On top of a builder's values: the preset's fields are overwritten, every other field kept.
+    let on_top = Config::builder()
+        .num_threads(3)
+        .min_inliers(21)
+        .voxel_size(2.0)
+        .sensor_height(1.8)
+        .suppression(Suppression::None)
+        .preset(Preset::LidarVehicle)
+        .build()
+        .unwrap();
+    assert_eq!((on_top.num_threads(), on_top.min_inliers(), on_top.sensor_height()), (3, 21, 1.8));
+    assert_eq!((on_top.voxel_size(), on_top.suppression()), (0.3, Suppression::Ground));
+    // A raw config's bad field is still reported after a preset that does not touch it.
+    let err = Config::builder().min_inliers(2).preset(Preset::Object).build().unwrap_err();
+    assert!(err.message().contains("min_inliers"), "{err}");
+}
+
+/// A street-like cloud in the sensor's frame: a flat ground plane at z = -1.7 (the sensor 1.7 above it at
+/// the origin), a 161 x 161 grid 0.25 apart nudged within the plane, and four boxes of different sizes
+/// standing on it, their surfaces sampled every 0.1. Returns the points and how many of the first are the
+/// plane's.
+fn ground_scene() -> (Vec<[f64; 3]>, usize) {
+    const GROUND: f64 = -1.7;
+    let mut points: Vec<[f64; 3]> = (0..161 * 161)
+        .map(|i| {
+            let (x, y) = ((i % 161) as f64, (i / 161) as f64);
+            [-20.0 + 0.25 * x + 0.04 * (1.3 * y).sin(), -20.0 + 0.25 * y + 0.04 * (2.1 * x).cos(), GROUND]
+        })
+        .collect();
+    let plane = points.len();
+    // (centre x, centre y, size x, size y, height)
+    for (cx, cy, sx, sy, h) in [
+        (8.0, 5.0, 2.0, 3.0, 1.5),
+        (-10.0, 4.0, 4.0, 1.6, 2.5),
+        (4.0, -12.0, 1.2, 1.2, 3.0),
+        (-7.0, -9.0, 3.0, 2.0, 1.0),
+    ] {
+        let steps = |len: f64| (len / 0.1).round() as usize;
+        let (x0, y0, top) = (cx - sx / 2.0, cy - sy / 2.0, GROUND + h);
+        for i in 0..=steps(sx) {
+            for j in 0..=steps(sy) {
+                points.push([x0 + 0.1 * i as f64, y0 + 0.1 * j as f64, top]);
+            }
+        }
+        for k in 1..steps(h) {
+            let z = GROUND + 0.1 * k as f64;
+            for i in 0..=steps(sx) {
+                let x = x0 + 0.1 * i as f64;
+                points.push([x, y0, z]);
+                points.push([x, y0 + sy, z]);
+            }
+            for j in 1..steps(sy) {
+                let y = y0 + 0.1 * j as f64;
+                points.push([x0, y, z]);
+                points.push([x0 + sx, y, z]);
+            }
+        }
+    }
+    (points, plane)
+}
+
+#[test]
+fn ground_mask_labels_the_plane_not_the_boxes() {
+    let (points, plane) = ground_scene();
+    let config = Config::preset(Preset::LidarVehicle).num_threads(1).build().unwrap();
+    let mask = Matcher::new(&config).unwrap().ground_mask(&points).unwrap();
+    assert_eq!(mask.len(), points.len());
+    // The model covers 2.7 m and more from the sensor: most of the plane is ground.
+    let ground = mask[..plane].iter().filter(|&&g| g).count();
+    assert!(ground as f64 > 0.9 * plane as f64, "{ground} of {plane} plane points are ground");
+    // No box point clear of the voxels that touch the plane is ground.
+    let mut boxes_above = 0;
+    for (p, &g) in points[plane..].iter().zip(&mask[plane..]) {
+        if p[2] > -1.7 + 2.0 * config.voxel_size() {
+            boxes_above += 1;
+            assert!(!g, "box point {p:?} labelled ground");
+        }
+    }
+    assert!(boxes_above > 1000, "{boxes_above}");
+    let box_ground = mask[plane..].iter().filter(|&&g| g).count();
+    assert!(box_ground * 10 < points.len() - plane, "{box_ground} of {} box points are ground", points.len() - plane);
+
+    // The same mask for 2 threads, for float32 input, and whatever the matcher's suppression.
+    let two = config.to_builder().num_threads(2).build().unwrap();
+    assert_eq!(Matcher::new(&two).unwrap().ground_mask(&points).unwrap(), mask);
+    let off = config.to_builder().suppression(Suppression::None).build().unwrap();
+    assert_eq!(Matcher::new(&off).unwrap().ground_mask(&points).unwrap(), mask);
+    // Without ground in the cloud: all false.
+    let boxes = &points[plane..];
+    let none = Matcher::new(&config).unwrap().ground_mask(boxes).unwrap();
+    assert_eq!(none.len(), boxes.len());
+    // A matcher whose up is sideways sees no horizontal ground in the plane.
+    let sideways = config.to_builder().up([1.0, 0.0, 0.0]).build().unwrap();
+    let side = Matcher::new(&sideways).unwrap().ground_mask(&points).unwrap();
+    assert!(side[..plane].iter().filter(|&&g| g).count() < ground / 2);
+
+    // Bad clouds fail as registration does, and the matcher stays usable.
+    let mut m = Matcher::new(&config).unwrap();
+    let err = m.ground_mask(&Vec::<[f64; 3]>::new()).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::EmptyInput, "{err}");
+    let err = m.ground_mask(&[[0.0f32; 3]; 3]).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::TooFewPoints, "{err}");
+    let mut bad = points.clone();
+    bad[7][1] = f64::NAN;
+    assert_eq!(m.ground_mask(&bad).unwrap_err().kind(), ErrorKind::NonFinite);
+    let drop = config.to_builder().nonfinite_policy(NonFinitePolicy::Drop).build().unwrap();
+    let dropped = Matcher::new(&drop).unwrap().ground_mask(&bad).unwrap();
+    assert!(!dropped[7]);
+    assert_eq!(m.ground_mask(&points).unwrap(), mask);
+}
+
+#[test]
+fn ground_suppression_counts_suppressed_voxels() {
+    let (points, _) = ground_scene();
+    // The target: the scene seen from a sensor turned by 35 degrees about the vertical and moved along the
+    // ground, so its ground is still 1.7 below the sensor.
+    let turn = Pose::axis_angle([0.0, 0.0, 1.0], 35.0, [1.5, -0.8, 0.0]);
+    let target = moved(&points, &turn);
+    let config = Config::preset(Preset::LidarVehicle).num_threads(2).build().unwrap();
+    let reg = Matcher::new(&config).unwrap().register(&points, &target).unwrap();
+    assert!(reg.counts.source_suppressed > 0, "{:?}", reg.counts);
+    assert!(reg.counts.target_suppressed > 0, "{:?}", reg.counts);
+    assert!(reg.counts.source_suppressed + reg.counts.source_keypoints <= reg.counts.source_voxels);
+    assert!(reg.timings.suppression_ms >= 0.0 && reg.timings.suppression_ms <= reg.timings.features_ms);
+    assert!(reg.tilt.is_nan(), "tilt {} without rotation_dof 1", reg.tilt);
+    // Without suppression: nothing suppressed, and more keypoints.
+    let off = config.to_builder().suppression(Suppression::None).build().unwrap();
+    let plain = Matcher::new(&off).unwrap().register(&points, &target).unwrap();
+    assert_eq!((plain.counts.source_suppressed, plain.counts.target_suppressed), (0, 0));
+    assert_eq!(plain.timings.suppression_ms, 0.0);
+    assert!(plain.counts.source_keypoints > reg.counts.source_keypoints);
+    // Deterministic: the same result with 1 thread.
+    let one = config.to_builder().num_threads(1).build().unwrap();
+    assert!(Matcher::new(&one).unwrap().register(&points, &target).unwrap().same_result(&reg));
+}
+
+#[test]
+fn yaw_only_registration_turns_about_up_only() {
+    let Some(pair) = scene("yaw_only_registration_turns_about_up_only") else { return };
+    let truth = Pose::axis_angle([0.0, 0.0, 1.0], 70.0, [2.0, -1.0, 0.3]);
+    let target = moved(&pair.source, &truth);
+    let config = Config::builder().voxel_size(common::SCENE_VOXEL).num_threads(2).rotation_dof(1).build().unwrap();
+    let reg = Matcher::new(&config).unwrap().register(&pair.source, &target).unwrap();
+    assert!(reg.has_pose(), "{}", reg.reason);
+    for i in 0..3 {
+        let expected = if i == 2 { 1.0 } else { 0.0 };
+        assert!((reg.rotation[2][i] - expected).abs() < 1e-9, "row 3: {:?}", reg.rotation);
+        assert!((reg.rotation[i][2] - expected).abs() < 1e-9, "column 3: {:?}", reg.rotation);
+    }
+    assert!(reg.valid, "{} (tilt {})", reg.reason, reg.tilt);
+    let (rot, trans) = truth.errors(&Pose::from_matrix(&reg.transform));
+    assert!(rot < 1.0 && trans < 0.2, "rotation error {rot} deg, translation error {trans}");
+    assert!(reg.tilt.is_finite() && reg.tilt >= 0.0 && reg.tilt <= config.max_rotation_uncertainty(), "{}", reg.tilt);
+    // With 3 degrees of freedom there is no tilt.
+    let free = config.to_builder().rotation_dof(3).build().unwrap();
+    assert!(Matcher::new(&free).unwrap().register(&pair.source, &target).unwrap().tilt.is_nan());
+    // A pair whose relative pitch is 5 degrees is not valid under rotation_dof 1: Reason::Tilted, with the
+    // tilt as evidence; at 20 degrees it is not valid either, and the tilt measures the pitch.
+    for (degrees, reason) in [(5.0, Some(Reason::Tilted)), (20.0, None)] {
+        let tilted = Pose::axis_angle([1.0, 0.0, 0.0], degrees, [0.0; 3]).compose(&truth);
+        let reg = Matcher::new(&config).unwrap().register(&pair.source, &moved(&pair.source, &tilted)).unwrap();
+        assert!(!reg.valid, "a pair tilted by {degrees} degrees is valid under rotation_dof 1");
+        if let Some(reason) = reason {
+            assert_eq!(reg.reason, reason, "tilt {}", reg.tilt);
+        }
+        assert!(reg.tilt > config.max_rotation_uncertainty(), "{}", reg.tilt);
+        assert!((reg.tilt.to_degrees() - degrees).abs() < 0.2 * degrees, "tilt {} deg", reg.tilt.to_degrees());
+    }
 }
 
 fn line(n: usize) -> Vec<[f64; 3]> {
@@ -649,4 +970,8 @@ fn thread_safety_contract() {
     assert_sync::<Registration>();
     assert_send::<Refinement>();
     assert_sync::<Refinement>();
+    assert_send::<Preset>();
+    assert_sync::<Preset>();
+    assert_send::<Suppression>();
+    assert_sync::<Suppression>();
 }

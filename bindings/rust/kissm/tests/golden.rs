@@ -1,14 +1,15 @@
 // SPDX-License-Identifier: MIT
 //! Cross-language round trip, Rust side: the clouds of `tests/data` (or `KISSM_TEST_DATA`) registered
 //! (`"call": "register"`) or refined from the case's `"initial_transform"` (`"call": "refine"`) with the
-//! case's refine mode, as listed in `tests/data/golden.json` (written by the C library), give the same
-//! result bit for bit (the file writes NaN as `null`; any NaN matches it). The C suite (`tests/roundtrip`)
-//! and the Python suite (`tests/test_golden.py`) check the same file.
+//! case's refine mode, viewpoint mode, suppression and rotational degrees of freedom, as listed in
+//! `tests/data/golden.json` (written by the C library), give the same result bit for bit (the file writes
+//! NaN as `null`; any NaN matches it). The C suite (`tests/roundtrip`) and the Python suite
+//! (`tests/test_golden.py`) check the same file.
 
 mod common;
 
 use common::Json;
-use kissm::{Config, Matcher, RefineMode, Registration, Viewpoint};
+use kissm::{Config, Matcher, RefineMode, Registration, Suppression, Viewpoint};
 
 fn viewpoint(name: &str) -> Viewpoint {
     match name {
@@ -26,6 +27,14 @@ fn refine_mode(name: &str) -> RefineMode {
         "gicp" => RefineMode::Gicp,
         "point_to_plane" => RefineMode::PointToPlane,
         other => panic!("golden.json: unknown refine mode {other:?}"),
+    }
+}
+
+fn suppression(name: &str) -> Suppression {
+    match name {
+        "none" => Suppression::None,
+        "ground" => Suppression::Ground,
+        other => panic!("golden.json: unknown suppression {other:?}"),
     }
 }
 
@@ -83,6 +92,8 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
         ("num_refine_correspondences", fine.map_or(0, |f| f.correspondences)),
         ("refine_iterations", fine.map_or(0, |f| u64::from(f.iterations))),
         ("refine_converged", fine.map_or(0, |f| u64::from(f.converged))),
+        ("num_source_suppressed", c.source_suppressed),
+        ("num_target_suppressed", c.target_suppressed),
     ];
     for (key, got) in counts {
         same(key.into(), case.get(key).num(), got as f64);
@@ -95,6 +106,7 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
         ("refine_condition", fine.map_or(nan, |f| f.condition)),
         ("rotation_uncertainty", reg.rotation_uncertainty),
         ("inlier_coverage", fine.map_or(nan, |f| f.inlier_coverage)),
+        ("tilt", reg.tilt),
     ];
     for (key, got) in doubles {
         same(key.into(), case.get(key).num(), got);
@@ -120,12 +132,18 @@ fn golden_file_matches_bit_for_bit() {
     let mut calls = std::collections::BTreeSet::new();
     let mut modes = std::collections::BTreeSet::new();
     let mut views = std::collections::BTreeSet::new();
+    let mut suppressions = std::collections::BTreeSet::new();
+    let mut dofs = std::collections::BTreeSet::new();
     for case in cases {
         let name = case.get("name").str();
         let mode = refine_mode(case.get("refine").str());
         let call = case.get("call").str();
         let view = viewpoint(case.get("viewpoint").str());
         views.insert(format!("{view:?}"));
+        let suppress = suppression(case.get("suppression").str());
+        suppressions.insert(format!("{suppress:?}"));
+        let dof = case.get("rotation_dof").u64() as usize;
+        dofs.insert(dof);
         calls.insert(call.to_string());
         modes.insert(format!("{mode:?}"));
         let float32 = match case.get("scalar").str() {
@@ -139,6 +157,8 @@ fn golden_file_matches_bit_for_bit() {
                 .num_threads(threads)
                 .refine_mode(mode)
                 .viewpoint(view)
+                .suppression(suppress)
+                .rotation_dof(dof)
                 .build()
                 .unwrap();
             let mut matcher = Matcher::new(&config).unwrap();
@@ -169,4 +189,6 @@ fn golden_file_matches_bit_for_bit() {
     assert!(calls.contains("register") && calls.contains("refine"), "calls {calls:?}");
     assert_eq!(modes.len(), 3, "refine modes {modes:?}");
     assert!(views.len() >= 3, "viewpoint modes {views:?}");
+    assert_eq!(suppressions.len(), 2, "suppressions {suppressions:?}");
+    assert!(dofs.contains(&1) && dofs.contains(&3), "rotation_dof {dofs:?}");
 }

@@ -24,7 +24,8 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             viewpoint_mode, log_level, log_fn, log_user_data, progress_fn, progress_user_data, refine_mode,
             refine_max_iterations, refine_max_distance_gain, refine_kernel_gain, refine_rotation_epsilon,
             refine_translation_epsilon_gain, max_rotation_uncertainty, min_overlap, min_inlier_coverage,
-            refine_min_inliers, reserved1, min_refine_condition, refine_normal_radius_gain),
+            refine_min_inliers, reserved1, min_refine_condition, refine_normal_radius_gain, suppression, rotation_dof,
+            up, sensor_height),
         "kissm_points" => fields!(sys::kissm_points; data, count, stride_bytes, scalar_type, reserved),
         "kissm_result" => fields!(sys::kissm_result; struct_size, valid, reason, reserved0, transform, rotation,
             translation, num_source_points, num_target_points, num_source_nonfinite, num_target_nonfinite,
@@ -33,7 +34,8 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             max_core_number, inlier_ratio, residual_rms, noise_bound, inlier_extent, time_voxelize_ms,
             time_features_ms, time_matching_ms, time_pruning_ms, time_solver_ms, time_total_ms, coarse_transform,
             information, overlap, refine_rmse, refine_condition, rotation_uncertainty, inlier_coverage,
-            time_refine_ms, num_refine_correspondences, refine_iterations, refine_converged),
+            time_refine_ms, num_refine_correspondences, refine_iterations, refine_converged, num_source_suppressed,
+            num_target_suppressed, time_suppression_ms, tilt),
         _ => None,
     }
 }
