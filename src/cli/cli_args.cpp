@@ -157,6 +157,52 @@ const char *refine_mode_name(int32_t mode) {
     }
 }
 
+void parse_vec3(const std::string &option, const std::string &text, double out[3]) {
+    double v[3] = {0.0, 0.0, 0.0};
+    size_t begin = 0;
+    for (int i = 0; i < 3; ++i) {
+        const size_t comma = text.find(',', begin);
+        const bool last = i == 2;
+        if (last != (comma == std::string::npos)) {
+            throw UsageError(option + " expects three numbers X,Y,Z separated by commas, got '" + one_line(text) + "'");
+        }
+        const std::string part = text.substr(begin, last ? std::string::npos : comma - begin);
+        v[i] = parse_double(option, part);
+        begin = comma + 1;
+    }
+    for (int i = 0; i < 3; ++i) out[i] = v[i];
+}
+
+int32_t parse_suppression(const std::string &option, const std::string &text) {
+    if (text == "none") return KISSM_SUPPRESS_NONE;
+    if (text == "ground") return KISSM_SUPPRESS_GROUND;
+    throw UsageError(option + ": unknown suppression '" + one_line(text) + "' (expected none or ground)");
+}
+
+int32_t parse_preset(const std::string &option, const std::string &text) {
+    std::string name = text;
+    for (char &c : name) {
+        if (c == '_') c = '-';
+    }
+    if (name == "lidar-vehicle") return KISSM_PRESET_LIDAR_VEHICLE;
+    if (name == "lidar-handheld") return KISSM_PRESET_LIDAR_HANDHELD;
+    if (name == "indoor-rgbd") return KISSM_PRESET_INDOOR_RGBD;
+    if (name == "object") return KISSM_PRESET_OBJECT;
+    throw UsageError(option + ": unknown preset '" + one_line(text) + "' (expected " + preset_names() + ")");
+}
+
+const char *preset_name(int32_t preset) {
+    switch (preset) {
+    case KISSM_PRESET_LIDAR_VEHICLE: return "lidar-vehicle";
+    case KISSM_PRESET_LIDAR_HANDHELD: return "lidar-handheld";
+    case KISSM_PRESET_INDOOR_RGBD: return "indoor-rgbd";
+    case KISSM_PRESET_OBJECT: return "object";
+    default: return "unknown";
+    }
+}
+
+const char *preset_names() { return "lidar-vehicle, lidar-handheld, indoor-rgbd or object"; }
+
 std::string one_line(const std::string &text) {
     std::string out = text;
     for (char &c : out) {

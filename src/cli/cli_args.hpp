@@ -65,6 +65,15 @@ int32_t parse_refine_mode(const std::string &option, const std::string &text);
 // --viewpoint: fixed, center (cloud-center), sign-free or local.
 int32_t parse_viewpoint_mode(const std::string &option, const std::string &text);
 const char *refine_mode_name(int32_t mode);
+// --up, --viewpoint X,Y,Z: three finite numbers separated by commas ("0,0,1"), into out[0..2].
+void parse_vec3(const std::string &option, const std::string &text, double out[3]);
+// --suppression: none or ground, to its KISSM_SUPPRESS_* value.
+int32_t parse_suppression(const std::string &option, const std::string &text);
+// --preset: lidar-vehicle, lidar-handheld, indoor-rgbd or object (or with underscores), to its
+// KISSM_PRESET_* value.
+int32_t parse_preset(const std::string &option, const std::string &text);
+const char *preset_names();
+const char *preset_name(int32_t preset); // "lidar-vehicle", ...; "unknown" for other values
 
 // The text with line breaks replaced by spaces, so that an error message stays on one line.
 std::string one_line(const std::string &text);

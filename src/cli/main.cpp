@@ -4,6 +4,7 @@
 //   kissm register SOURCE TARGET --voxel V [options]   global registration of two point files
 //   kissm refine SOURCE TARGET --initial T.txt --voxel V [options]   fine registration from a known pose
 //   kissm demo [--out DIR] [--threads N] [--seed S]     synthetic LiDAR scene, registered end to end
+//   kissm ground IN --voxel V [--out-ground G.ply] [--out-rest R.ply]   a scan's ground points
 //
 // Exit status: 0 success, 1 the registration ran but gave no trustworthy pose, 2 usage or input error
 // (with one "kissm: ..." line on stderr).
@@ -26,7 +27,7 @@ void print_usage(std::FILE *out) {
                  "kissm %s: fast, deterministic global 3D point cloud registration\n"
                  "\n"
                  "usage:\n"
-                 "  kissm register SOURCE TARGET --voxel V [options]\n"
+                 "  kissm register SOURCE TARGET --voxel V [options]   (or --preset NAME instead of --voxel)\n"
                  "      Find the rigid transform that maps SOURCE into TARGET's frame, with no initial guess.\n"
                  "      Reads PLY, PCD, KITTI .bin, raw float32 xyz .bin, .npy and xyz text files.\n"
                  "      --refine gicp|point-to-plane refines the global pose on the voxelised clouds.\n"
@@ -36,6 +37,9 @@ void print_usage(std::FILE *out) {
                  "  kissm demo [--out DIR] [--threads N] [--seed S] [--voxel V] [--json]\n"
                  "      Simulate two LiDAR scans of a synthetic street, register them, report the error against\n"
                  "      the ground truth and write PLY files and a top-view picture into DIR.\n"
+                 "  kissm ground IN --voxel V [--out-ground G.ply] [--out-rest R.ply] [options]\n"
+                 "      Label the ground points of a scan (the model of register --suppression ground) and\n"
+                 "      write them and the other points as PLY files.\n"
                  "  kissm help [COMMAND]      this text, or a command's options (same as COMMAND --help)\n"
                  "  kissm --version           print the version\n"
                  "\n"
@@ -58,6 +62,8 @@ int run(const std::vector<std::string> &args) {
             print_refine_help(stdout);
         } else if (rest[0] == "demo") {
             print_demo_help(stdout);
+        } else if (rest[0] == "ground") {
+            print_ground_help(stdout);
         } else {
             throw UsageError("no help for unknown command '" + one_line(rest[0]) + "' (try 'kissm --help')");
         }
@@ -70,6 +76,7 @@ int run(const std::vector<std::string> &args) {
     if (command == "register") return run_register(rest);
     if (command == "refine") return run_refine(rest);
     if (command == "demo") return run_demo(rest);
+    if (command == "ground") return run_ground(rest);
     if (!command.empty() && command[0] == '-') {
         throw UsageError("unknown option '" + one_line(command) + "' (try 'kissm --help')");
     }

@@ -24,28 +24,6 @@ namespace {
 
 const char *command_name(PairCommand command) { return command == PairCommand::Register ? "register" : "refine"; }
 
-double elapsed_ms(std::chrono::steady_clock::time_point since) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
-}
-
-CloudPtr read_cloud(const char *role, const std::string &path, int32_t format) {
-    kissm_cloud *cloud = nullptr;
-    const int32_t status = kissm_read_points(path.c_str(), format, &cloud);
-    if (status != KISSM_OK) {
-        throw UsageError(std::string("cannot read ") + role + " '" + one_line(path) +
-                         "': " + library_error(status, path));
-    }
-    return CloudPtr(cloud);
-}
-
-kissm_points points_of(const kissm_cloud *cloud, const char *role) {
-    kissm_points points{};
-    const int32_t status = kissm_cloud_points(cloud, &points);
-    if (status != KISSM_OK)
-        throw UsageError(std::string("cannot use the ") + role + " cloud: " + library_error(status));
-    return points;
-}
-
 // The option that sets each config field the library may reject, so that its message (which names the
 // field) can name the option too.
 struct FieldOption {
@@ -65,15 +43,12 @@ constexpr FieldOption kFieldOptions[] = {
     {"config.refine_min_inliers ", "--refine-min-inliers"},
     {"config.min_refine_condition ", "--min-refine-condition"},
     {"config.refine_normal_radius_gain ", "--refine-normal-radius"},
+    {"config.suppression ", "--suppression"},
+    {"config.rotation_dof ", "--rotation-dof"},
+    {"config.up", "--up"}, // "config.up is (0, 0, 0); ..." and "config.up[1] is not finite"
+    {"config.sensor_height ", "--sensor-height"},
+    {"config.viewpoint[", "--viewpoint"},
 };
-
-std::string settings_error(int32_t status) {
-    const std::string message = library_error(status);
-    for (const FieldOption &f : kFieldOptions) {
-        if (message.find(f.field) != std::string::npos) return std::string("invalid ") + f.option + ": " + message;
-    }
-    return "invalid settings: " + message;
-}
 
 void write_outputs(PairCommand command, const PairOptions &opt, const kissm_cloud *source, const kissm_cloud *target,
                    const kissm_result &result) {
@@ -149,7 +124,8 @@ void print_json(PairCommand command, const PairOptions &opt, const kissm_result 
     std::fputs(json.str().c_str(), stdout);
 }
 
-void print_human(PairCommand command, const PairOptions &opt, const kissm_result &result, double read_ms) {
+void print_human(PairCommand command, const PairOptions &opt, const kissm_config &config, const kissm_result &result,
+                 double read_ms) {
     std::printf("kissm %s %s\n", kissm_version_string(), command_name(command));
     std::printf("  source: %s (%llu points)\n", opt.files[0].c_str(),
                 static_cast<unsigned long long>(result.num_source_points));
@@ -157,6 +133,14 @@ void print_human(PairCommand command, const PairOptions &opt, const kissm_result
                 static_cast<unsigned long long>(result.num_target_points));
     std::printf("  voxel %g, threads %d%s, refinement %s, files read in %.1f ms\n", opt.voxel, opt.threads,
                 opt.threads == 0 ? " (all)" : "", refine_mode_name(opt.refine_mode), read_ms);
+    if (command == PairCommand::Register &&
+        (opt.ground_up.preset != 0 || config.suppression != KISSM_SUPPRESS_NONE || config.rotation_dof != 3)) {
+        const int32_t preset = opt.ground_up.preset;
+        std::printf("  %s%ssuppression %s, rotation dof %d, up (%g, %g, %g)\n", preset ? "preset " : "",
+                    preset ? (preset_name(preset) + std::string(", ")).c_str() : "",
+                    config.suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none", config.rotation_dof, config.up[0],
+                    config.up[1], config.up[2]);
+    }
     if (command == PairCommand::Refine) {
         std::printf("initial transform (from %s):\n", opt.initial.c_str());
         print_matrix(stdout, result.coarse_transform, "  ");
@@ -176,6 +160,79 @@ void print_human(PairCommand command, const PairOptions &opt, const kissm_result
 }
 
 } // namespace
+
+double elapsed_ms(std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+
+bool take_ground_up_option(ArgCursor &cur, bool solver, GroundUpOptions *opt) {
+    if (!cur.is_option()) return false;
+    const std::string &name = cur.current();
+    if (name == "--preset") {
+        opt->preset = parse_preset(name, cur.value());
+    } else if (name == "--up") {
+        parse_vec3(name, cur.value(), opt->up);
+        opt->have_up = true;
+    } else if (name == "--sensor-height") {
+        opt->sensor_height = parse_double(name, cur.value());
+        opt->have_sensor_height = true;
+    } else if (solver && name == "--suppression") {
+        opt->suppression = parse_suppression(name, cur.value());
+    } else if (solver && name == "--rotation-dof") {
+        constexpr int32_t kAnyInt = std::numeric_limits<int32_t>::max(); // the library checks the range
+        opt->rotation_dof = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
+        opt->have_rotation_dof = true;
+    } else {
+        return false;
+    }
+    return true;
+}
+
+void apply_ground_up(const GroundUpOptions &opt, kissm_config *config) {
+    if (opt.suppression >= 0) config->suppression = opt.suppression;
+    if (opt.have_rotation_dof) config->rotation_dof = opt.rotation_dof;
+    if (opt.have_up) {
+        for (int i = 0; i < 3; ++i) config->up[i] = opt.up[i];
+    }
+    if (opt.have_sensor_height) config->sensor_height = opt.sensor_height;
+}
+
+kissm_config validated_config(kissm_config config, bool drop_nonfinite, bool verbose) {
+    if (drop_nonfinite) config.nonfinite_policy = KISSM_NONFINITE_DROP;
+    if (verbose) {
+        config.log_fn = log_to_stderr;
+        config.log_level = KISSM_LOG_INFO;
+    }
+    const int32_t status = kissm_config_validate(&config);
+    if (status != KISSM_OK) throw UsageError(settings_error(status));
+    return config;
+}
+
+CloudPtr read_cloud(const char *role, const std::string &path, int32_t format) {
+    kissm_cloud *cloud = nullptr;
+    const int32_t status = kissm_read_points(path.c_str(), format, &cloud);
+    if (status != KISSM_OK) {
+        throw UsageError(std::string("cannot read ") + role + " '" + one_line(path) +
+                         "': " + library_error(status, path));
+    }
+    return CloudPtr(cloud);
+}
+
+kissm_points points_of(const kissm_cloud *cloud, const char *role) {
+    kissm_points points{};
+    const int32_t status = kissm_cloud_points(cloud, &points);
+    if (status != KISSM_OK)
+        throw UsageError(std::string("cannot use the ") + role + " cloud: " + library_error(status));
+    return points;
+}
+
+std::string settings_error(int32_t status) {
+    const std::string message = library_error(status);
+    for (const FieldOption &f : kFieldOptions) {
+        if (message.find(f.field) != std::string::npos) return std::string("invalid ") + f.option + ": " + message;
+    }
+    return "invalid settings: " + message;
+}
 
 int run_pair_command(PairCommand command, const std::vector<std::string> &args) {
     PairOptions opt;
@@ -218,6 +275,8 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
         } else if (is_register && name == "--refine-min-inliers") {
             opt.refine_min_inliers = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
             opt.have_refine_min_inliers = true;
+        } else if (is_register && take_ground_up_option(cur, true, &opt.ground_up)) {
+            // --preset, --suppression, --rotation-dof, --up, --sensor-height
         } else if (!is_register && name == "--initial") {
             opt.initial = cur.value();
         } else if (name == "--viewpoint") {
@@ -265,10 +324,10 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
         throw UsageError(std::string(command_name(command)) + " expects 2 files (SOURCE TARGET), got " +
                          std::to_string(opt.files.size()) + see);
     }
-    if (!opt.have_voxel) {
+    if (!opt.have_voxel && opt.ground_up.preset == 0) { // every preset gives a voxel size
         throw UsageError(std::string(command_name(command)) +
                          " needs --voxel V, the voxel size in the clouds' unit (e.g. --voxel 0.3 for outdoor LiDAR "
-                         "in metres)");
+                         "in metres), or a --preset that gives one");
     }
     if (!is_register && opt.initial.empty()) {
         throw UsageError("refine needs --initial FILE, the starting transform (4 rows of 4 numbers, as "
@@ -286,11 +345,21 @@ kissm_config config_defaults() {
     return config;
 }
 
-kissm_config pair_config(PairCommand command, const PairOptions &opt) {
+kissm_config config_with_preset(int32_t preset) {
     kissm_config config = config_defaults();
-    config.voxel_size = opt.voxel;
+    if (preset == 0) return config;
+    const int32_t status = kissm_config_preset(&config, preset);
+    if (status != KISSM_OK) throw UsageError("invalid --preset: " + library_error(status));
+    return config;
+}
+
+kissm_config pair_config(PairCommand command, const PairOptions &opt) {
+    // The preset first, so that every option given explicitly overrides it, whatever their order.
+    kissm_config config = config_with_preset(command == PairCommand::Register ? opt.ground_up.preset : 0);
+    if (opt.have_voxel) config.voxel_size = opt.voxel;
     config.num_threads = opt.threads;
     if (command == PairCommand::Register) {
+        apply_ground_up(opt.ground_up, &config);
         if (opt.min_inliers >= 0) config.min_inliers = opt.min_inliers;
         if (opt.max_correspondences >= 0) config.max_correspondences = opt.max_correspondences;
         if (opt.have_max_rotation_uncertainty) config.max_rotation_uncertainty = opt.max_rotation_uncertainty;
@@ -303,20 +372,15 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
     if (opt.have_min_overlap) config.min_overlap = opt.min_overlap;
     if (opt.have_min_refine_condition) config.min_refine_condition = opt.min_refine_condition;
     if (opt.have_refine_normal_radius) config.refine_normal_radius_gain = opt.refine_normal_radius_gain;
-    if (opt.drop_nonfinite) config.nonfinite_policy = KISSM_NONFINITE_DROP;
     if (opt.viewpoint_mode >= 0) config.viewpoint_mode = opt.viewpoint_mode;
     if (opt.viewpoint_center) config.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
-    if (opt.verbose) {
-        config.log_fn = log_to_stderr;
-        config.log_level = KISSM_LOG_INFO;
-    }
-    const int32_t status = kissm_config_validate(&config);
-    if (status != KISSM_OK) throw UsageError(settings_error(status));
-    return config;
+    return validated_config(config, opt.drop_nonfinite, opt.verbose);
 }
 
-int run_pair(PairCommand command, const PairOptions &opt) {
-    const kissm_config config = pair_config(command, opt);
+int run_pair(PairCommand command, const PairOptions &given) {
+    const kissm_config config = pair_config(command, given);
+    PairOptions opt = given;
+    opt.voxel = config.voxel_size; // --voxel, or the preset's
     double initial[16] = {};
     if (command == PairCommand::Refine) {
         std::string error;
@@ -355,7 +419,7 @@ int run_pair(PairCommand command, const PairOptions &opt) {
     if (opt.json) {
         print_json(command, opt, result, initial, read_ms);
     } else {
-        print_human(command, opt, result, read_ms);
+        print_human(command, opt, config, result, read_ms);
     }
     std::fflush(stdout);
     return result.valid ? kExitOk : kExitInvalid;

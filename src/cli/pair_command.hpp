@@ -4,6 +4,7 @@
 // files, print the summary or the JSON object).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -11,9 +12,40 @@
 
 #include <kissm.h>
 
+#include "commands.hpp"
+
 namespace kissm_cli {
 
 enum class PairCommand { Register, Refine };
+
+class ArgCursor;
+
+// The settings `register` and `ground` share: --preset (0 = none), applied to kissm_config_init's values
+// first, then every option given explicitly, whatever the order on the command line (with a preset --voxel
+// is optional: every preset gives one); and the ground model's and yaw solver's --suppression, --rotation-dof,
+// --up, --sensor-height. Unset ones keep the preset's or kissm_config_init's values; the library checks the
+// ranges.
+struct GroundUpOptions {
+    int32_t preset = 0;
+    int32_t suppression = -1; // -1 = unset
+    bool have_rotation_dof = false;
+    int32_t rotation_dof = 0;
+    bool have_up = false;
+    double up[3] = {0.0, 0.0, 0.0};
+    bool have_sensor_height = false;
+    double sensor_height = 0.0;
+};
+// When the cursor stands on --preset, --up or --sensor-height (and, with `solver`, --suppression or
+// --rotation-dof): reads its value into *opt and returns true.
+bool take_ground_up_option(ArgCursor &cur, bool solver, GroundUpOptions *opt);
+// kissm_config_init's defaults with opt.preset applied (a UsageError naming --preset when the library refuses
+// it), the base the command's explicit options then change; apply_ground_up writes the others.
+kissm_config config_with_preset(int32_t preset);
+void apply_ground_up(const GroundUpOptions &opt, kissm_config *config);
+// The last settings every command shares (--drop-nonfinite, -v), then kissm_config_validate: a value out of
+// range is a UsageError with the library's message after the option that set the field.
+kissm_config validated_config(kissm_config config, bool drop_nonfinite, bool verbose);
+double elapsed_ms(std::chrono::steady_clock::time_point since);
 
 struct PairOptions {
     std::vector<std::string> files;
@@ -32,6 +64,7 @@ struct PairOptions {
     double min_inlier_coverage = 0.0;
     bool have_refine_min_inliers = false;
     int32_t refine_min_inliers = 0;
+    GroundUpOptions ground_up; // register only
     bool drop_nonfinite = false;
     bool viewpoint_center = false;
     int32_t viewpoint_mode = -1; // --viewpoint, -1 = the default
@@ -61,11 +94,18 @@ struct PairOptions {
 bool parse_pair_options(PairCommand command, const std::vector<std::string> &args, PairOptions *opt);
 // kissm_config_init's defaults (the help shows them; nothing in the tool writes a default of its own).
 kissm_config config_defaults();
-// kissm_config_init's defaults with the options applied, checked by kissm_config_validate: a value out of
-// range is a UsageError with the library's message, prefixed by the option that set the field.
+// The option that set the config field the library's message names, before that message ("invalid --up:
+// config.up is ..."), or "invalid settings: ..." when no option set it.
+std::string settings_error(int32_t status);
+// kissm_config_init's defaults (with --preset first) with the options applied, checked by kissm_config_validate: a
+// value out of range is a UsageError with the library's message, prefixed by the option that set the field.
 kissm_config pair_config(PairCommand command, const PairOptions &opt);
 // Reads the files, registers or refines, writes the output files, prints; returns the exit status.
 int run_pair(PairCommand command, const PairOptions &opt);
+// Reads a point file (`role` names it in the error: "cannot read source '...': ..."), a UsageError on failure.
+CloudPtr read_cloud(const char *role, const std::string &path, int32_t format);
+// The cloud's points view for the library's calls.
+kissm_points points_of(const kissm_cloud *cloud, const char *role);
 // Both: parse_pair_options, then run_pair (or 0 after the help).
 int run_pair_command(PairCommand command, const std::vector<std::string> &args);
 

@@ -24,6 +24,7 @@ void log_to_stderr(void *, int32_t level, const char *message) {
 void print_register_help(std::FILE *out) {
     const kissm_config defaults = config_defaults();
     std::fprintf(out, "usage: kissm register SOURCE TARGET --voxel V [options]\n"
+                      "       kissm register SOURCE TARGET --preset NAME [options]\n"
                       "\n"
                       "Globally registers SOURCE against TARGET (no initial guess needed) and prints the rigid\n"
                       "transform that maps SOURCE points into TARGET's frame: p_target = R p_source + t.\n"
@@ -31,9 +32,14 @@ void print_register_help(std::FILE *out) {
     print_pair_input_help(out);
     std::fprintf(out,
                  "Registration:\n"
-                 "  --voxel V               voxel size in the clouds' unit, > 0 (required); every radius and\n"
-                 "                          noise bound scales with it. Try 0.3-0.5 for outdoor LiDAR in metres,\n"
-                 "                          0.05 for indoor RGB-D fragments\n"
+                 "  --preset NAME           the settings of a common kind of data, applied first: every option\n"
+                 "                          given explicitly overrides them, in any order. lidar-vehicle (0.3 m\n"
+                 "                          voxels, ground suppression, normals toward the sensor), lidar-handheld\n"
+                 "                          (0.3 m, --viewpoint local), indoor-rgbd (0.05 m), object (0.006 m);\n"
+                 "                          each gives a voxel size, so --voxel becomes optional\n"
+                 "  --voxel V               voxel size in the clouds' unit, > 0 (required without --preset);\n"
+                 "                          every radius and noise bound scales with it. Try 0.3-0.5 for outdoor\n"
+                 "                          LiDAR in metres, 0.05 for indoor RGB-D fragments\n"
                  "  --threads N             worker threads, 0 = all hardware threads (default 0); the result\n"
                  "                          does not depend on N\n"
                  "  --min-inliers N         final inliers a valid pose needs without refinement (default %d)\n"
@@ -47,9 +53,21 @@ void print_register_help(std::FILE *out) {
                  "                          (each cloud's centre), sign-free or local (no viewpoint: features\n"
                  "                          that depend on no cloud's frame; docs/frames.md)\n"
                  "  --viewpoint-center      the same as --viewpoint center\n"
+                 "\n"
+                 "Ground and up (scans of a sensor on a vehicle, in its own frame):\n"
+                 "  --suppression MODE      none or ground (default %s): ground voxels around the sensor (at the\n"
+                 "                          frame origin) get no keypoint; they stay in the refined clouds\n"
+                 "  --rotation-dof N        3 or 1 (default %d): 1 = yaw about --up only, roll and pitch taken as\n"
+                 "                          zero (a clearly tilted pair is not valid: reason_code 12, tilt)\n"
+                 "  --up X,Y,Z              the up direction in each cloud's frame (default %g,%g,%g), any\n"
+                 "                          length above 1e-9\n"
+                 "  --sensor-height H       the sensor's height above the ground along up (default %g), in\n"
+                 "                          [0, 1000]; 0 = estimate it from the cloud\n"
                  "\n",
                  defaults.min_inliers, defaults.max_correspondences, defaults.max_rotation_uncertainty,
-                 rad_to_deg(defaults.max_rotation_uncertainty));
+                 rad_to_deg(defaults.max_rotation_uncertainty),
+                 defaults.suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none", defaults.rotation_dof,
+                 defaults.up[0], defaults.up[1], defaults.up[2], defaults.sensor_height);
     print_refinement_help(out, PairCommand::Register, defaults);
     print_pair_output_help(out);
     std::fprintf(out, "Exit status: 0 valid pose, 1 registration ran but the pose is not valid (see the reason),\n"

@@ -84,6 +84,10 @@ void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind
     }
     row2(out, "voxels", r.num_source_voxels, r.num_target_voxels);
     if (global) {
+        // Voxels the suppression kept from becoming keypoints (all zero when it is off).
+        if (r.num_source_suppressed || r.num_target_suppressed || r.time_suppression_ms > 0.0) {
+            row2(out, "suppressed (ground)", r.num_source_suppressed, r.num_target_suppressed);
+        }
         row2(out, "keypoints", r.num_source_keypoints, r.num_target_keypoints);
         row1(out, "initial matches", r.num_initial_correspondences);
         char label[64];
@@ -100,14 +104,16 @@ void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind
         // How well the inliers pin the solver's rotation down (radians in the JSON, degrees for people).
         std::fprintf(out, "rotation uncertainty: %s\n",
                      number_text(rad_to_deg(r.rotation_uncertainty), "%.4g deg").text);
+        // Only measured with rotation_dof = 1: how far the best free rotation on the inliers turns `up`.
+        if (!std::isnan(r.tilt)) std::fprintf(out, "tilt: %s\n", number_text(rad_to_deg(r.tilt), "%.4g deg").text);
     }
     if (refinement_ran(r)) print_refinement(out, r, kind);
     if (global) {
         std::fprintf(out,
-                     "time (ms): voxelize %.1f, features %.1f, matching %.1f, pruning %.1f, solver %.1f, refine %.1f, "
-                     "total %.1f\n",
-                     r.time_voxelize_ms, r.time_features_ms, r.time_matching_ms, r.time_pruning_ms, r.time_solver_ms,
-                     r.time_refine_ms, r.time_total_ms);
+                     "time (ms): voxelize %.1f, features %.1f (suppression %.1f), matching %.1f, pruning %.1f, solver "
+                     "%.1f, refine %.1f, total %.1f\n",
+                     r.time_voxelize_ms, r.time_features_ms, r.time_suppression_ms, r.time_matching_ms,
+                     r.time_pruning_ms, r.time_solver_ms, r.time_refine_ms, r.time_total_ms);
     } else {
         std::fprintf(out, "time (ms): voxelize %.1f, normals %.1f, refine %.1f, total %.1f\n", r.time_voxelize_ms,
                      r.time_features_ms, r.time_refine_ms, r.time_total_ms);
@@ -153,16 +159,20 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field("rotation_inliers", r.num_rotation_inliers);
     json.field("final_inliers", r.num_final_inliers);
     json.field("refine_correspondences", r.num_refine_correspondences);
+    json.field("source_suppressed", r.num_source_suppressed);
+    json.field("target_suppressed", r.num_target_suppressed);
     json.end_object();
     json.field("inlier_ratio", r.inlier_ratio);
     json.field("residual_rms", r.residual_rms);
     json.field("noise_bound", r.noise_bound);
     json.field_vector("inlier_extent", r.inlier_extent, 3);
     json.field("rotation_uncertainty", r.rotation_uncertainty);
+    json.field("tilt", r.tilt);
     json.key("time_ms");
     json.begin_object();
     json.field("voxelize", r.time_voxelize_ms);
     json.field("features", r.time_features_ms);
+    json.field("suppression", r.time_suppression_ms);
     json.field("matching", r.time_matching_ms);
     json.field("pruning", r.time_pruning_ms);
     json.field("solver", r.time_solver_ms);

@@ -27,8 +27,9 @@ void print_result_summary(std::FILE *out, const kissm_result &result, ResultKind
 // Adds the result's fields to the open JSON object, in the order of the CLI JSON contract (src/cli/README.md):
 // valid, reason, reason_code, [initial_transform,] transform, rotation, translation, coarse_transform,
 // refine, information, overlap, refine_rmse, refine_condition, inlier_coverage, refine_iterations,
-// refine_converged, final_inliers, counts, inlier_ratio, residual_rms, noise_bound, inlier_extent,
-// rotation_uncertainty, time_ms.
+// refine_converged, final_inliers, counts (... refine_correspondences, source_suppressed, target_suppressed),
+// inlier_ratio, residual_rms, noise_bound, inlier_extent, rotation_uncertainty, tilt, time_ms (voxelize,
+// features, suppression, matching, pruning, solver, refine, total).
 // refine_mode: the config's KISSM_REFINE_* (the mode used). initial_transform: kissm_refine's, or null.
 void add_result_json(JsonWriter &json, const kissm_result &result, int32_t refine_mode,
                      const double *initial_transform = nullptr);

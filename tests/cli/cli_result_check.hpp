@@ -43,6 +43,7 @@ inline std::vector<std::string> contract_keys(bool refine_command) {
                           "noise_bound",
                           "inlier_extent",
                           "rotation_uncertainty",
+                          "tilt",
                           "time_ms",
                           "read_ms"}) {
         keys.push_back(k);
@@ -52,15 +53,16 @@ inline std::vector<std::string> contract_keys(bool refine_command) {
 
 inline const std::vector<std::string> &contract_count_keys() {
     static const std::vector<std::string> keys = {
-        "source_points",   "target_points",    "source_nonfinite", "target_nonfinite",        "source_voxels",
-        "target_voxels",   "source_keypoints", "target_keypoints", "initial_correspondences", "pruned_correspondences",
-        "max_core_number", "rotation_inliers", "final_inliers",    "refine_correspondences"};
+        "source_points",           "target_points",          "source_nonfinite",  "target_nonfinite",
+        "source_voxels",           "target_voxels",          "source_keypoints",  "target_keypoints",
+        "initial_correspondences", "pruned_correspondences", "max_core_number",   "rotation_inliers",
+        "final_inliers",           "refine_correspondences", "source_suppressed", "target_suppressed"};
     return keys;
 }
 
 inline const std::vector<std::string> &contract_time_keys() {
-    static const std::vector<std::string> keys = {"voxelize", "features", "matching", "pruning",
-                                                  "solver",   "refine",   "total"};
+    static const std::vector<std::string> keys = {"voxelize", "features", "suppression", "matching",
+                                                  "pruning",  "solver",   "refine",      "total"};
     return keys;
 }
 
@@ -95,7 +97,7 @@ inline void check_contract(const Json &j, bool refine_command, const char *what)
     const Json &info = j.at("information");
     CHECK_MSG(info.is(T::Null) || info.is_matrix(6, 6, false), "%s: information is neither null nor 6x6", what);
     for (const char *k : {"overlap", "refine_rmse", "refine_condition", "inlier_coverage", "inlier_ratio",
-                          "residual_rms", "noise_bound", "rotation_uncertainty"}) {
+                          "residual_rms", "noise_bound", "rotation_uncertainty", "tilt"}) {
         CHECK_MSG(is_number_or_null(j.at(k)), "%s: %s is not a number or null", what, k);
     }
     for (const std::string &k : contract_count_keys()) {
@@ -164,17 +166,18 @@ inline void check_matches_library(const Json &j, const kissm_result &r, const ch
                    {"inlier_ratio", r.inlier_ratio},
                    {"residual_rms", r.residual_rms},
                    {"noise_bound", r.noise_bound},
-                   {"rotation_uncertainty", r.rotation_uncertainty}};
+                   {"rotation_uncertainty", r.rotation_uncertainty},
+                   {"tilt", r.tilt}};
     for (const auto &s : scalars) check_scalar(j.at(s.key), s.value, what, s.key);
     check_doubles(j.at("inlier_extent").flat(), r.inlier_extent, 3, what, "inlier_extent");
     check_count(j.at("refine_iterations"), static_cast<uint64_t>(r.refine_iterations), what, "refine_iterations");
     CHECK_MSG(j.at("refine_converged").boolean == (r.refine_converged != 0), "%s: refine_converged", what);
     check_count(j.at("final_inliers"), r.num_final_inliers, what, "final_inliers");
-    const uint64_t counts[] = {r.num_source_points,          r.num_target_points,         r.num_source_nonfinite,
-                               r.num_target_nonfinite,       r.num_source_voxels,         r.num_target_voxels,
-                               r.num_source_keypoints,       r.num_target_keypoints,      r.num_initial_correspondences,
-                               r.num_pruned_correspondences, r.max_core_number,           r.num_rotation_inliers,
-                               r.num_final_inliers,          r.num_refine_correspondences};
+    const uint64_t counts[] = {
+        r.num_source_points,           r.num_target_points,          r.num_source_nonfinite,  r.num_target_nonfinite,
+        r.num_source_voxels,           r.num_target_voxels,          r.num_source_keypoints,  r.num_target_keypoints,
+        r.num_initial_correspondences, r.num_pruned_correspondences, r.max_core_number,       r.num_rotation_inliers,
+        r.num_final_inliers,           r.num_refine_correspondences, r.num_source_suppressed, r.num_target_suppressed};
     const std::vector<std::string> &keys = contract_count_keys();
     for (size_t i = 0; i < keys.size(); ++i) check_count(j.at("counts").at(keys[i]), counts[i], what, keys[i].c_str());
 }

@@ -5,7 +5,8 @@
 //   cli_test KISSM_BINARY WORK_DIR CASE
 //
 // CASE: usage | errors | malformed | demo | json | threads | realdata | refine_options | refine_register |
-// refine_command | refine_initial | refine_roundtrip | validity_options | refine_rule_options. Cases that need
+// refine_command | refine_initial | refine_roundtrip | validity_options | refine_rule_options | ground_options |
+// ground_command. Cases that need
 // ../shared/data (KISSM_DATA_DIR) return 77 (skipped) when it is absent; the refine and validity cases use the
 // committed pair of tests/data (KISSM_TEST_DATA).
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #if !defined(_WIN32)
@@ -1175,6 +1177,350 @@ void test_refine_rule_options() {
     CHECK(json_line_value(capped.out, "transform") != json_line_value(capped.out, "initial_transform"));
 }
 
+// ---------------------------------------------------------------------------------------------------
+// Ground and up: register --preset/--suppression/--rotation-dof/--up/--sensor-height, kissm ground.
+// ---------------------------------------------------------------------------------------------------
+
+constexpr double kGroundZ = -1.7; // the street's ground below the sensor at the origin, metres
+
+// A scan-like street in the sensor's frame (sensor at the origin, up +z): a ground plane z = -1.7 on a
+// 0.25 m grid, 32 m square, and boxes standing on it (their sides and tops on a 0.15 m grid). Deterministic.
+// Each point's cloud is `yaw` degrees about z and `shift` (x, y) away: p = Rz(yaw)^T (q - shift).
+struct Street {
+    std::vector<double> xyz;
+    size_t plane_points = 0; // the first plane_points points are the plane's
+};
+
+Street street_cloud(double yaw_deg, double shift_x, double shift_y) {
+    Street s;
+    const double c = std::cos(yaw_deg * 3.14159265358979323846 / 180.0), sn = std::sin(yaw_deg * M_PI / 180.0);
+    const auto add = [&](double x, double y, double z) {
+        const double dx = x - shift_x, dy = y - shift_y;
+        s.xyz.push_back(c * dx + sn * dy);
+        s.xyz.push_back(-sn * dx + c * dy);
+        s.xyz.push_back(z);
+    };
+    for (int i = -64; i <= 64; ++i) {
+        for (int j = -64; j <= 64; ++j) add(0.25 * i, 0.25 * j, kGroundZ);
+    }
+    s.plane_points = s.xyz.size() / 3;
+    struct Box {
+        double x, y, w, d, h;
+    };
+    const Box boxes[] = {{6, 3, 3, 5, 4},   {-9, 5, 5, 3, 7},   {10, -7, 4, 4, 2.5}, {-5, -11, 2, 7, 5},
+                         {11, 9, 3, 2, 3},  {-13, -4, 3, 3, 9}, {1, 12, 6, 2, 2},    {-3, 7, 1.5, 1.5, 3},
+                         {8, -14, 2, 5, 6}, {-14, 11, 3, 3, 4}};
+    const double step = 0.15;
+    for (const Box &b : boxes) {
+        const double top = kGroundZ + b.h;
+        for (double z = kGroundZ + step; z <= top + 1e-9; z += step) { // the four sides
+            for (double u = 0.0; u <= b.w + 1e-9; u += step) {
+                add(b.x + u, b.y, z);
+                add(b.x + u, b.y + b.d, z);
+            }
+            for (double v = step; v < b.d - 1e-9; v += step) {
+                add(b.x, b.y + v, z);
+                add(b.x + b.w, b.y + v, z);
+            }
+        }
+        for (double u = step; u < b.w - 1e-9; u += step) { // the top
+            for (double v = step; v < b.d - 1e-9; v += step) add(b.x + u, b.y + v, top);
+        }
+    }
+    return s;
+}
+
+// x y z text lines (%.17g: the reader gets the exact doubles back).
+bool write_xyz_text(const std::string &path, const std::vector<double> &xyz) {
+    std::string text;
+    char line[128];
+    for (size_t i = 0; i < xyz.size(); i += 3) {
+        std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", xyz[i], xyz[i + 1], xyz[i + 2]);
+        text += line;
+    }
+    return write_file(path, text);
+}
+
+// The errors `register` and `ground` share: --preset, --up, --sensor-height (prefix: the command line before
+// the option, ending with a space). Exit 2, one line naming the option (and the library's field when in range
+// of the parser but not of the library).
+void expect_ground_up_errors(const std::string &prefix) {
+    expect_usage_error(prefix + "--up 0,0,0", "--up: config.up is (0, 0, 0)");
+    for (const char *bad : {"1,2", "1,2,3,4", "a,b,c", "nan,0,1", "''"})
+        expect_usage_error(prefix + "--up " + bad, "--up");
+    expect_usage_error(prefix + "--preset nope", "--preset: unknown preset 'nope'");
+    expect_usage_error(prefix + "--preset", "--preset");
+    for (const char *bad : {"-1", "1001"}) {
+        expect_usage_error(prefix + "--sensor-height " + bad, "--sensor-height: config.sensor_height");
+    }
+    expect_usage_error(prefix + "--sensor-height abc", "--sensor-height");
+}
+
+// The committed pair with --rotation-dof 1: a rotation about up only, reported tilt; with 3: tilt null.
+void test_ground_options() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string reg = "register " + pair_args(pair) + " --voxel 0.25 ";
+
+    const Run yaw = run(reg + "--rotation-dof 1 --json");
+    CHECK_MSG(yaw.code == 0 || yaw.code == 1, "--rotation-dof 1: exit %d (%s)", yaw.code, yaw.err.c_str());
+    const Json y = contract_json(yaw, false, "--rotation-dof 1");
+    const std::vector<double> R = y.at("rotation").flat();
+    REQUIRE(R.size() == 9);
+    for (int k : {2, 5, 6, 7}) CHECK_MSG(std::fabs(R[k]) < 1e-12, "--rotation-dof 1: R[%d] = %.17g", k, R[k]);
+    CHECK_MSG(std::fabs(R[8] - 1.0) < 1e-12, "--rotation-dof 1: R[8] = %.17g", R[8]);
+    CHECK_MSG(y.at("tilt").is(Json::Type::Number) && y.at("tilt").number >= 0.0, "--rotation-dof 1: tilt %s",
+              y.at("tilt").text.c_str());
+    // The committed pair is tilted (its truth turns +z by tens of degrees): never a valid yaw-only pose.
+    CHECK(!y.at("valid").boolean);
+    kissm_result lib{};
+    REQUIRE(library_result(pair.source, pair.target, 0.25, KISSM_REFINE_NONE, nullptr, &lib,
+                           [](kissm_config &c) { c.rotation_dof = 1; }));
+    check_matches_library(y, lib, "--rotation-dof 1");
+    // Another up: rotation about x only.
+    const Json yx = contract_json(run(reg + "--rotation-dof 1 --up=2,0,0 --json"), false, "--up 2,0,0");
+    const std::vector<double> Rx = yx.at("rotation").flat();
+    REQUIRE(Rx.size() == 9);
+    for (int k : {1, 2, 3, 6}) CHECK_MSG(std::fabs(Rx[k]) < 1e-12, "--up 2,0,0: R[%d] = %.17g", k, Rx[k]);
+    CHECK(std::fabs(Rx[0] - 1.0) < 1e-12);
+    const Json free_ = contract_json(run(reg + "--json"), false, "--rotation-dof 3");
+    CHECK(free_.at("tilt").is(Json::Type::Null));
+    CHECK(free_.at("counts").at("source_suppressed").text == "0" && free_.at("time_ms").at("suppression").text == "0");
+
+    // Bad values: exit 2, one line naming the option (the library's message names the field).
+    expect_usage_error(reg + "--rotation-dof 2", "--rotation-dof: config.rotation_dof is 2");
+    expect_usage_error(reg + "--rotation-dof 0", "--rotation-dof: config.rotation_dof");
+    expect_usage_error(reg + "--rotation-dof x", "--rotation-dof");
+    expect_ground_up_errors(reg);
+    expect_usage_error(reg + "--suppression planes", "--suppression");
+    // refine has no solver and no keypoints: these are register's.
+    const std::string ref = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path) + " ";
+    for (const char *option :
+         {"--preset lidar-vehicle", "--suppression ground", "--rotation-dof 1", "--up 0,0,1", "--sensor-height 1.7"}) {
+        expect_usage_error(ref + option, std::string(option).substr(0, std::string(option).find(' ')));
+    }
+    // --voxel is still required without a preset.
+    expect_usage_error("register " + pair_args(pair) + " --suppression ground", "--voxel");
+
+    // A street with a ground plane, seen from two poses 20 degrees and 1.1 m apart (both sensors 1.7 m up).
+    const std::string target = work("street_target.xyz"), source = work("street_source.xyz");
+    REQUIRE(write_xyz_text(target, street_cloud(0.0, 0.0, 0.0).xyz));
+    REQUIRE(write_xyz_text(source, street_cloud(20.0, 1.0, 0.5).xyz));
+    const std::string street = "register " + quote(source) + " " + quote(target) + " ";
+    const auto street_json = [&](const std::string &options, const char *what) {
+        const Run r = run(street + options + " --json");
+        CHECK_MSG(r.code == 0 || r.code == 1, "%s: exit %d (%s)", what, r.code, r.err.c_str());
+        return contract_json(r, false, what);
+    };
+    const auto suppressed = [](const Json &j) {
+        return std::make_pair(j.at("counts").at("source_suppressed").number,
+                              j.at("counts").at("target_suppressed").number);
+    };
+    const Json off = street_json("--voxel 0.3", "street, no suppression");
+    CHECK(suppressed(off).first == 0.0 && suppressed(off).second == 0.0);
+    const Json on = street_json("--voxel 0.3 --suppression ground", "street, --suppression ground");
+    std::printf("street: %g / %g voxels suppressed of %s / %s; keypoints %s / %s (without: %s / %s)\n",
+                suppressed(on).first, suppressed(on).second, on.at("counts").at("source_voxels").text.c_str(),
+                on.at("counts").at("target_voxels").text.c_str(), on.at("counts").at("source_keypoints").text.c_str(),
+                on.at("counts").at("target_keypoints").text.c_str(),
+                off.at("counts").at("source_keypoints").text.c_str(),
+                off.at("counts").at("target_keypoints").text.c_str());
+    CHECK(suppressed(on).first > 1000.0 && suppressed(on).second > 1000.0);
+    CHECK(on.at("time_ms").at("suppression").number > 0.0);
+    CHECK(on.at("counts").at("source_keypoints").number < off.at("counts").at("source_keypoints").number);
+    kissm_result lib_on{};
+    REQUIRE(library_result(source, target, 0.3, KISSM_REFINE_NONE, nullptr, &lib_on,
+                           [](kissm_config &c) { c.suppression = KISSM_SUPPRESS_GROUND; }));
+    check_matches_library(on, lib_on, "street, --suppression ground");
+    // The summary says so too.
+    const Run human = run(street + "--voxel 0.3 --suppression ground");
+    CHECK_MSG(contains(human.out, "suppressed (ground)") && contains(human.out, "suppression ground"), "%s",
+              human.out.c_str());
+
+    // The preset first, then the explicit options, in either order.
+    const Json vehicle = street_json("--preset lidar-vehicle", "--preset lidar-vehicle");
+    CHECK(vehicle.at("voxel_size").text == "0.3");
+    CHECK(suppressed(vehicle) == suppressed(on));
+    for (const char *options :
+         {"--preset lidar-vehicle --suppression none", "--suppression none --preset lidar-vehicle"}) {
+        const Json j = street_json(options, options);
+        CHECK_MSG(suppressed(j).first == 0.0 && j.at("voxel_size").text == "0.3", "%s: suppressed %g, voxel %s",
+                  options, suppressed(j).first, j.at("voxel_size").text.c_str());
+    }
+    for (const char *options : {"--preset lidar-vehicle --voxel 0.4", "--voxel 0.4 --preset lidar-vehicle"}) {
+        const Json j = street_json(options, options);
+        CHECK_MSG(j.at("voxel_size").text == "0.4" && suppressed(j).first > 0.0, "%s: voxel %s, suppressed %g", options,
+                  j.at("voxel_size").text.c_str(), suppressed(j).first);
+    }
+    // lidar-handheld: no suppression, frame-free normals; --suppression ground turns it back on.
+    CHECK(suppressed(street_json("--preset lidar-handheld", "--preset lidar-handheld")).first == 0.0);
+    CHECK(suppressed(street_json("--suppression ground --preset lidar-handheld", "handheld + ground")) ==
+          suppressed(street_json("--preset lidar-handheld --suppression ground", "handheld + ground")));
+    CHECK(suppressed(street_json("--preset lidar-handheld --suppression ground", "handheld + ground")).first > 0.0);
+    // --up and --sensor-height reach the ground model: with up along x there is no ground.
+    CHECK(suppressed(street_json("--preset lidar-vehicle --up 1,0,0", "--up 1,0,0")).first <
+          suppressed(on).first / 10.0);
+    const Json known = street_json("--preset lidar-vehicle --sensor-height 1.7", "--sensor-height 1.7");
+    CHECK(suppressed(known).first > 1000.0);
+    // The yaw-only solver on the street (yaw 20 degrees about up, no tilt).
+    const Json street_yaw = street_json("--preset lidar-vehicle --rotation-dof 1", "street --rotation-dof 1");
+    const std::vector<double> Rs = street_yaw.at("rotation").flat();
+    REQUIRE(Rs.size() == 9);
+    CHECK(std::fabs(Rs[8] - 1.0) < 1e-12 && std::fabs(Rs[2]) < 1e-12 && std::fabs(Rs[6]) < 1e-12);
+}
+
+// kissm ground: two PLY files that add up to the input, the plane in the ground file, the boxes in the rest.
+void test_ground_command() {
+    const Street s = street_cloud(0.0, 0.0, 0.0);
+    const size_t n = s.xyz.size() / 3;
+    const std::string in = work("street.xyz"), g = work("ground.ply"), rest = work("rest.ply");
+    REQUIRE(write_xyz_text(in, s.xyz));
+    const std::string base = "ground " + quote(in) + " --voxel 0.3 ";
+
+    Run r = run(base + "--out-ground " + quote(g) + " --out-rest " + quote(rest));
+    CHECK_MSG(r.code == 0, "kissm ground: exit %d (%s)", r.code, r.err.c_str());
+    CHECK(r.err.empty());
+    CHECK_MSG(contains(r.out, "ground points: ") && contains(r.out, std::to_string(n) + " points"), "%s",
+              r.out.c_str());
+    std::printf("%s", r.out.c_str());
+    const std::string ground_bytes = read_file(g), rest_bytes = read_file(rest);
+    const long long ng = ply_vertex_count(ground_bytes), nr = ply_vertex_count(rest_bytes);
+    CHECK_MSG(ng > 0 && nr > 0 && static_cast<size_t>(ng + nr) == n, "ground %lld + rest %lld != %zu", ng, nr, n);
+    const std::vector<double> ground = read_back(g), others = read_back(rest);
+    REQUIRE(ground.size() == 3 * static_cast<size_t>(ng) && others.size() == 3 * static_cast<size_t>(nr));
+
+    // The ground file: plane points (and at most the lowest box points sharing their voxels), and most of the
+    // plane the model covers (2.7 m to 80 m from the sensor).
+    size_t ground_on_plane = 0, plane_covered = 0, rest_on_plane = 0;
+    for (size_t i = 0; i < ground.size(); i += 3) {
+        CHECK_MSG(ground[i + 2] < kGroundZ + 0.61, "ground point at z = %g", ground[i + 2]);
+        ground_on_plane += ground[i + 2] == kGroundZ ? 1u : 0u;
+    }
+    for (size_t i = 0; i < 3 * s.plane_points; i += 3) {
+        const double range = std::hypot(s.xyz[i], s.xyz[i + 1]);
+        plane_covered += (range > 3.5 && range < 15.5) ? 1u : 0u;
+    }
+    for (size_t i = 0; i < others.size(); i += 3) rest_on_plane += others[i + 2] == kGroundZ ? 1u : 0u;
+    std::printf(
+        "ground: %lld points, %zu on the plane; %zu plane points 3.5-15.5 m out; %zu plane points in the rest\n", ng,
+        ground_on_plane, plane_covered, rest_on_plane);
+    CHECK(ground_on_plane + rest_on_plane == s.plane_points);
+    CHECK_MSG(ground_on_plane >= plane_covered * 95 / 100, "only %zu of %zu plane points are ground", ground_on_plane,
+              plane_covered);
+    CHECK_MSG(static_cast<double>(ground_on_plane) >= 0.95 * static_cast<double>(ng), "%zu of %lld ground points",
+              ground_on_plane, ng);
+    size_t high = 0;
+    for (size_t i = 0; i < others.size(); i += 3) high += others[i + 2] > kGroundZ + 0.7 ? 1u : 0u;
+    CHECK_EQ_INT(
+        high, n - s.plane_points - [&] {
+            size_t low = 0;
+            for (size_t i = 3 * s.plane_points; i < s.xyz.size(); i += 3)
+                low += s.xyz[i + 2] <= kGroundZ + 0.7 ? 1u : 0u;
+            return low;
+        }()); // every box point well above the ground is in the rest
+
+    // The same labels as the library's, and for any thread count (the files byte for byte).
+    {
+        kissm_cloud *cloud = nullptr;
+        kissm_matcher *matcher = nullptr;
+        kissm_config config{};
+        kissm_points points{};
+        REQUIRE(kissm_read_points(in.c_str(), KISSM_FORMAT_AUTO, &cloud) == KISSM_OK);
+        REQUIRE(kissm_cloud_points(cloud, &points) == KISSM_OK &&
+                kissm_config_init(&config, sizeof config) == KISSM_OK);
+        config.voxel_size = 0.3;
+        REQUIRE(kissm_create(&config, &matcher) == KISSM_OK);
+        std::vector<uint8_t> mask(n, 0);
+        REQUIRE(kissm_ground_mask(matcher, &points, mask.data()) == KISSM_OK);
+        size_t lib_ground = 0;
+        for (uint8_t m : mask) lib_ground += m;
+        CHECK_EQ_INT(lib_ground, static_cast<size_t>(ng));
+        kissm_destroy(matcher);
+        kissm_cloud_destroy(cloud);
+    }
+    for (const char *threads : {"1", "2"}) {
+        const std::string g2 = work(std::string("ground_t") + threads + ".ply");
+        const std::string r2 = work(std::string("rest_t") + threads + ".ply");
+        const Run t = run(base + "--threads " + threads + " --out-ground " + quote(g2) + " --out-rest " + quote(r2));
+        CHECK_EQ_INT(t.code, 0);
+        CHECK_MSG(read_file(g2) == ground_bytes && read_file(r2) == rest_bytes, "--threads %s: other files", threads);
+    }
+
+    // JSON: the counts, the settings, the files (null when not written).
+    r = run(base + "--json --out-rest " + quote(work("rest_only.ply")));
+    CHECK_MSG(r.code == 0, "kissm ground --json: exit %d (%s)", r.code, r.err.c_str());
+    std::string error;
+    const Json j = json_parse(r.out, &error);
+    CHECK_MSG(error.empty(), "invalid JSON (%s):\n%s", error.c_str(), r.out.c_str());
+    const std::vector<std::string> keys = {
+        "version",    "input",         "preset",    "voxel_size",    "threads",     "up",
+        "viewpoint",  "sensor_height", "points",    "ground_points", "rest_points", "nonfinite_points",
+        "out_ground", "out_rest",      "ground_ms", "read_ms"};
+    CHECK_MSG(j.keys() == keys, "keys %s", joined(j.keys()).c_str());
+    CHECK(j.at("points").text == std::to_string(n));
+    CHECK(j.at("ground_points").text == std::to_string(ng) && j.at("rest_points").text == std::to_string(nr));
+    CHECK(j.at("nonfinite_points").text == "0" && j.at("preset").text == "none");
+    CHECK(j.at("out_ground").is(Json::Type::Null) && j.at("out_rest").text == work("rest_only.ply"));
+    CHECK(j.at("up").flat() == std::vector<double>({0.0, 0.0, 1.0}) && j.at("voxel_size").text == "0.3");
+    CHECK(ply_vertex_count(read_file(work("rest_only.ply"))) == nr);
+    // No file at all: only the counts.
+    r = run(base);
+    CHECK_EQ_INT(r.code, 0);
+    CHECK(contains(r.out, "ground points: " + std::to_string(ng)));
+
+    // The preset gives the voxel; explicit options override it in any order.
+    const auto ground_count = [&](const std::string &options) {
+        const Run run_ = run("ground " + quote(in) + " " + options + " --json");
+        CHECK_MSG(run_.code == 0, "ground %s: exit %d (%s)", options.c_str(), run_.code, run_.err.c_str());
+        const Json jj = json_parse(run_.out);
+        return std::make_pair(jj.at("ground_points").text, jj.at("voxel_size").text);
+    };
+    CHECK(ground_count("--preset lidar-vehicle") == std::make_pair(std::to_string(ng), std::string("0.3")));
+    CHECK(ground_count("--voxel 0.5 --preset lidar-vehicle") == ground_count("--preset lidar-vehicle --voxel 0.5"));
+    CHECK(ground_count("--voxel 0.5 --preset lidar-vehicle").second == "0.5");
+    CHECK(ground_count("--voxel 0.3 --sensor-height 1.7").first == std::to_string(ng));
+    // Up along x, or the sensor 10 m up: (almost) no ground.
+    CHECK(std::stoll(ground_count("--voxel 0.3 --up 1,0,0").first) < ng / 10);
+    // The sensor 200 m away: the whole street is beyond the model's 80 m.
+    CHECK(ground_count("--voxel 0.3 --viewpoint 200,0,0").first == "0");
+
+    // Non-finite points: an error, or with --drop-nonfinite in neither file.
+    std::vector<double> with_nan = s.xyz;
+    with_nan.insert(with_nan.end(), {std::nan(""), 1.0, 2.0});
+    const std::string nan_in = work("street_nan.ply");
+    REQUIRE(write_cloud(nan_in, with_nan));
+    expect_usage_error("ground " + quote(nan_in) + " --voxel 0.3", "street_nan.ply");
+    r = run("ground " + quote(nan_in) + " --voxel 0.3 --drop-nonfinite --json");
+    CHECK_EQ_INT(r.code, 0);
+    const Json jn = json_parse(r.out);
+    CHECK(jn.at("nonfinite_points").text == "1" && jn.at("points").text == std::to_string(n + 1));
+    CHECK(jn.at("ground_points").text == std::to_string(ng) && jn.at("rest_points").text == std::to_string(nr));
+
+    // Help and errors.
+    for (const char *help : {"ground --help", "help ground"}) {
+        r = run(help);
+        CHECK_EQ_INT(r.code, 0);
+        CHECK(contains(r.out, "usage: kissm ground") && contains(r.out, "--out-ground") &&
+              contains(r.out, "--up X,Y,Z"));
+    }
+    CHECK(contains(run("--help").out, "kissm ground"));
+    expect_usage_error("ground --voxel 0.3", "1 file");
+    expect_usage_error("ground " + quote(in) + " " + quote(in) + " --voxel 0.3", "1 file");
+    expect_usage_error("ground " + quote(in), "--voxel");
+    expect_ground_up_errors(base);
+    expect_usage_error(base + "--viewpoint fixed", "--viewpoint");
+    expect_usage_error(base + "--viewpoint 0,0", "--viewpoint");
+    expect_usage_error(base + "--threads -1", "--threads");
+    expect_usage_error(base + "--suppression ground", "--suppression"); // the model is always the ground's
+    expect_usage_error(base + "--rotation-dof 1", "--rotation-dof");
+    expect_usage_error(base + "--format bogus", "bogus");
+    expect_usage_error(base + "--bogus", "--bogus");
+    expect_usage_error(base + "--json=1", "--json");
+    expect_usage_error("ground " + quote(work("missing.xyz")) + " --voxel 0.3", "missing.xyz");
+    expect_usage_error(base + "--out-ground " + quote(work("no/such/dir/g.ply")), "g.ply");
+    expect_usage_error("ground " + quote(in) + " --voxel 1e-6", "voxel"); // too many voxels: the library's range
+}
+
 } // namespace
 
 int main(int argc, char **argv) {
@@ -1208,7 +1554,9 @@ int main(int argc, char **argv) {
                  {"refine_initial", test_refine_initial},
                  {"refine_roundtrip", test_refine_roundtrip},
                  {"validity_options", test_validity_options},
-                 {"refine_rule_options", test_refine_rule_options}};
+                 {"refine_rule_options", test_refine_rule_options},
+                 {"ground_options", test_ground_options},
+                 {"ground_command", test_ground_command}};
     for (const auto &c : cases) {
         if (which != c.name) continue;
         c.run();

@@ -271,6 +271,34 @@ void test_args() {
     }
     CHECK(one_line("a\nb\r\n") == "a b");
 
+    // --up, --viewpoint X,Y,Z: three finite numbers and two commas, nothing else; *out unchanged on error.
+    double v[3] = {7.0, 7.0, 7.0};
+    parse_vec3("--up", "0,0,1", v);
+    CHECK(v[0] == 0.0 && v[1] == 0.0 && v[2] == 1.0);
+    parse_vec3("--up", "-1.5,2e-3,0.1", v);
+    CHECK(v[0] == -1.5 && v[1] == 2e-3 && v[2] == 0.1);
+    for (const char *bad : {"", "1", "1,2", "1,2,3,4", "1,,3", ",1,2", "1,2,", "a,b,c", "nan,0,1", "0,inf,1",
+                            "1e999,0,0", "1;2;3", "1, 2,3"}) {
+        double w[3] = {7.0, 7.0, 7.0};
+        CHECK_MSG(throws_usage([&] { parse_vec3("--up", bad, w); }), "'%s' accepted", bad);
+        CHECK(w[0] == 7.0 && w[1] == 7.0 && w[2] == 7.0);
+    }
+    CHECK(parse_suppression("--suppression", "none") == KISSM_SUPPRESS_NONE);
+    CHECK(parse_suppression("--suppression", "ground") == KISSM_SUPPRESS_GROUND);
+    for (const char *bad : {"", "Ground", "1", "planes"}) {
+        CHECK_MSG(throws_usage([&] { parse_suppression("--suppression", bad); }), "'%s' accepted", bad);
+    }
+    for (int32_t preset :
+         {KISSM_PRESET_LIDAR_VEHICLE, KISSM_PRESET_LIDAR_HANDHELD, KISSM_PRESET_INDOOR_RGBD, KISSM_PRESET_OBJECT}) {
+        CHECK(parse_preset("--preset", preset_name(preset)) == preset);
+    }
+    CHECK(parse_preset("--preset", "lidar_vehicle") == KISSM_PRESET_LIDAR_VEHICLE);
+    CHECK(parse_preset("--preset", "indoor_rgbd") == KISSM_PRESET_INDOOR_RGBD);
+    for (const char *bad : {"", "nope", "LIDAR-VEHICLE", "1", "lidar"}) {
+        CHECK_MSG(throws_usage([&] { parse_preset("--preset", bad); }), "'%s' accepted", bad);
+    }
+    CHECK(std::strcmp(preset_name(0), "unknown") == 0);
+
     ArgCursor cur("register", {"a", "--voxel=0.5", "--json", "--threads", "3", "--", "--b"});
     std::vector<std::string> seen;
     while (cur.next()) {
@@ -365,6 +393,8 @@ void test_result_json() {
     CHECK(j.at("counts").keys() == cli_test::contract_count_keys());
     CHECK(j.at("time_ms").keys() == cli_test::contract_time_keys());
     CHECK(j.at("information").is(cli_test::Json::Type::Null));
+    CHECK(j.at("tilt").is(cli_test::Json::Type::Null)); // NaN unless rotation_dof = 1
+    CHECK(j.at("counts").at("source_suppressed").text == "0" && j.at("time_ms").at("suppression").text == "0");
     CHECK(j.at("coarse_transform").is_matrix(4, 4, true) &&
           j.at("coarse_transform").items[0].items[0].is(cli_test::Json::Type::Null));
     CHECK(j.at("overlap").is(cli_test::Json::Type::Null) && j.at("refine_rmse").is(cli_test::Json::Type::Null));
