@@ -162,7 +162,8 @@ Grid grid_for(const InputCloud &input, double voxel_size, const std::string &nam
 
 } // namespace
 
-VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx) {
+VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx,
+                    std::vector<std::uint64_t> *keys) {
     VoxelCloud out;
     const std::size_t n = static_cast<std::size_t>(input.num_given);
     if (input.num_finite() == 0) return out;
@@ -239,6 +240,7 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     std::vector<std::size_t> first_voxel(kRanges + 1, 0);
     for (std::size_t r = 0; r < kRanges; ++r) first_voxel[r + 1] = first_voxel[r] + merged[r].slots.size();
     out.points.resize(first_voxel[kRanges]);
+    if (keys != nullptr) keys->resize(first_voxel[kRanges]);
     const Vec3d corner = input.min - out.origin;
     ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t r = b; r < e; ++r) {
@@ -254,6 +256,7 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
                         corner[a] +
                         (static_cast<double>(c[a]) + static_cast<double>(s.sum[a]) / kFixedScale / count) * voxel_size;
                 out.points[first_voxel[r] + v] = centroid.cast<float>();
+                if (keys != nullptr) (*keys)[first_voxel[r] + v] = key;
             }
         }
     });
@@ -261,29 +264,18 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
 }
 
 std::vector<std::uint32_t> voxel_of_points(const InputCloud &input, double voxel_size, const std::string &name,
-                                           RunContext &ctx) {
+                                           const std::vector<std::uint64_t> &keys, RunContext &ctx) {
     const std::size_t n = static_cast<std::size_t>(input.num_given);
     std::vector<std::uint32_t> out(n, kNoVoxel);
     if (input.num_finite() == 0) return out;
     const Grid grid = grid_for(input, voxel_size, name);
-    constexpr std::uint64_t kSkipped = ~std::uint64_t(0); // keys use at most 63 bits
-    std::vector<std::uint64_t> keys(n, kSkipped);
     ctx.parallel_for(n, 16384, [&](std::size_t b, std::size_t e) {
         input.for_each_point(b, e, [&](std::size_t i, const Vec3d &p) {
+            if (input.skip_nonfinite && !InputCloud::finite(p)) return;
             std::int64_t q[3];
-            if (!input.skip_nonfinite || InputCloud::finite(p)) keys[i] = grid.key(p, q);
+            const auto at = std::lower_bound(keys.begin(), keys.end(), grid.key(p, q));
+            if (at != keys.end()) out[i] = static_cast<std::uint32_t>(at - keys.begin());
         });
-    });
-    // voxelize() emits voxels in key order, so a voxel's number is its key's rank among the distinct keys.
-    std::vector<std::uint64_t> distinct(keys);
-    std::sort(distinct.begin(), distinct.end());
-    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
-    if (!distinct.empty() && distinct.back() == kSkipped) distinct.pop_back();
-    ctx.parallel_for(n, 16384, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i)
-            if (keys[i] != kSkipped)
-                out[i] = static_cast<std::uint32_t>(std::lower_bound(distinct.begin(), distinct.end(), keys[i]) -
-                                                    distinct.begin());
     });
     return out;
 }

@@ -22,13 +22,16 @@ constexpr std::uint64_t kMaxVoxelsPerAxis = std::uint64_t(1) << 21;
 // Output order is by voxel key (x-major), independent of input order and thread count; centroids come from
 // integer sums of fixed-point offsets, so a permutation of the input gives a bitwise identical output.
 // Throws Failure(VoxelRange) when the extent needs more than kMaxVoxelsPerAxis voxels on an axis.
-VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx);
+// keys, when given, receives each voxel's grid key (ascending: the voxels come in key order), for
+// voxel_of_points.
+VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::string &name, RunContext &ctx,
+                    std::vector<std::uint64_t> *keys = nullptr);
 
 constexpr std::uint32_t kNoVoxel = ~std::uint32_t(0);
 
-// For each point of `input`, the number of its voxel in voxelize(input, voxel_size, ...) (kNoVoxel for a
-// non-finite point the policy drops): how a per-voxel label reaches the caller's points.
+// For each point of `input`, the number of its voxel in voxelize(input, voxel_size, ...), whose keys are
+// `keys` (kNoVoxel for a non-finite point the policy drops): how a per-voxel label reaches the caller's points.
 std::vector<std::uint32_t> voxel_of_points(const InputCloud &input, double voxel_size, const std::string &name,
-                                           RunContext &ctx);
+                                           const std::vector<std::uint64_t> &keys, RunContext &ctx);
 
 KISSM_DETAIL_END

@@ -50,6 +50,36 @@ static void test_counts_and_centroids() {
     CHECK(cells == sorted); // x-major key order
 }
 
+// voxel_of_points: every point's voxel is the one whose centroid is the mean of exactly the points mapped to it,
+// on 200K points (past the chunk size and the merge's key ranges), at 1 and 3 threads.
+static void test_voxel_of_points() {
+    TestRng rng(5);
+    std::vector<Vec3d> pts;
+    for (int i = 0; i < 200000; ++i) pts.emplace_back(rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(-3, 3));
+    RunContext one(1, nullptr, Hooks()), three(3, nullptr, Hooks());
+    std::vector<std::uint64_t> keys;
+    const InputCloud in = make_input(pts);
+    const VoxelCloud v = voxelize(in, 0.5, "cloud", one, &keys);
+    REQUIRE(keys.size() == v.points.size());
+    CHECK(std::is_sorted(keys.begin(), keys.end()));
+    const std::vector<std::uint32_t> a = voxel_of_points(in, 0.5, "cloud", keys, one);
+    const std::vector<std::uint32_t> b = voxel_of_points(in, 0.5, "cloud", keys, three);
+    CHECK(a == b);
+    std::vector<Vec3d> sum(v.points.size(), Vec3d::Zero());
+    std::vector<int> count(v.points.size(), 0);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        REQUIRE(a[i] < v.points.size());
+        sum[a[i]] += pts[i] - v.origin;
+        ++count[a[i]];
+    }
+    double worst = 0.0;
+    for (std::size_t k = 0; k < v.points.size(); ++k) {
+        REQUIRE(count[k] > 0);
+        worst = std::max(worst, (sum[k] / count[k] - v.points[k].cast<double>()).norm());
+    }
+    CHECK_MSG(worst < 1e-4, "centroid of the mapped points %g from the voxel's", worst);
+}
+
 static void test_order_independent_of_threads_and_permutation() {
     TestRng rng(2);
     std::vector<Vec3d> pts;
@@ -134,6 +164,7 @@ static void test_large_coordinates_keep_precision() {
 int main() {
     RUN_TEST(test_counts_and_centroids);
     RUN_TEST(test_order_independent_of_threads_and_permutation);
+    RUN_TEST(test_voxel_of_points);
     RUN_TEST(test_centroids_are_means);
     RUN_TEST(test_range_check);
     RUN_TEST(test_large_coordinates_keep_precision);

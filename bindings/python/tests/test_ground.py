@@ -140,9 +140,9 @@ def test_yaw_only_on_lidar(real_pairs: dict[str, RealPair], name: str) -> None:
     assert np.abs(rotation[2, :2]).max() < 1e-12 and np.abs(rotation[:2, 2]).max() < 1e-12
     assert abs(rotation[2, 2] - 1.0) < 1e-12
     assert 0.0 <= r.tilt < math.radians(2.0)
-    r, rre, rte = _run(pair, _turned_about(np.array([1.0, 0.0, 0.0]), 20.0), rotation_dof=1)
-    assert not r.valid or (rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m), f"{name} tilted: {r!r}"
-    assert not r.valid, f"{name}: a 20 degree tilt cannot be right under yaw only ({rre:.2f} deg)"
+    for tilt in (5.0, 10.0, 20.0):  # 10 degrees on keyframes 3-4 once gave a look-alike yaw pose, valid
+        r, rre, rte = _run(pair, _turned_about(np.array([1.0, 0.0, 0.0]), tilt), rotation_dof=1)
+        assert not r.valid, f"{name}: a {tilt} degree tilt reported valid under yaw only ({rre:.2f} deg, {r!r})"
 
 
 def test_vehicle_preset_on_every_real_pair(real_pairs: dict[str, RealPair]) -> None:
