@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: MIT
 # The benchmark in one command: sets up its own venv (kissm's Python binding built from this checkout, the
 # reference KISS-Matcher, Open3D, small_gicp, numpy, matplotlib) and runs bench/bench.py (with --maps:
-# bench/map_bench.py, the scan-to-map benchmark).
+# bench/map_bench.py, the scan-to-map benchmark; with --ground: bench/ground_bench.py, ground suppression and
+# yaw only against Patchwork++ and the reference's Quatro).
 #
 #   bash bench/run.sh                  # full run: threads 1 and 2, every pair raw + 2 rotations, scaling to 3M voxels;
 #                                      # writes docs/benchmarks.md, docs/img/*.png, bench/results/latest.json
@@ -11,6 +12,7 @@
 #   bash bench/run.sh --refine-only --out /tmp/refine   # 15 minutes: the refinement comparison alone (issue 14)
 #   bash bench/run.sh --setup-only     # only make the venv
 #   bash bench/run.sh --maps [...]     # the scan-to-map benchmark instead (bench/map_bench.py and its options)
+#   bash bench/run.sh --ground [...]   # the ground-vehicle benchmark instead (bench/ground_bench.py, 6 minutes)
 #   bash bench/run.sh --threads 2 --repeats 5 ...   # any bench.py option (python bench/bench.py --help)
 #
 # Environment: KISSM_BENCH_VENV (default bench/.venv), PYTHON (default python3), KISSM_DATA_DIR (default
@@ -24,9 +26,18 @@ python=${PYTHON:-python3}
 
 setup_only=0
 maps=0
+ground=0
 args=()
 for a in "$@"; do
-  if [[ $a == --setup-only ]]; then setup_only=1; elif [[ $a == --maps ]]; then maps=1; else args+=("$a"); fi
+  if [[ $a == --setup-only ]]; then
+    setup_only=1
+  elif [[ $a == --maps ]]; then
+    maps=1
+  elif [[ $a == --ground ]]; then
+    ground=1
+  else
+    args+=("$a")
+  fi
 done
 
 # ---- Debian packages ---------------------------------------------------------------------------------
@@ -61,11 +72,11 @@ fi
 py="$venv/bin/python"
 pip() { "$py" -m pip --disable-pip-version-check "$@"; }
 echo "bench: $("$py" --version) in $venv"
-stamp="$venv/.peers-installed"
+stamp="$venv/.peers-installed-2" # -2: pypatchworkpp joined the peers
 if [[ ! -f $stamp ]]; then
   pip install --quiet --upgrade pip
   # The peers named in the issue, pinned; numpy and matplotlib within tested major versions.
-  pip install --quiet "kiss-matcher==1.0.2" "open3d-cpu==0.20.0" "small-gicp==1.0.1" \
+  pip install --quiet "kiss-matcher==1.0.2" "open3d-cpu==0.20.0" "small-gicp==1.0.1" "pypatchworkpp==1.4.1" \
     "numpy>=1.24,<3" "matplotlib>=3.7,<4"
   touch "$stamp"
 fi
@@ -81,12 +92,16 @@ echo "bench: pip install ./bindings/python took $(($(date +%s) - start)) s"
 "$py" - <<'EOF'
 import importlib.metadata as md
 print("bench: " + ", ".join(f"{d} {md.version(d)}" for d in
-      ("kissm", "kiss-matcher", "open3d-cpu", "small-gicp", "numpy", "matplotlib")))
-import kissm, kiss_matcher, open3d, small_gicp  # noqa: F401  (fails here rather than mid-run)
+      ("kissm", "kiss-matcher", "open3d-cpu", "small-gicp", "pypatchworkpp", "numpy", "matplotlib")))
+import kissm, kiss_matcher, open3d, small_gicp, pypatchworkpp  # noqa: F401  (fails here rather than mid-run)
 EOF
 ((setup_only)) && exit 0
 
 # ---- the run -----------------------------------------------------------------------------------------
+if ((ground)); then
+  export KISSM_BENCH_COMMAND="bash bench/run.sh --ground${args[*]:+ ${args[*]}}"
+  exec "$py" bench/ground_bench.py "${args[@]}"
+fi
 if ((maps)); then
   export KISSM_BENCH_COMMAND="bash bench/run.sh --maps${args[*]:+ ${args[*]}}"
   exec "$py" bench/map_bench.py "${args[@]}"

@@ -47,6 +47,8 @@ echo "== bench/bench.py --smoke =="
 "$build/venv-python/bin/python" "$here/bench/bench.py" --smoke --out "$build/bench-smoke"
 echo "== bench/map_bench.py --smoke =="
 "$build/venv-python/bin/python" "$here/bench/map_bench.py" --smoke --out "$build/map-bench-smoke"
+echo "== bench/ground_bench.py --smoke =="
+"$build/venv-python/bin/python" "$here/bench/ground_bench.py" --smoke --out "$build/ground-bench-smoke"
 
 echo "== tools/docs.sh =="
 bash "$here/tools/docs.sh"
