@@ -121,34 +121,15 @@ bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<E
     weights.assign(n, 1.0);
     iterations = 0;
     if (n < 2) return false;
-    const double c2 = std::max(bound * bound, 1e-12);
     GncPass pass(a, b);
 
     rotation = weighted_rotation(a, b, weights);
-    const double max_r2 = pass.run(rotation, c2, 0.0, ctx).max_r2;
-    if (max_r2 > c2) {
-        // mu starts where the surrogate is convex over all residuals and grows until it is the TLS loss.
-        // Each pass evaluates the residuals of the previous rotation and the weights for this mu in one go.
-        double mu = 1.0 / (2.0 * max_r2 / c2 - 1.0);
-        double prev_cost = std::numeric_limits<double>::infinity();
-        for (int it = 0; it < params.max_iterations; ++it) {
-            iterations = it + 1;
-            const GncPass::Partial p = pass.run(rotation, c2, mu, ctx);
-            rotation = rotation_from_correlation(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(p.H));
-            if (std::fabs(p.cost - prev_cost) < 1e-12 * std::max(1.0, p.cost)) break;
-            prev_cost = p.cost;
-            if (p.binary && it > 0) break;
-            mu *= params.gnc_factor;
-        }
-        pass.run(rotation, c2, 0.0, ctx);
-    }
-    const std::vector<double> &r2 = pass.residuals();
-    std::size_t inliers = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-        weights[k] = r2[k] <= c2 ? 1.0 : 0.0;
-        inliers += weights[k] > 0.0;
-    }
-    return inliers >= 2;
+    return gnc_tls_schedule(
+        pass, n, bound, params, rotation,
+        [](const GncPass::Partial &p) {
+            return rotation_from_correlation(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(p.H));
+        },
+        weights, iterations, ctx);
 }
 
 double scalar_tls(std::vector<double> values, double bound) {

@@ -10,7 +10,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -46,6 +49,40 @@ Eigen::Matrix3d weighted_rotation(const std::vector<Eigen::Vector3d> &a, const s
 bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                       const SolverParams &params, Eigen::Matrix3d &rotation, std::vector<double> &weights,
                       int &iterations, RunContext &ctx);
+
+// The GNC-TLS schedule both rotation solvers share (Yang et al.): from `estimate`, mu starts where the surrogate is
+// convex over all residuals and grows by gnc_factor until the weights are binary or the cost settles. Each
+// pass.run(estimate, c2, mu, ctx) evaluates the residuals of the previous estimate and the weights for this mu in
+// one go and returns a partial with cost, binary and max_r2; update(partial) is the weighted estimate. Ends with
+// binary `weights` (size n): 1 within the bound under the final estimate. False when fewer than two agree.
+template <class Pass, class Estimate, class Update>
+bool gnc_tls_schedule(Pass &pass, std::size_t n, double bound, const SolverParams &params, Estimate &estimate,
+                      Update &&update, std::vector<double> &weights, int &iterations, RunContext &ctx) {
+    const double c2 = std::max(bound * bound, 1e-12);
+    const double max_r2 = pass.run(estimate, c2, 0.0, ctx).max_r2;
+    if (max_r2 > c2) {
+        double mu = 1.0 / (2.0 * max_r2 / c2 - 1.0);
+        double prev_cost = std::numeric_limits<double>::infinity();
+        for (int it = 0; it < params.max_iterations; ++it) {
+            iterations = it + 1;
+            const auto p = pass.run(estimate, c2, mu, ctx);
+            estimate = update(p);
+            if (std::fabs(p.cost - prev_cost) < 1e-12 * std::max(1.0, p.cost)) break;
+            prev_cost = p.cost;
+            if (p.binary && it > 0) break;
+            mu *= params.gnc_factor;
+        }
+        pass.run(estimate, c2, 0.0, ctx);
+    }
+    const std::vector<double> &r2 = pass.residuals();
+    weights.assign(n, 0.0);
+    std::size_t inliers = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        weights[k] = r2[k] <= c2 ? 1.0 : 0.0;
+        inliers += weights[k] > 0.0;
+    }
+    return inliers >= 2;
+}
 
 // Globally optimal 1-D truncated least squares: argmin_x sum_k min((x_k - x)^2, bound^2).
 double scalar_tls(std::vector<double> values, double bound);

@@ -116,30 +116,10 @@ bool gnc_tls_yaw(YawPass &pass, double bound, const SolverParams &params, double
     weights.assign(n, 0.0);
     iterations = 0;
     if (n < 2) return false;
-    const double c2 = std::max(bound * bound, 1e-12);
     theta = pass.least_squares_angle();
-    const double max_r2 = pass.run(theta, c2, 0.0, ctx).max_r2;
-    if (max_r2 > c2) {
-        double mu = 1.0 / (2.0 * max_r2 / c2 - 1.0);
-        double prev_cost = std::numeric_limits<double>::infinity();
-        for (int it = 0; it < params.max_iterations; ++it) {
-            iterations = it + 1;
-            const YawPass::Partial p = pass.run(theta, c2, mu, ctx);
-            theta = std::atan2(p.cross, p.dot);
-            if (std::fabs(p.cost - prev_cost) < 1e-12 * std::max(1.0, p.cost)) break;
-            prev_cost = p.cost;
-            if (p.binary && it > 0) break;
-            mu *= params.gnc_factor;
-        }
-        pass.run(theta, c2, 0.0, ctx);
-    }
-    const std::vector<double> &r2 = pass.residuals();
-    std::size_t inliers = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-        weights[k] = r2[k] <= c2 ? 1.0 : 0.0;
-        inliers += weights[k] > 0.0;
-    }
-    return inliers >= 2;
+    return gnc_tls_schedule(
+        pass, n, bound, params, theta, [](const YawPass::Partial &p) { return std::atan2(p.cross, p.dot); }, weights,
+        iterations, ctx);
 }
 
 } // namespace
