@@ -167,9 +167,11 @@ KISSM_API const char *kissm_last_error_message(void);
 /** Refinement was still moving the pose at kissm_config.refine_max_iterations (kissm_result.refine_converged
  * = 0): it was crossing from one basin to another, as refinements from a wrong start do. */
 #define KISSM_REASON_NOT_CONVERGED 11
-/** kissm_config.rotation_dof = 1 and the best rotation on the yaw solution's inliers turns kissm_config.up by
- * more than kissm_config.max_rotation_uncertainty (kissm_result.tilt): the clouds' relative roll or pitch is
- * not zero, so the yaw-only pose would be off by at least that much. */
+/** kissm_config.rotation_dof = 1 and the clouds' relative roll or pitch is not zero, so the yaw-only pose would
+ * be off by at least that much: the best rotation on the yaw solution's inliers turns kissm_config.up by more
+ * than kissm_config.max_rotation_uncertainty (kissm_result.tilt), or the yaw rotation explains under a quarter
+ * of the matches that pruning found mutually consistent (kissm_result.num_rotation_inliers against
+ * num_pruned_correspondences). */
 #define KISSM_REASON_TILTED 12
 
 /**
