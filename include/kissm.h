@@ -832,6 +832,45 @@ KISSM_API int32_t kissm_register_features(kissm_matcher *matcher, const kissm_fe
 KISSM_API int32_t kissm_refine_features(kissm_matcher *matcher, const kissm_features *source,
                                         const kissm_features *target, const double initial_transform[16],
                                         kissm_result *result);
+/**
+ * @brief Writes features as bytes that kissm_features_deserialize() reads back on any machine: a versioned,
+ *        little-endian format with a checksum (docs/features-format.md).
+ *
+ * The bytes hold the voxels, normals, descriptors and counts, and the descriptor settings they were computed
+ * under (so features loaded elsewhere still fail with #KISSM_ERR_FEATURES_MISMATCH against a matcher of other
+ * settings); the search indexes are not stored but rebuilt on load. The same features always give the same
+ * bytes. Call it first with @p buffer NULL to learn the size.
+ * @param[in] features The features.
+ * @param[out] buffer Where the bytes go, or NULL to ask for the size only (then @p capacity is ignored).
+ * @param[in] capacity Bytes available at @p buffer.
+ * @param[out] out_size The size of the bytes, written or needed. Also written when @p capacity is too small,
+ *             so that the caller can grow the buffer (the one exception to "nothing is written on failure").
+ * @retval KISSM_OK The bytes were written (or, for a NULL @p buffer, *out_size is the size they need).
+ * @retval KISSM_ERR_NULL_ARGUMENT @p features or @p out_size is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p capacity is smaller than the size needed; nothing is written to
+ *         @p buffer and *out_size is the size needed.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_features_serialize(const kissm_features *features, void *buffer, uint64_t capacity,
+                                           uint64_t *out_size);
+/**
+ * @brief Features from bytes written by kissm_features_serialize(), possibly by another process or machine.
+ *
+ * The bytes are not trusted: everything is bounds-checked and validated (magic, version, checksum, counts,
+ * indices, finite values), so truncated, corrupted or forged input fails with a message and is never read
+ * beyond @p size. The features' search indexes are rebuilt (on the calling thread), so registering the loaded
+ * features gives bit for bit the result of the original ones.
+ * @param[in] bytes The bytes; read during the call only.
+ * @param[in] size Their number: exactly what kissm_features_serialize() wrote (trailing bytes are refused).
+ * @param[out] out_features The features, for kissm_features_destroy(); untouched on failure.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p bytes or @p out_features is NULL.
+ * @retval KISSM_ERR_PARSE The bytes are not features of this format version, are truncated or corrupted
+ *         (checksum), or hold a value the library cannot have written; the message names it and its byte
+ *         offset.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_features **out_features);
 
 /** @} */
 

@@ -21,6 +21,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/point_index.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/refine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/features_codec.cpp
 )
 # The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).
 set(KISSM_CAPI_SOURCES

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: MIT
 // The features handle: a cloud described once (voxels, descriptors), registered against many.
+#include <limits>
 #include <memory>
+#include <string>
 
 #include "capi/boundary.hpp"
 #include "capi/conversions.hpp"
 #include "capi/handles.hpp"
+#include "core/features_codec.hpp"
 
 using namespace kissm::detail::capi;
 namespace core = kissm::detail;
@@ -56,6 +59,38 @@ int32_t kissm_refine_features(kissm_matcher *matcher, const kissm_features *sour
         rigid_transform(initial_transform, "initial_transform", R, t);
         core::RunContext ctx = matcher->begin_call();
         fill_result(core::refine_features(source->data, target->data, R, t, matcher->params, ctx), result);
+        return ok();
+    });
+}
+
+int32_t kissm_features_serialize(const kissm_features *features, void *buffer, uint64_t capacity, uint64_t *out_size) {
+    return guarded("kissm_features_serialize", [&] {
+        require_non_null(features, "features");
+        require_non_null(out_size, "out_size");
+        const std::size_t needed = core::encoded_features_size(features->data);
+        if (buffer != nullptr && capacity < needed) {
+            *out_size = needed; // documented: the caller learns how much to allocate
+            core::fail(core::ErrorKind::InvalidArgument, "capacity is " + std::to_string(capacity) +
+                                                             " bytes; the features need " + std::to_string(needed));
+        }
+        if (buffer != nullptr) core::encode_features_to(features->data, static_cast<std::uint8_t *>(buffer));
+        *out_size = needed;
+        return ok();
+    });
+}
+
+int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_features **out_features) {
+    return guarded("kissm_features_deserialize", [&] {
+        require_non_null(bytes, "bytes");
+        require_non_null(out_features, "out_features");
+        if (size > std::numeric_limits<std::size_t>::max())
+            core::fail(core::ErrorKind::Parse, "size " + std::to_string(size) + " does not fit in memory");
+        // One thread: the indexes do not depend on the thread count, and callers that load many features
+        // parallelise over them.
+        core::RunContext ctx(1, nullptr, core::Hooks{});
+        auto f = std::make_unique<kissm_features>();
+        f->data = core::decode_features(static_cast<const std::uint8_t *>(bytes), static_cast<std::size_t>(size), ctx);
+        *out_features = f.release();
         return ok();
     });
 }

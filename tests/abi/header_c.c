@@ -98,6 +98,8 @@ struct kissm_header_test_api {
     uint64_t (*features_num_keypoints)(const kissm_features *);
     uint64_t (*features_memory_bytes)(const kissm_features *);
     int32_t (*register_features)(kissm_matcher *, const kissm_features *, const kissm_features *, kissm_result *);
+    int32_t (*features_serialize)(const kissm_features *, void *, uint64_t, uint64_t *);
+    int32_t (*features_deserialize)(const void *, uint64_t, kissm_features **);
     int32_t (*read_points)(const char *, int32_t, kissm_cloud **);
     void (*cloud_destroy)(kissm_cloud *);
     uint64_t (*cloud_count)(const kissm_cloud *);
@@ -127,6 +129,8 @@ const struct kissm_header_test_api kissm_header_test_api = {
     .features_num_keypoints = kissm_features_num_keypoints,
     .features_memory_bytes = kissm_features_memory_bytes,
     .register_features = kissm_register_features,
+    .features_serialize = kissm_features_serialize,
+    .features_deserialize = kissm_features_deserialize,
     .read_points = kissm_read_points,
     .cloud_destroy = kissm_cloud_destroy,
     .cloud_count = kissm_cloud_count,

@@ -40,6 +40,8 @@ uint64_t kissm_features_num_keypoints(const kissm_features *features);
 uint64_t kissm_features_memory_bytes(const kissm_features *features);
 int32_t kissm_register_features(kissm_matcher *matcher, const kissm_features *source, const kissm_features *target,
                                 kissm_result *result);
+int32_t kissm_features_serialize(const kissm_features *features, void *buffer, uint64_t capacity, uint64_t *out_size);
+int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_features **out_features);
 int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);
 void kissm_cloud_destroy(kissm_cloud *cloud);
 uint64_t kissm_cloud_count(const kissm_cloud *cloud);

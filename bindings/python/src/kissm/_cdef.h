@@ -343,6 +343,11 @@ int32_t kissm_refine_features(kissm_matcher *matcher, const kissm_features *sour
     const kissm_features *target, const double initial_transform[16],
     kissm_result *result);
 
+int32_t kissm_features_serialize(const kissm_features *features, void *buffer, uint64_t capacity,
+    uint64_t *out_size);
+
+int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_features **out_features);
+
 #define KISSM_FORMAT_AUTO 0
 #define KISSM_FORMAT_PLY 1
 #define KISSM_FORMAT_PCD 2

@@ -1,0 +1,455 @@
+// SPDX-License-Identifier: MIT
+// The features byte format, version 1 (docs/features-format.md has the layout). Every multi-byte value is
+// written and read byte by byte in little-endian order, so the bytes are the same on every host and no
+// unaligned load is ever made. The decoder trusts nothing: each read is bounds-checked, each count is checked
+// against the bytes that remain before anything is allocated for it, and each value is checked against what
+// the pipeline can produce, because a loaded cloud goes straight into matching and refinement.
+#include "features_codec.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "failure.hpp"
+
+KISSM_DETAIL_BEGIN
+
+namespace {
+
+constexpr std::uint8_t kMagic[8] = {'K', 'I', 'S', 'S', 'M', 'F', 'T', 0};
+// Magic, version, reserved, total size; the settings (6 + 3 + 3 doubles, an int32, 4 bytes of enums); the
+// voxel and keypoint counts.
+constexpr std::size_t kSettingsBytes = 12 * 8 + 4 + 4;
+constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8 + kSettingsBytes + 8 + 8;
+constexpr std::size_t kOriginBytes = 3 * 8;
+constexpr std::size_t kCountsBytes = 3 * 8;
+constexpr std::size_t kChecksumBytes = 8;
+constexpr std::size_t kPointBytes = 3 * 4;
+constexpr std::size_t kDescriptorBytes = kDescriptorDim * 4;
+// Nothing shorter can be features: one voxel, no valid normal, no keypoint.
+constexpr std::size_t kMinBytes = kHeaderBytes + kOriginBytes + kPointBytes + 2 + kCountsBytes + kChecksumBytes;
+
+// Limits the pipeline guarantees (see decode_features): a cloud needs 4 finite points; voxelize refuses more
+// than 2^21 voxels per axis and recentres on the bounding-box centre, so a local coordinate is within
+// 2^20 voxels of 0 (2^21 leaves room for the voxel's own width); each FPFH block of 11 bins is rescaled to
+// sum to 100 (or is all 0), so no bin exceeds 100 but by rounding.
+constexpr std::uint64_t kMinFinitePoints = 4;
+constexpr double kMaxVoxelsFromOrigin = 2097152.0;
+constexpr float kMaxDescriptorValue = 101.0f;
+
+// ---- enums as the format's bytes (the same numbers as kissm.h's constants) ------------------------------
+
+std::uint8_t code_of(NonFinitePolicy p) { return p == NonFinitePolicy::Drop ? 1 : 0; }
+std::uint8_t code_of(ViewpointMode m) {
+    switch (m) {
+    case ViewpointMode::Fixed: return 0;
+    case ViewpointMode::CloudCenter: return 1;
+    case ViewpointMode::SignFree: return 2;
+    case ViewpointMode::Local: return 3;
+    }
+    return 0;
+}
+std::uint8_t code_of(RefineMode m) {
+    switch (m) {
+    case RefineMode::None: return 0;
+    case RefineMode::Gicp: return 1;
+    case RefineMode::PointToPlane: return 2;
+    }
+    return 0;
+}
+std::uint8_t code_of(Suppression s) { return s == Suppression::Ground ? 1 : 0; }
+
+// ---- writing ----------------------------------------------------------------------------------------------
+
+class Writer {
+public:
+    explicit Writer(std::uint8_t *out) : p_(out) {}
+    std::uint8_t *position() const { return p_; }
+    void bytes(const std::uint8_t *b, std::size_t n) {
+        std::memcpy(p_, b, n);
+        p_ += n;
+    }
+    void u8(std::uint8_t v) { *p_++ = v; }
+    void u32(std::uint32_t v) {
+        for (int i = 0; i < 4; ++i) *p_++ = static_cast<std::uint8_t>(v >> (8 * i));
+    }
+    void u64(std::uint64_t v) {
+        for (int i = 0; i < 8; ++i) *p_++ = static_cast<std::uint8_t>(v >> (8 * i));
+    }
+    void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+    void f32(float v) {
+        std::uint32_t b;
+        std::memcpy(&b, &v, 4);
+        u32(b);
+    }
+    void f64(double v) {
+        std::uint64_t b;
+        std::memcpy(&b, &v, 8);
+        u64(b);
+    }
+    void vec3(const Vec3f &v) { f32(v.x()), f32(v.y()), f32(v.z()); }
+
+private:
+    std::uint8_t *p_;
+};
+
+std::size_t count_valid(const Normals &n) {
+    std::size_t c = 0;
+    for (const std::uint8_t v : n.valid) c += v != 0;
+    return c;
+}
+
+// Flags for every voxel, then the vectors of the valid ones only: invalid normals are zero by construction
+// (normals.cpp), so they carry nothing.
+void write_normals(Writer &w, const Normals &n) {
+    for (const std::uint8_t v : n.valid) w.u8(v != 0 ? 1 : 0);
+    for (std::size_t i = 0; i < n.valid.size(); ++i)
+        if (n.valid[i]) w.vec3(n.normal[i]);
+}
+
+// ---- reading ----------------------------------------------------------------------------------------------
+
+std::uint32_t load_u32(const std::uint8_t *p) {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(p[i]) << (8 * i);
+    return v;
+}
+std::uint64_t load_u64(const std::uint8_t *p) {
+    std::uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(p[i]) << (8 * i);
+    return v;
+}
+float load_f32(const std::uint8_t *p) {
+    const std::uint32_t b = load_u32(p);
+    float v;
+    std::memcpy(&v, &b, 4);
+    return v;
+}
+double load_f64(const std::uint8_t *p) {
+    const std::uint64_t b = load_u64(p);
+    double v;
+    std::memcpy(&v, &b, 8);
+    return v;
+}
+
+[[noreturn]] void malformed(const std::string &what, std::size_t offset) {
+    fail(ErrorKind::Parse, "features bytes: " + what + " (byte offset " + std::to_string(offset) + ")");
+}
+
+std::string text(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+class Reader {
+public:
+    Reader(const std::uint8_t *data, std::size_t size) : data_(data), size_(size) {}
+    std::size_t offset() const { return pos_; }
+    std::size_t left() const { return size_ - pos_; }
+
+    // The next n bytes, which must exist.
+    const std::uint8_t *take(std::size_t n, const char *what) {
+        if (n > left())
+            malformed(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
+                          std::to_string(left()) + " left",
+                      pos_);
+        const std::uint8_t *p = data_ + pos_;
+        pos_ += n;
+        return p;
+    }
+    std::uint8_t u8(const char *what) { return *take(1, what); }
+    std::uint32_t u32(const char *what) { return load_u32(take(4, what)); }
+    std::uint64_t u64(const char *what) { return load_u64(take(8, what)); }
+    double f64(const char *what) { return load_f64(take(8, what)); }
+    std::int32_t i32(const char *what) {
+        const std::uint32_t u = u32(what);
+        std::int32_t v;
+        std::memcpy(&v, &u, 4);
+        return v;
+    }
+
+    // A count of elements of `element_bytes` each that follow: refused, before anything is allocated for it,
+    // when the remaining bytes cannot hold them (a lying count never becomes a huge allocation).
+    std::size_t count_that_fits(std::uint64_t count, std::size_t element_bytes, const char *what,
+                                std::size_t count_offset) const {
+        if (count > left() / element_bytes)
+            malformed(std::string(what) + " is " + std::to_string(count) + ", more than the " + std::to_string(left()) +
+                          " bytes left can hold",
+                      count_offset);
+        return static_cast<std::size_t>(count);
+    }
+
+private:
+    const std::uint8_t *data_;
+    std::size_t size_;
+    std::size_t pos_ = 0;
+};
+
+double finite_in(Reader &r, const char *field, double lo, double hi, bool lo_open) {
+    const std::size_t at = r.offset();
+    const double v = r.f64(field);
+    if (!(std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi))
+        malformed(std::string(field) + " is " + text(v) + "; it must be in " + (lo_open ? "(" : "[") + text(lo) + ", " +
+                      text(hi) + "]",
+                  at);
+    return v;
+}
+
+std::uint8_t code_in(Reader &r, const char *field, std::uint8_t max) {
+    const std::size_t at = r.offset();
+    const std::uint8_t v = r.u8(field);
+    if (v > max)
+        malformed(std::string(field) + " is " + std::to_string(v) + "; it must be in [0, " + std::to_string(max) + "]",
+                  at);
+    return v;
+}
+
+void read_settings(Reader &r, Params &p) {
+    p.voxel_size = finite_in(r, "voxel_size", 0.0, HUGE_VAL, true);
+    // Read before the normal radius, whose upper bound it is (as in kissm_config_validate).
+    p.fpfh_radius_gain = finite_in(r, "fpfh_radius_gain", 1.5, 50.0, false);
+    p.normal_radius_gain = finite_in(r, "normal_radius_gain", 0.0, p.fpfh_radius_gain, true);
+    p.max_linearity = finite_in(r, "max_linearity", 0.0, 1.0, true);
+    p.refine_normal_radius_gain = finite_in(r, "refine_normal_radius_gain", 0.0, 50.0, true);
+    p.sensor_height = finite_in(r, "sensor_height", 0.0, 1000.0, false);
+    const char *viewpoint[3] = {"viewpoint[0]", "viewpoint[1]", "viewpoint[2]"};
+    for (int i = 0; i < 3; ++i)
+        p.viewpoint[static_cast<std::size_t>(i)] = finite_in(r, viewpoint[i], -HUGE_VAL, HUGE_VAL, false);
+    const std::size_t up_at = r.offset();
+    const char *up[3] = {"up[0]", "up[1]", "up[2]"};
+    for (int i = 0; i < 3; ++i) p.up[static_cast<std::size_t>(i)] = finite_in(r, up[i], -1.0, 1.0, false);
+    // The boundary normalises `up`: a stored one is a unit vector up to rounding.
+    const double len = std::sqrt(p.up[0] * p.up[0] + p.up[1] * p.up[1] + p.up[2] * p.up[2]);
+    if (!(std::fabs(len - 1.0) <= 1e-9)) malformed("up has length " + text(len) + "; it must be a unit vector", up_at);
+    const std::size_t tau_at = r.offset();
+    const std::int32_t tau = r.i32("min_normal_neighbors");
+    if (tau < 3 || tau > 100000)
+        malformed("min_normal_neighbors is " + std::to_string(tau) + "; it must be in [3, 100000]", tau_at);
+    p.min_normal_neighbors = tau;
+    p.nonfinite = code_in(r, "nonfinite_policy", 1) == 1 ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
+    static constexpr ViewpointMode kViewpoints[] = {ViewpointMode::Fixed, ViewpointMode::CloudCenter,
+                                                    ViewpointMode::SignFree, ViewpointMode::Local};
+    p.viewpoint_mode = kViewpoints[code_in(r, "viewpoint_mode", 3)];
+    static constexpr RefineMode kRefine[] = {RefineMode::None, RefineMode::Gicp, RefineMode::PointToPlane};
+    p.refine_mode = kRefine[code_in(r, "refine_mode", 2)];
+    p.suppression = code_in(r, "suppression", 1) == 1 ? Suppression::Ground : Suppression::None;
+}
+
+void read_normals(Reader &r, std::size_t num_voxels, const char *flags_name, const char *vectors_name, Normals &n) {
+    const std::size_t flags_at = r.offset();
+    const std::uint8_t *flags = r.take(num_voxels, flags_name);
+    std::size_t valid = 0;
+    for (std::size_t i = 0; i < num_voxels; ++i) {
+        if (flags[i] > 1)
+            malformed(std::string(flags_name) + " of voxel " + std::to_string(i) + " is " + std::to_string(flags[i]) +
+                          "; it must be 0 or 1",
+                      flags_at + i);
+        valid += flags[i];
+    }
+    const std::size_t at = r.offset();
+    const std::uint8_t *p = r.take(valid * kPointBytes, vectors_name);
+    n.valid.assign(flags, flags + num_voxels);
+    n.normal.assign(num_voxels, Vec3f::Zero());
+    for (std::size_t i = 0, k = 0; i < num_voxels; ++i) {
+        if (!flags[i]) continue;
+        const std::uint8_t *q = p + k * kPointBytes;
+        const Vec3f v(load_f32(q), load_f32(q + 4), load_f32(q + 8));
+        // Unit vectors from the eigen solver, rounded to float: anything else is not a normal the pipeline made.
+        if (!(v.allFinite() && std::fabs(v.squaredNorm() - 1.0f) <= 1e-3f))
+            malformed(std::string(vectors_name) + " of voxel " + std::to_string(i) + " is not a finite unit vector",
+                      at + k * kPointBytes);
+        n.normal[i] = v;
+        ++k;
+    }
+}
+
+} // namespace
+
+std::uint64_t features_checksum(const std::uint8_t *data, std::size_t size) {
+    // FNV-1a, 64 bits: every step is a bijection of the state for a given byte, so any change of one byte
+    // (every single-bit flip in particular) changes the result.
+    std::uint64_t h = 14695981039346656037ull;
+    for (std::size_t i = 0; i < size; ++i) {
+        h ^= data[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+std::size_t encoded_features_size(const CloudFeatures &f) {
+    const std::size_t v = f.voxels.points.size(), k = f.descriptors.keypoint.size();
+    return kHeaderBytes + kOriginBytes + v * kPointBytes + 2 * v +
+           (count_valid(f.normals) + count_valid(f.plane_normals)) * kPointBytes + k * (4 + kDescriptorBytes) +
+           kCountsBytes + kChecksumBytes;
+}
+
+void encode_features_to(const CloudFeatures &f, std::uint8_t *out) {
+    const Params &p = f.params;
+    const std::size_t total = encoded_features_size(f);
+    Writer w(out);
+    w.bytes(kMagic, sizeof kMagic);
+    w.u32(kFeaturesFormatVersion);
+    w.u32(0); // reserved
+    w.u64(total);
+    w.f64(p.voxel_size);
+    w.f64(p.fpfh_radius_gain);
+    w.f64(p.normal_radius_gain);
+    w.f64(p.max_linearity);
+    w.f64(p.refine_normal_radius_gain);
+    w.f64(p.sensor_height);
+    for (const double v : p.viewpoint) w.f64(v);
+    for (const double v : p.up) w.f64(v);
+    w.i32(p.min_normal_neighbors);
+    w.u8(code_of(p.nonfinite));
+    w.u8(code_of(p.viewpoint_mode));
+    w.u8(code_of(p.refine_mode));
+    w.u8(code_of(p.suppression));
+    w.u64(f.voxels.points.size());
+    w.u64(f.descriptors.keypoint.size());
+
+    for (int i = 0; i < 3; ++i) w.f64(f.voxels.origin[i]);
+    for (const Vec3f &q : f.voxels.points) w.vec3(q);
+    write_normals(w, f.normals);
+    write_normals(w, f.plane_normals);
+    for (const std::uint32_t k : f.descriptors.keypoint) w.u32(k);
+    for (const float v : f.descriptors.values) w.f32(v);
+    w.u64(f.num_points);
+    w.u64(f.num_nonfinite);
+    w.u64(f.num_suppressed);
+    w.u64(features_checksum(out, total - kChecksumBytes));
+}
+
+std::vector<std::uint8_t> encode_features(const CloudFeatures &f) {
+    std::vector<std::uint8_t> out(encoded_features_size(f));
+    encode_features_to(f, out.data());
+    return out;
+}
+
+CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunContext &ctx) {
+    // Magic and version first (another file, or a version whose checksum may differ, is named as such); then
+    // the checksum over everything, so corruption anywhere is reported as corruption before any field is
+    // interpreted; then the fields, each checked as if the checksum had been forged.
+    if (size >= sizeof kMagic && std::memcmp(data, kMagic, sizeof kMagic) != 0)
+        malformed("not kissm features (wrong magic)", 0);
+    if (size >= 12 && load_u32(data + 8) != kFeaturesFormatVersion)
+        malformed("format version " + std::to_string(load_u32(data + 8)) + " is not known (this kissm reads " +
+                      std::to_string(kFeaturesFormatVersion) + ")",
+                  8);
+    if (size < kMinBytes)
+        malformed("truncated: " + std::to_string(size) + " bytes given, features take at least " +
+                      std::to_string(kMinBytes),
+                  size);
+    const std::uint64_t declared = load_u64(data + 16);
+    const std::uint64_t stored = load_u64(data + size - kChecksumBytes);
+    const std::uint64_t computed = features_checksum(data, size - kChecksumBytes);
+    if (stored != computed)
+        malformed("checksum mismatch: the bytes are corrupted or truncated (" + std::to_string(size) +
+                      " bytes given, the header declares " + std::to_string(declared) + ")",
+                  size - kChecksumBytes);
+    if (declared != size)
+        malformed("the header declares " + std::to_string(declared) + " bytes but " + std::to_string(size) +
+                      " are given",
+                  16);
+
+    Reader r(data, size - kChecksumBytes);
+    r.take(12, "magic and version");
+    if (r.u32("reserved") != 0) malformed("the reserved field is not 0", 12);
+    r.u64("size");
+    CloudFeatures f;
+    read_settings(r, f.params);
+    const std::size_t voxels_at = r.offset();
+    const std::uint64_t num_voxels64 = r.u64("num_voxels");
+    const std::size_t keypoints_at = r.offset();
+    const std::uint64_t num_keypoints64 = r.u64("num_keypoints");
+    // Keypoints are 32-bit voxel numbers; a cloud has at least one voxel.
+    if (num_voxels64 == 0 || num_voxels64 > 0xFFFFFFFFull)
+        malformed("num_voxels is " + std::to_string(num_voxels64) + "; it must be in [1, 2^32 - 1]", voxels_at);
+    if (num_keypoints64 > num_voxels64)
+        malformed("num_keypoints " + std::to_string(num_keypoints64) + " exceeds num_voxels " +
+                      std::to_string(num_voxels64),
+                  keypoints_at);
+    // Each voxel takes a point and two flags; each keypoint an index and a descriptor.
+    const std::size_t num_voxels = r.count_that_fits(num_voxels64, kPointBytes + 2, "num_voxels", voxels_at);
+    const std::size_t num_keypoints =
+        r.count_that_fits(num_keypoints64, 4 + kDescriptorBytes, "num_keypoints", keypoints_at);
+
+    const std::size_t origin_at = r.offset();
+    const std::uint8_t *o = r.take(kOriginBytes, "origin");
+    for (int i = 0; i < 3; ++i) {
+        f.voxels.origin[i] = load_f64(o + 8 * i);
+        if (!std::isfinite(f.voxels.origin[i])) malformed("origin[" + std::to_string(i) + "] is not finite", origin_at);
+    }
+
+    const std::size_t points_at = r.offset();
+    const std::uint8_t *pts = r.take(num_voxels * kPointBytes, "voxel points");
+    const float reach = static_cast<float>(kMaxVoxelsFromOrigin * f.params.voxel_size);
+    f.voxels.points.resize(num_voxels);
+    for (std::size_t i = 0; i < num_voxels; ++i) {
+        const std::uint8_t *q = pts + i * kPointBytes;
+        const Vec3f v(load_f32(q), load_f32(q + 4), load_f32(q + 8));
+        if (!(v.allFinite() && v.cwiseAbs().maxCoeff() <= reach))
+            malformed("voxel point " + std::to_string(i) + " is not finite or lies beyond 2^21 voxels of the origin",
+                      points_at + i * kPointBytes);
+        f.voxels.points[i] = v;
+    }
+    read_normals(r, num_voxels, "normal flag", "normal", f.normals);
+    read_normals(r, num_voxels, "plane normal flag", "plane normal", f.plane_normals);
+
+    // Keypoints as select_keypoints() makes them: voxels with a valid normal, in increasing order.
+    const std::size_t keys_at = r.offset();
+    const std::uint8_t *keys = r.take(num_keypoints * 4, "keypoints");
+    f.descriptors.keypoint.resize(num_keypoints);
+    for (std::size_t i = 0; i < num_keypoints; ++i) {
+        const std::uint32_t k = load_u32(keys + 4 * i);
+        if (k >= num_voxels)
+            malformed("keypoint " + std::to_string(i) + " is voxel " + std::to_string(k) + ", out of range (" +
+                          std::to_string(num_voxels) + " voxels)",
+                      keys_at + 4 * i);
+        if (i > 0 && k <= f.descriptors.keypoint[i - 1])
+            malformed("keypoint " + std::to_string(i) + " (voxel " + std::to_string(k) +
+                          ") is not above the previous one",
+                      keys_at + 4 * i);
+        if (!f.normals.valid[k])
+            malformed("keypoint " + std::to_string(i) + " (voxel " + std::to_string(k) + ") has no valid normal",
+                      keys_at + 4 * i);
+        f.descriptors.keypoint[i] = k;
+    }
+    const std::size_t values_at = r.offset();
+    const std::uint8_t *vals = r.take(num_keypoints * kDescriptorBytes, "descriptors");
+    f.descriptors.values.resize(num_keypoints * kDescriptorDim);
+    for (std::size_t i = 0; i < f.descriptors.values.size(); ++i) {
+        const float v = load_f32(vals + 4 * i);
+        if (!(v >= 0.0f && v <= kMaxDescriptorValue))
+            malformed("descriptor value " + std::to_string(i % kDescriptorDim) + " of keypoint " +
+                          std::to_string(i / kDescriptorDim) + " is not in [0, 101]",
+                      values_at + 4 * i);
+        f.descriptors.values[i] = v;
+    }
+
+    const std::size_t counts_at = r.offset();
+    f.num_points = r.u64("num_points");
+    f.num_nonfinite = r.u64("num_nonfinite");
+    f.num_suppressed = r.u64("num_suppressed");
+    if (f.num_nonfinite > f.num_points || f.num_points - f.num_nonfinite < kMinFinitePoints ||
+        f.num_points - f.num_nonfinite < num_voxels)
+        malformed("num_points " + std::to_string(f.num_points) + " and num_nonfinite " +
+                      std::to_string(f.num_nonfinite) + " leave fewer finite points than 4 or than the " +
+                      std::to_string(num_voxels) + " voxels",
+                  counts_at);
+    if (f.params.nonfinite == NonFinitePolicy::Reject && f.num_nonfinite != 0)
+        malformed("num_nonfinite is " + std::to_string(f.num_nonfinite) + " under the reject policy", counts_at + 8);
+    if (f.num_suppressed > num_voxels || (f.params.suppression == Suppression::None && f.num_suppressed != 0))
+        malformed("num_suppressed " + std::to_string(f.num_suppressed) + " is impossible for " +
+                      std::to_string(num_voxels) + " voxels under this suppression",
+                  counts_at + 16);
+    if (r.left() != 0) malformed(std::to_string(r.left()) + " unexpected bytes before the checksum", r.offset());
+
+    // The indexes, exactly as describe_cloud() builds them: a function of the descriptors and points alone.
+    f.descriptor_index = std::move(DescriptorIndex::build({&f.descriptors}, ctx)[0]);
+    if (f.params.refine_mode != RefineMode::None) f.index = PointIndex(f.voxels.points, f.params.voxel_size);
+    return f;
+}
+
+KISSM_DETAIL_END
