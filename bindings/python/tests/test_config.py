@@ -36,14 +36,10 @@ def test_defaults_come_from_kissm_config_init() -> None:
     config = kissm.Config()
     for name in set(C_FIELDS) - PLUMBING - RESERVED:
         value = getattr(config, name)
-        if name == "viewpoint":
-            assert value == tuple(c.viewpoint)
-        elif name == "nonfinite_policy":
-            assert kissm._config.NONFINITE_POLICIES[value] == c.nonfinite_policy
-        elif name == "viewpoint_mode":
-            assert kissm._config.VIEWPOINT_MODES[value] == c.viewpoint_mode
-        elif name == "refine_mode":
-            assert kissm._config.REFINE_MODES[value] == c.refine_mode
+        if name in kissm._config._VECTOR_FIELDS:  # double[3] in C, a tuple here
+            assert value == tuple(getattr(c, name)), name
+        elif name in kissm._config._ENUMS:  # a KISSM_* code in C, its name here
+            assert kissm._config._ENUMS[name][value] == getattr(c, name), name
         else:
             assert value == getattr(c, name), name
     # and the struct handed to the library is byte for byte kissm_config_init's

@@ -77,7 +77,8 @@ class IoError(Error, OSError):
 
 
 class ParseError(Error, ValueError):
-    """A file is malformed, truncated or of an unsupported layout (KISSM_ERR_PARSE)."""
+    """A file, or the bytes given to ``Features.from_bytes``, is malformed, truncated or of an unsupported layout
+    (KISSM_ERR_PARSE)."""
 
 
 class UnsupportedFormatError(Error, ValueError):

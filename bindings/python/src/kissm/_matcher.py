@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import threading
 import warnings
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
 from ._config import Config
-from ._errors import check, raise_status
+from ._errors import InternalError, check, raise_status
 from ._ffi import ffi, lib
 from ._points import PointsLike, points_view
 from ._result import Result
@@ -49,8 +49,14 @@ class Features:
     Made by :meth:`Matcher.compute_features`. Immutable: one Features object may be used by several threads and
     matchers at once, and may outlive the matcher that made it. It can be matched by any matcher whose
     descriptor settings (voxel size, radii, ``min_normal_neighbors``, ``max_linearity``, viewpoint) are the
-    same, else :class:`kissm.FeaturesMismatchError` is raised. Not picklable (the library has no
-    serialisation): pickle the points and recompute.
+    same, else :class:`kissm.FeaturesMismatchError` is raised.
+
+    Portable: :meth:`to_bytes` writes them in the library's versioned, little-endian format with a checksum
+    (docs/features-format.md) and :meth:`from_bytes` reads them back, in another process or on another
+    machine; registering loaded features gives bit for bit the result of the original ones. Features pickle
+    through these bytes, so they can be sent to worker processes (``concurrent.futures``, ``multiprocessing``)
+    and cached. The bytes carry the descriptor settings the features were computed under, so loaded features
+    still raise :class:`kissm.FeaturesMismatchError` against a matcher of other settings.
     """
 
     __slots__ = ("_ptr", "num_points", "num_voxels", "num_keypoints", "memory_bytes", "__weakref__")
@@ -80,11 +86,63 @@ class Features:
     def __repr__(self) -> str:
         return f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, {self.num_keypoints} keypoints>"
 
-    def __reduce__(self) -> NoReturn:
-        raise TypeError(
-            "kissm.Features cannot be pickled (the library has no serialisation); pickle the points "
-            "and call Matcher.compute_features() again"
-        )
+    def to_bytes(self) -> bytes:
+        """The features as bytes (``kissm_features_serialize``) that :meth:`from_bytes` reads back on any machine.
+
+        The same features always give the same bytes, so they can be hashed or deduplicated. They hold the
+        voxels, normals, descriptors, counts and the descriptor settings, not the search indexes (rebuilt on
+        load): about 170 bytes per voxel when most voxels are keypoints.
+        """
+        size = ffi.new("uint64_t *")
+        check(lib.kissm_features_serialize(self._ptr, ffi.NULL, 0, size))
+        buffer = bytearray(int(size[0]))
+        # The library writes straight into the bytearray; the one copy left makes the result immutable.
+        with ffi.from_buffer("char[]", buffer, require_writable=True) as c:
+            check(lib.kissm_features_serialize(self._ptr, c, len(buffer), size))
+        if int(size[0]) != len(buffer):
+            raise InternalError(f"kissm_features_serialize wrote {int(size[0])} bytes after announcing {len(buffer)}")
+        return bytes(buffer)
+
+    @classmethod
+    def from_bytes(cls, data: bytes | bytearray | memoryview) -> Features:
+        """Features from the bytes of :meth:`to_bytes` (``kissm_features_deserialize``), possibly written by
+        another process or machine. ``data`` is any C-contiguous bytes-like object (``bytes``, ``bytearray``,
+        ``memoryview``, ``mmap``, a contiguous numpy array...), read without copying and exactly as long as
+        :meth:`to_bytes` made it (trailing bytes are refused).
+
+        Nothing in the bytes is trusted: they are bounds-checked and validated (magic, version, checksum,
+        counts, values). The search indexes are rebuilt, on the calling thread, with the GIL released.
+
+        Raises:
+            TypeError: ``data`` is not a bytes-like object (a ``str``, for example) or is not C-contiguous.
+            kissm.ParseError: the bytes are not kissm features of this format version, are truncated or
+                corrupted, or hold a value the library cannot have written; the message names what is wrong
+                and its byte offset.
+        """
+        if isinstance(data, str):
+            raise TypeError("Features.from_bytes() needs a bytes-like object (bytes, bytearray, memoryview), not str")
+        try:
+            view = memoryview(data)
+        except TypeError:
+            raise TypeError(
+                f"Features.from_bytes() needs a bytes-like object (bytes, bytearray, memoryview), "
+                f"not {type(data).__name__}"
+            ) from None
+        with view:
+            if not view.c_contiguous:
+                raise TypeError("Features.from_bytes() needs C-contiguous bytes; copy them first (bytes(data))")
+            out = ffi.new("kissm_features **")
+            # Any item format and shape, as its bytes (no copy). An empty buffer may have no address: the library
+            # gets a valid one and refuses the size.
+            with view.cast("B") as flat:
+                size = flat.nbytes
+                c_bytes = ffi.from_buffer("char[]", flat) if size else ffi.new("char[1]")
+                with c_bytes:  # releases the buffer (a bytearray can be resized again)
+                    check(lib.kissm_features_deserialize(c_bytes, size, out))
+        return cls._adopt(out[0])
+
+    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
+        return (Features.from_bytes, (self.to_bytes(),))
 
 
 def _check_features(source: Features, target: Features) -> None:

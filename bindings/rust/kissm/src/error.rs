@@ -53,7 +53,8 @@ pub enum ErrorKind {
     FeaturesMismatch,
     /// `KISSM_ERR_IO`: a file could not be opened or read.
     Io,
-    /// `KISSM_ERR_PARSE`: a file is malformed, truncated or of an unsupported layout.
+    /// `KISSM_ERR_PARSE`: a file, or the bytes given to [`Features::from_bytes`](crate::Features::from_bytes), is
+    /// malformed, truncated or of an unsupported layout.
     Parse,
     /// `KISSM_ERR_UNSUPPORTED_FORMAT`: a file's format is not recognised.
     UnsupportedFormat,

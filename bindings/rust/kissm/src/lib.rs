@@ -80,6 +80,8 @@
 //!   [`Registration::valid`] is `false` and [`Registration::reason`] says why.
 //! - **Threads**: a [`Matcher`] is `Send` (one thread at a time); [`Features`] are `Send + Sync` and can be
 //!   shared by matchers on several threads; a [`CancelHandle`] stops a running call from any thread.
+//! - **Portable features**: [`Features::to_bytes`] and [`Features::from_bytes`] move described clouds
+//!   between processes and machines; registration from loaded features is bitwise the original's.
 //! - Nothing here panics, and no Rust code is ever called back from C.
 //!
 //! # Refinement

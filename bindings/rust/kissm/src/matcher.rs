@@ -310,6 +310,11 @@ impl fmt::Debug for CancelHandle {
 
 /// A described cloud ([`Matcher::compute_features`]): immutable, shareable between threads
 /// (`Send + Sync`, e.g. in an `Arc`) and independent of the matcher that computed it.
+///
+/// Portable: [`to_bytes`](Features::to_bytes) writes them in the library's versioned, little-endian format
+/// with a checksum (`docs/features-format.md`) and [`from_bytes`](Features::from_bytes) reads them back in
+/// another process or on another machine; registering loaded features gives bit for bit the result of the
+/// original ones.
 pub struct Features {
     raw: NonNull<sys::kissm_features>,
 }
@@ -341,11 +346,80 @@ impl Features {
         // SAFETY: live features.
         unsafe { sys::kissm_features_memory_bytes(self.raw.as_ptr()) }
     }
+
+    /// The features as bytes (`kissm_features_serialize`) that [`from_bytes`](Features::from_bytes) reads
+    /// back on any machine: a versioned, little-endian format with a checksum (`docs/features-format.md`).
+    ///
+    /// The bytes hold the voxels, normals, descriptors and counts and the descriptor settings they were
+    /// computed under, so loaded features still fail with
+    /// [`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch) against a matcher of other settings;
+    /// the search indexes are not stored but rebuilt on load. The same features always give the same bytes,
+    /// so they can be hashed or deduplicated.
+    ///
+    /// ```no_run
+    /// use kissm::{Features, Matcher};
+    /// # let (scan, map): (Vec<[f32; 3]>, Vec<[f32; 3]>) = (Vec::new(), Vec::new());
+    /// let mut matcher = Matcher::with_voxel_size(0.5)?;
+    /// // Describe the map once and store its features...
+    /// let bytes = matcher.compute_features(&map)?.to_bytes()?;
+    /// std::fs::write("map.features", &bytes).expect("write");
+    /// // ...then, in another process or on another machine, with the same settings:
+    /// let map = Features::from_bytes(&std::fs::read("map.features").expect("read"))?;
+    /// let scan = matcher.compute_features(&scan)?;
+    /// let reg = matcher.register_features(&scan, &map)?;
+    /// # Ok::<(), kissm::Error>(())
+    /// ```
+    pub fn to_bytes(&self) -> Result<Vec<u8>, Error> {
+        let mut size: u64 = 0;
+        // SAFETY: live features; a NULL buffer asks for the size only; size is a valid out pointer.
+        Error::check(unsafe { sys::kissm_features_serialize(self.raw.as_ptr(), std::ptr::null_mut(), 0, &mut size) })?;
+        let len = usize::try_from(size)
+            .map_err(|_| Error::new(sys::KISSM_ERR_OUT_OF_MEMORY, format!("the features take {size} bytes")))?;
+        let mut bytes = vec![0u8; len];
+        let mut written: u64 = 0;
+        // SAFETY: bytes holds len = size writable bytes; written is a valid out pointer.
+        Error::check(unsafe {
+            sys::kissm_features_serialize(self.raw.as_ptr(), bytes.as_mut_ptr().cast(), size, &mut written)
+        })?;
+        if written != size {
+            return Err(Error::new(
+                sys::KISSM_ERR_INTERNAL,
+                format!("kissm_features_serialize wrote {written} bytes after announcing {size}"),
+            ));
+        }
+        Ok(bytes)
+    }
+
+    /// Features from the bytes of [`to_bytes`](Features::to_bytes) (`kissm_features_deserialize`), possibly
+    /// written by another process or machine: exactly those bytes (trailing bytes are refused).
+    ///
+    /// Nothing in the bytes is trusted: they are bounds-checked and validated (magic, version, checksum,
+    /// counts, values), and the search indexes are rebuilt on the calling thread. Fails with
+    /// [`ErrorKind::Parse`](crate::ErrorKind::Parse) when the bytes are not features of this format version,
+    /// are truncated or corrupted, or hold a value the library cannot have written; the message names what is
+    /// wrong and its byte offset.
+    ///
+    /// ```
+    /// let err = kissm::Features::from_bytes(b"not features").unwrap_err();
+    /// assert_eq!(err.kind(), kissm::ErrorKind::Parse);
+    /// assert!(err.message().contains("features bytes"), "{err}");
+    /// ```
+    pub fn from_bytes(bytes: &[u8]) -> Result<Features, Error> {
+        crate::check_library()?;
+        let mut raw: *mut sys::kissm_features = std::ptr::null_mut();
+        // SAFETY: bytes is readable for its length (an empty slice has a dangling but non-NULL pointer, which
+        // the library does not read past the size 0); raw is a valid out pointer.
+        Error::check(unsafe { sys::kissm_features_deserialize(bytes.as_ptr().cast(), bytes.len() as u64, &mut raw) })?;
+        NonNull::new(raw).map(|raw| Features { raw }).ok_or_else(|| {
+            Error::new(sys::KISSM_ERR_INTERNAL, "kissm_features_deserialize succeeded but returned no features")
+        })
+    }
 }
 
 impl Drop for Features {
     fn drop(&mut self) {
-        // SAFETY: the pointer came from kissm_features_compute and is destroyed exactly once.
+        // SAFETY: the pointer came from kissm_features_compute or kissm_features_deserialize and is destroyed
+        // exactly once.
         unsafe { sys::kissm_features_destroy(self.raw.as_ptr()) }
     }
 }
