@@ -595,6 +595,8 @@ def summarise(results: dict[str, Any]) -> dict[str, Any]:
             "iou_pass": sum(1 for k in ks if k["iou"] is not None and k["iou"] >= IOU_TARGET),
             "min_speedup": min((k["speedup"] for k in ks if k["speedup"]), default=None),
             "speed_pass": sum(1 for k in ks if k["speedup"] and k["speedup"] >= SPEED_TARGET),
+            "speed_pass_raw": sum(1 for k in full if k["speedup"] and k["speedup"] >= SPEED_TARGET),
+            "scans_raw": len(full),
             "scans": len(ks),
         }
     kissm_wrong = sum(1 for r in runs if r["wrong_valid"] and r["method"] != "ref_quatro")
@@ -716,7 +718,9 @@ def write_report(results: dict[str, Any], out_dir: Path) -> list[Path]:
                 f"{f2(x['min_iou'], 3)}; lowest on the full sweeps and small_gicp scans {f2(x['min_iou_raw'], 3)}): "
                 f"{verdict(x['iou_pass'] == x['scans'])}. At least {SPEED_TARGET:g}x faster on "
                 f"{x['speed_pass']}/{x['scans']} scans (lowest {fx(x['min_speedup'])}): "
-                f"{verdict(x['speed_pass'] == x['scans'])}."
+                f"{verdict(x['speed_pass'] == x['scans'])}; on the raw scans (the full sweeps and small_gicp's, the "
+                f"issue's measure) {x.get('speed_pass_raw', '?')}/{x.get('scans_raw', '?')}: "
+                f"{verdict(x.get('speed_pass_raw') == x.get('scans_raw'))}."
             )
         unstable = [r["label"] for r in seg if not r["pw_second_call_same"]]
         nondet = [r["label"] for r in seg if not all(k["deterministic"] for k in r["kissm"].values())]
