@@ -236,6 +236,7 @@ static void test_mismatch(void) {
     uint64_t n = 0;
     kissm_result r;
     REQUIRE(f != NULL);
+    scn_result_poison(&r); /* struct_size set, every other byte garbage: a failed call must reset it */
     b = to_bytes(f, &n);
     REQUIRE(b != NULL);
     REQUIRE(kissm_features_deserialize(b, n, &d) == KISSM_OK);
