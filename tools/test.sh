@@ -16,25 +16,36 @@
 # never sets it.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
-bash "$here/tools/setup.sh"
+# Each step's wall time, on stderr at its end and in a table at the end of a green run: the whole command
+# must stay within CI's budget (35 minutes on 2 cores), and this says where the time goes.
+step_log=()
+step() {
+  local name=$1 start=$SECONDS
+  shift
+  "$@"
+  step_log+=("$(printf '%6d s  %s' $((SECONDS - start)) "$name")")
+  echo "== step '$name' took $((SECONDS - start)) s ==" >&2
+}
+step setup bash "$here/tools/setup.sh"
 data_dir=${KISSM_DATA_DIR:-$here/../shared/data}
-bash "$here/tools/build.sh" -DKISSM_DATA_DIR="$data_dir"
+step build bash "$here/tools/build.sh" -DKISSM_DATA_DIR="$data_dir"
 build=${KISSM_BUILD_DIR:-$here/build}
 export KISSM_BUILD_DIR=$build KISSM_DATA_DIR=$data_dir
 
 echo "== tools/lint.sh =="
-bash "$here/tools/lint.sh"
+step lint bash "$here/tools/lint.sh"
 
 echo "== C/C++ tests (CTest) =="
-ctest --test-dir "$build" --output-on-failure --parallel 2 --timeout 900
+step ctest ctest --test-dir "$build" --output-on-failure --parallel 2 --timeout 900
 
 if [[ ${KISSM_SKIP_SANITIZERS:-0} != 1 ]]; then
-  bash "$here/tools/sanitize.sh"
+  step "asan+ubsan" bash "$here/tools/sanitize.sh" asan
+  step tsan bash "$here/tools/sanitize.sh" tsan
 fi
 
 run_suite() {
   echo "== $1 =="
-  bash "$here/$1"
+  step "$1" bash "$here/$1"
 }
 
 # Python binding (its own venv in $build/venv-python, set up by the script), then its packages.
@@ -43,17 +54,21 @@ run_suite bindings/python/package_test.sh
 
 # Benchmark smoke run (seconds, in the Python binding's venv): keeps bench/ from rotting. The full
 # benchmark is `bash bench/run.sh`, never a timed test.
-echo "== bench/bench.py --smoke =="
-"$build/venv-python/bin/python" "$here/bench/bench.py" --smoke --out "$build/bench-smoke"
-echo "== bench/map_bench.py --smoke =="
-"$build/venv-python/bin/python" "$here/bench/map_bench.py" --smoke --out "$build/map-bench-smoke"
-echo "== bench/ground_bench.py --smoke =="
-"$build/venv-python/bin/python" "$here/bench/ground_bench.py" --smoke --out "$build/ground-bench-smoke"
+bench_smoke() {
+  echo "== bench/$1 --smoke =="
+  "$build/venv-python/bin/python" "$here/bench/$1" --smoke --out "$build/$2"
+}
+step "bench.py --smoke" bench_smoke bench.py bench-smoke
+step "map_bench.py --smoke" bench_smoke map_bench.py map-bench-smoke
+step "ground_bench.py --smoke" bench_smoke ground_bench.py ground-bench-smoke
 
 echo "== tools/docs.sh =="
-bash "$here/tools/docs.sh"
+step docs bash "$here/tools/docs.sh"
 
-# Rust binding (cargo test), then its crates from their own archives; last, so that a test runner's
-# summary closes the log.
+# Rust binding (cargo test), then its crates from their own archives; last but the time table, so that a
+# test runner's summary is near the end of the log.
 run_suite bindings/rust/run_tests.sh
 run_suite bindings/rust/package_test.sh
+
+echo "== time per step (total $SECONDS s) =="
+printf '%s\n' "${step_log[@]}"
