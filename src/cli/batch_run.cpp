@@ -155,35 +155,27 @@ struct PairOutcome {
 
 PairOutcome register_pair(const BatchRun &run, const PairRow &row, FeatureCache &cache, kissm_matcher *matcher) {
     PairOutcome o;
+    const auto failed = [&](const std::string &message) {
+        o.error = true;
+        o.line = batch_line_error(row, run.has_gt_column, message);
+        return o;
+    };
     double gt[16];
     std::string error;
     if (!row.gt.empty() && !read_transform_file(resolve_pair_path(run.pairs_file, row.gt), gt, &error)) {
-        o.error = true;
-        o.line = batch_line_error(row, run.has_gt_column, "gt: " + error);
-        return o;
+        return failed("gt: " + error);
     }
+    // The source first, then the target: the message names the first that fails, whichever job runs the pair.
     const kissm_features *source =
         cache.acquire(cloud_key(run.pairs_file, row.source, run.source_format), matcher, &error);
-    if (!source) {
-        o.error = true;
-        o.line = batch_line_error(row, run.has_gt_column, "source '" + one_line(row.source) + "': " + error);
-        return o;
-    }
+    if (!source) return failed("source '" + one_line(row.source) + "': " + error);
     const kissm_features *target =
         cache.acquire(cloud_key(run.pairs_file, row.target, run.target_format), matcher, &error);
-    if (!target) {
-        o.error = true;
-        o.line = batch_line_error(row, run.has_gt_column, "target '" + one_line(row.target) + "': " + error);
-        return o;
-    }
+    if (!target) return failed("target '" + one_line(row.target) + "': " + error);
     kissm_result result{};
     int32_t status = kissm_result_init(&result, sizeof result);
     if (status == KISSM_OK) status = kissm_register_features(matcher, source, target, &result);
-    if (status != KISSM_OK) {
-        o.error = true;
-        o.line = batch_line_error(row, run.has_gt_column, "cannot register: " + library_error(status));
-        return o;
-    }
+    if (status != KISSM_OK) return failed("cannot register: " + library_error(status));
     o.valid = result.valid != 0;
     o.line = batch_line_ok(row, run.has_gt_column, result, run.config.refine_mode, row.gt.empty() ? nullptr : gt);
     return o;

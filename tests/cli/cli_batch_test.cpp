@@ -17,6 +17,7 @@
 
 #include <kissm.h>
 
+#include "cli_case_main.hpp"
 #include "cli_test_util.hpp"
 #include "harness.h"
 #include "ply_writer.hpp"
@@ -440,32 +441,11 @@ void test_batch_resume() {
 } // namespace
 
 int main(int argc, char **argv) {
-    if (argc != 4) {
-        std::fprintf(stderr, "usage: cli_batch_test KISSM_BINARY WORK_DIR CASE\n");
-        return 2;
-    }
-    g_kissm = argv[1];
-    g_work = argv[2];
-    const std::string which = argv[3];
-    std::error_code ec;
-    fs::remove_all(g_work, ec);
-    fs::create_directories(g_work, ec);
-    if (ec) {
-        std::fprintf(stderr, "cannot create %s: %s\n", g_work.c_str(), ec.message().c_str());
-        return 2;
-    }
-    g_work = fs::absolute(g_work).string();
-    const struct {
-        const char *name;
-        void (*run)();
-    } cases[] = {{"batch_usage", test_batch_usage}, {"batch_run", test_batch_run}, {"batch_resume", test_batch_resume}};
-    for (const auto &c : cases) {
-        if (which != c.name) continue;
-        c.run();
-        std::fprintf(stderr, "%s %s\n", harness_failed ? "[FAIL]" : "[ ok ]", c.name);
-        return TEST_SUMMARY();
-    }
-    std::fprintf(stderr, "unknown case '%s'\n", which.c_str());
-    return 2;
+    std::string which;
+    if (!prepare_case(argc, argv, &g_kissm, &g_work, &which)) return 2;
+    g_work = fs::absolute(g_work).string(); // the absolute path in a pairs file
+    const CliCase cases[] = {
+        {"batch_usage", test_batch_usage}, {"batch_run", test_batch_run}, {"batch_resume", test_batch_resume}};
+    return run_named_case(which, cases);
 }
 #endif
