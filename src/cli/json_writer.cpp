@@ -83,7 +83,7 @@ void JsonWriter::key(const std::string &name) {
 }
 
 void JsonWriter::begin_object() {
-    const bool parent_inline = !stack_.empty() && stack_.back().is_inline;
+    const bool parent_inline = one_line_ || (!stack_.empty() && stack_.back().is_inline);
     before_value();
     out_.push_back('{');
     stack_.push_back({true, parent_inline, 0});
@@ -98,7 +98,7 @@ void JsonWriter::end_object() {
 }
 
 void JsonWriter::begin_array(bool inline_array) {
-    const bool parent_inline = !stack_.empty() && stack_.back().is_inline;
+    const bool parent_inline = one_line_ || (!stack_.empty() && stack_.back().is_inline);
     before_value();
     out_.push_back('[');
     stack_.push_back({false, inline_array || parent_inline, 0});

@@ -13,6 +13,9 @@ namespace kissm_cli {
 
 class JsonWriter {
 public:
+    // one_line: the whole document on one line (a JSON Lines record), every level kept inline.
+    explicit JsonWriter(bool one_line = false) : one_line_(one_line) {}
+
     void begin_object();
     void end_object();
     // inline_array: keep the array (and anything nested in it) on one line.
@@ -57,6 +60,7 @@ private:
     std::vector<Level> stack_;
     std::string out_;
     bool after_key_ = false;
+    bool one_line_ = false;
 };
 
 } // namespace kissm_cli

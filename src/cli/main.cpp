@@ -5,6 +5,7 @@
 //   kissm refine SOURCE TARGET --initial T.txt --voxel V [options]   fine registration from a known pose
 //   kissm demo [--out DIR] [--threads N] [--seed S]     synthetic LiDAR scene, registered end to end
 //   kissm ground IN --voxel V [--out-ground G.ply] [--out-rest R.ply]   a scan's ground points
+//   kissm batch PAIRS.tsv --voxel V --out RESULTS.jsonl [--jobs N] [--resume]   many pairs, one JSON line each
 //
 // Exit status: 0 success, 1 the registration ran but gave no trustworthy pose, 2 usage or input error
 // (with one "kissm: ..." line on stderr).
@@ -40,10 +41,14 @@ void print_usage(std::FILE *out) {
                  "  kissm ground IN --voxel V [--out-ground G.ply] [--out-rest R.ply] [options]\n"
                  "      Label the ground points of a scan (the model of register --suppression ground) and\n"
                  "      write them and the other points as PLY files.\n"
+                 "  kissm batch PAIRS.tsv --voxel V --out RESULTS.jsonl [--jobs N] [--resume] [options]\n"
+                 "      Register every pair of a tab-separated pairs file (source, target, optional gt),\n"
+                 "      describing each cloud once; one JSON line per pair, appended as it finishes.\n"
                  "  kissm help [COMMAND]      this text, or a command's options (same as COMMAND --help)\n"
                  "  kissm --version           print the version\n"
                  "\n"
-                 "Exit status: 0 success, 1 registration ran but the pose is not valid, 2 usage or input error.\n",
+                 "Exit status: 0 success, 1 registration ran but the pose is not valid (batch: some pairs are\n"
+                 "errors), 2 usage or input error.\n",
                  kissm_version_string());
 }
 
@@ -64,6 +69,8 @@ int run(const std::vector<std::string> &args) {
             print_demo_help(stdout);
         } else if (rest[0] == "ground") {
             print_ground_help(stdout);
+        } else if (rest[0] == "batch") {
+            print_batch_help(stdout);
         } else {
             throw UsageError("no help for unknown command '" + one_line(rest[0]) + "' (try 'kissm --help')");
         }
@@ -77,6 +84,7 @@ int run(const std::vector<std::string> &args) {
     if (command == "refine") return run_refine(rest);
     if (command == "demo") return run_demo(rest);
     if (command == "ground") return run_ground(rest);
+    if (command == "batch") return run_batch(rest);
     if (!command.empty() && command[0] == '-') {
         throw UsageError("unknown option '" + one_line(command) + "' (try 'kissm --help')");
     }

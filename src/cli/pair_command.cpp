@@ -234,10 +234,90 @@ std::string settings_error(int32_t status) {
     return "invalid settings: " + message;
 }
 
+void require_voxel(const char *command, const PairOptions &opt) {
+    if (!opt.have_voxel && opt.ground_up.preset == 0) { // every preset gives a voxel size
+        throw UsageError(std::string(command) +
+                         " needs --voxel V, the voxel size in the clouds' unit (e.g. --voxel 0.3 for outdoor LiDAR "
+                         "in metres), or a --preset that gives one");
+    }
+}
+
 int run_pair_command(PairCommand command, const std::vector<std::string> &args) {
     PairOptions opt;
     if (!parse_pair_options(command, args, &opt)) return kExitOk;
     return run_pair(command, opt);
+}
+
+bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, PairOptions *out) {
+    if (!cur.is_option()) return false;
+    const bool is_register = command == PairCommand::Register;
+    PairOptions &opt = *out;
+    constexpr int32_t kAnyInt = std::numeric_limits<int32_t>::max(); // the library checks the range
+    const std::string name = cur.current();
+    if (name == "--voxel") {
+        opt.voxel = parse_positive(name, cur.value());
+        opt.have_voxel = true;
+    } else if (name == "--threads") {
+        opt.threads = parse_int32(name, cur.value(), 0, 4096);
+        opt.have_threads = true;
+    } else if (is_register && name == "--min-inliers") {
+        opt.min_inliers = parse_int32(name, cur.value(), 3, 1 << 30);
+    } else if (is_register && name == "--max-correspondences") {
+        opt.max_correspondences = parse_int32(name, cur.value(), 3, 1 << 30);
+    } else if (is_register && name == "--max-rotation-uncertainty") {
+        opt.max_rotation_uncertainty = parse_double(name, cur.value());
+        opt.have_max_rotation_uncertainty = true;
+    } else if (is_register && name == "--min-inlier-coverage") {
+        opt.min_inlier_coverage = parse_double(name, cur.value());
+        opt.have_min_inlier_coverage = true;
+    } else if (is_register && name == "--refine-min-inliers") {
+        opt.refine_min_inliers = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
+        opt.have_refine_min_inliers = true;
+    } else if (is_register && take_ground_up_option(cur, true, &opt.ground_up)) {
+        // --preset, --suppression, --rotation-dof, --up, --sensor-height
+    } else if (!is_register && name == "--initial") {
+        opt.initial = cur.value();
+    } else if (name == "--viewpoint") {
+        opt.viewpoint_mode = parse_viewpoint_mode(name, cur.value());
+    } else if (name == "--refine") {
+        opt.refine_mode = parse_refine_mode(name, cur.value());
+        if (!is_register && opt.refine_mode == KISSM_REFINE_NONE) {
+            throw UsageError("refine: --refine none leaves nothing to do (expected gicp or point-to-plane)");
+        }
+    } else if (name == "--refine-iterations") {
+        opt.refine_iterations = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
+        opt.have_refine_iterations = true;
+    } else if (name == "--refine-distance") {
+        opt.refine_distance = parse_double(name, cur.value());
+        opt.have_refine_distance = true;
+    } else if (name == "--min-overlap") {
+        opt.min_overlap = parse_double(name, cur.value());
+        opt.have_min_overlap = true;
+    } else if (name == "--min-refine-condition") {
+        opt.min_refine_condition = parse_double(name, cur.value());
+        opt.have_min_refine_condition = true;
+    } else if (name == "--refine-normal-radius") {
+        opt.refine_normal_radius_gain = parse_double(name, cur.value());
+        opt.have_refine_normal_radius = true;
+    } else if (name == "--format-src") {
+        opt.source_format = parse_format(name, cur.value());
+    } else if (name == "--format-tgt") {
+        opt.target_format = parse_format(name, cur.value());
+    } else if (name == "--format") {
+        opt.source_format = opt.target_format = parse_format(name, cur.value());
+    } else if (with_outputs && name == "--out-transform") {
+        opt.out_transform = cur.value();
+    } else if (with_outputs && name == "--out-aligned") {
+        opt.out_aligned = cur.value();
+    } else if (with_outputs && name == "--out-topview") {
+        opt.out_topview = cur.value();
+    } else if (!cur.take_flag("--drop-nonfinite", &opt.drop_nonfinite) &&
+               !cur.take_flag("--viewpoint-center", &opt.viewpoint_center) &&
+               !(with_outputs && cur.take_flag("--json", &opt.json)) &&
+               !cur.take_flag("--verbose", &opt.verbose, "-v")) {
+        return false;
+    }
+    return true;
 }
 
 bool parse_pair_options(PairCommand command, const std::vector<std::string> &args, PairOptions *out) {
@@ -245,7 +325,6 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
     PairOptions opt;
     opt.refine_mode = is_register ? KISSM_REFINE_NONE : KISSM_REFINE_GICP;
     ArgCursor cur(command_name(command), args);
-    constexpr int32_t kAnyInt = std::numeric_limits<int32_t>::max(); // the library checks the range
     while (cur.next()) {
         const std::string name = cur.current();
         if (!cur.is_option()) {
@@ -257,65 +336,7 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
                 print_refine_help(stdout);
             }
             return false;
-        } else if (name == "--voxel") {
-            opt.voxel = parse_positive(name, cur.value());
-            opt.have_voxel = true;
-        } else if (name == "--threads") {
-            opt.threads = parse_int32(name, cur.value(), 0, 4096);
-        } else if (is_register && name == "--min-inliers") {
-            opt.min_inliers = parse_int32(name, cur.value(), 3, 1 << 30);
-        } else if (is_register && name == "--max-correspondences") {
-            opt.max_correspondences = parse_int32(name, cur.value(), 3, 1 << 30);
-        } else if (is_register && name == "--max-rotation-uncertainty") {
-            opt.max_rotation_uncertainty = parse_double(name, cur.value());
-            opt.have_max_rotation_uncertainty = true;
-        } else if (is_register && name == "--min-inlier-coverage") {
-            opt.min_inlier_coverage = parse_double(name, cur.value());
-            opt.have_min_inlier_coverage = true;
-        } else if (is_register && name == "--refine-min-inliers") {
-            opt.refine_min_inliers = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
-            opt.have_refine_min_inliers = true;
-        } else if (is_register && take_ground_up_option(cur, true, &opt.ground_up)) {
-            // --preset, --suppression, --rotation-dof, --up, --sensor-height
-        } else if (!is_register && name == "--initial") {
-            opt.initial = cur.value();
-        } else if (name == "--viewpoint") {
-            opt.viewpoint_mode = parse_viewpoint_mode(name, cur.value());
-        } else if (name == "--refine") {
-            opt.refine_mode = parse_refine_mode(name, cur.value());
-            if (!is_register && opt.refine_mode == KISSM_REFINE_NONE) {
-                throw UsageError("refine: --refine none leaves nothing to do (expected gicp or point-to-plane)");
-            }
-        } else if (name == "--refine-iterations") {
-            opt.refine_iterations = parse_int32(name, cur.value(), -kAnyInt - 1, kAnyInt);
-            opt.have_refine_iterations = true;
-        } else if (name == "--refine-distance") {
-            opt.refine_distance = parse_double(name, cur.value());
-            opt.have_refine_distance = true;
-        } else if (name == "--min-overlap") {
-            opt.min_overlap = parse_double(name, cur.value());
-            opt.have_min_overlap = true;
-        } else if (name == "--min-refine-condition") {
-            opt.min_refine_condition = parse_double(name, cur.value());
-            opt.have_min_refine_condition = true;
-        } else if (name == "--refine-normal-radius") {
-            opt.refine_normal_radius_gain = parse_double(name, cur.value());
-            opt.have_refine_normal_radius = true;
-        } else if (name == "--format-src") {
-            opt.source_format = parse_format(name, cur.value());
-        } else if (name == "--format-tgt") {
-            opt.target_format = parse_format(name, cur.value());
-        } else if (name == "--format") {
-            opt.source_format = opt.target_format = parse_format(name, cur.value());
-        } else if (name == "--out-transform") {
-            opt.out_transform = cur.value();
-        } else if (name == "--out-aligned") {
-            opt.out_aligned = cur.value();
-        } else if (name == "--out-topview") {
-            opt.out_topview = cur.value();
-        } else if (!cur.take_flag("--drop-nonfinite", &opt.drop_nonfinite) &&
-                   !cur.take_flag("--viewpoint-center", &opt.viewpoint_center) && !cur.take_flag("--json", &opt.json) &&
-                   !cur.take_flag("--verbose", &opt.verbose, "-v")) {
+        } else if (!take_pair_option(command, cur, true, &opt)) {
             cur.unknown();
         }
     }
@@ -324,11 +345,7 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
         throw UsageError(std::string(command_name(command)) + " expects 2 files (SOURCE TARGET), got " +
                          std::to_string(opt.files.size()) + see);
     }
-    if (!opt.have_voxel && opt.ground_up.preset == 0) { // every preset gives a voxel size
-        throw UsageError(std::string(command_name(command)) +
-                         " needs --voxel V, the voxel size in the clouds' unit (e.g. --voxel 0.3 for outdoor LiDAR "
-                         "in metres), or a --preset that gives one");
-    }
+    require_voxel(command_name(command), opt);
     if (!is_register && opt.initial.empty()) {
         throw UsageError("refine needs --initial FILE, the starting transform (4 rows of 4 numbers, as "
                          "--out-transform writes)" +

@@ -54,6 +54,7 @@ struct PairOptions {
     bool have_voxel = false;
     double voxel = 0.0;
     int32_t threads = 0;
+    bool have_threads = false;        // --threads given (batch's default is 1 per job, not all)
     int32_t min_inliers = -1;         // register only; -1: library default
     int32_t max_correspondences = -1; // register only; -1: library default
     // The validity rules' settings (register only: kissm_refine has no solver inliers to judge); unset ones
@@ -90,6 +91,11 @@ struct PairOptions {
     std::string out_topview;
 };
 
+// When the cursor stands on one of the command's options (with_outputs: also --json and the --out-* files):
+// reads it into *opt and returns true. Positional arguments and -h are the caller's.
+bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, PairOptions *opt);
+// A UsageError "COMMAND needs --voxel V ..." unless --voxel or a --preset gave a voxel size.
+void require_voxel(const char *command, const PairOptions &opt);
 // Parses a pair command's arguments into *opt. Returns false when it printed the help (-h, --help).
 bool parse_pair_options(PairCommand command, const std::vector<std::string> &args, PairOptions *opt);
 // kissm_config_init's defaults (the help shows them; nothing in the tool writes a default of its own).

@@ -120,7 +120,8 @@ void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind
     }
 }
 
-void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mode, const double *initial_transform) {
+void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mode, const double *initial_transform,
+                     bool with_times) {
     json.field("valid", r.valid != 0);
     json.field("reason", kissm_reason_string(r.reason));
     json.field("reason_code", r.reason);
@@ -168,6 +169,7 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field_vector("inlier_extent", r.inlier_extent, 3);
     json.field("rotation_uncertainty", r.rotation_uncertainty);
     json.field("tilt", r.tilt);
+    if (!with_times) return;
     json.key("time_ms");
     json.begin_object();
     json.field("voxelize", r.time_voxelize_ms);

@@ -31,8 +31,9 @@ void print_result_summary(std::FILE *out, const kissm_result &result, ResultKind
 // inlier_ratio, residual_rms, noise_bound, inlier_extent, rotation_uncertainty, tilt, time_ms (voxelize,
 // features, suppression, matching, pruning, solver, refine, total).
 // refine_mode: the config's KISSM_REFINE_* (the mode used). initial_transform: kissm_refine's, or null.
+// with_times false leaves time_ms out, so that the same pair gives the same bytes on every run (batch).
 void add_result_json(JsonWriter &json, const kissm_result &result, int32_t refine_mode,
-                     const double *initial_transform = nullptr);
+                     const double *initial_transform = nullptr, bool with_times = true);
 
 // The library's message for the last failure on this thread (or the status string when it is empty),
 // without a leading "kissm_function: " or "path: ", which the caller's own message already gives.

@@ -25,6 +25,7 @@
 
 #include <kissm.h>
 
+#include "cli_case_main.hpp"
 #include "cli_result_check.hpp"
 #include "cli_test_util.hpp"
 #include "harness.h"
@@ -1524,45 +1525,23 @@ void test_ground_command() {
 } // namespace
 
 int main(int argc, char **argv) {
-    if (argc != 4) {
-        std::fprintf(stderr, "usage: cli_test KISSM_BINARY WORK_DIR CASE\n");
-        return 2;
-    }
-    g_kissm = argv[1];
-    g_work = argv[2];
-    const std::string which = argv[3];
-    std::error_code ec;
-    fs::remove_all(g_work, ec);
-    fs::create_directories(g_work, ec);
-    if (ec) {
-        std::fprintf(stderr, "cannot create %s: %s\n", g_work.c_str(), ec.message().c_str());
-        return 2;
-    }
+    std::string which;
+    if (!prepare_case(argc, argv, &g_kissm, &g_work, &which)) return 2;
     if (which == "realdata") return test_realdata(); // 77 when the data is absent
-    const struct {
-        const char *name;
-        void (*run)();
-    } cases[] = {{"usage", test_usage},
-                 {"errors", test_errors},
-                 {"malformed", test_malformed},
-                 {"demo", test_demo},
-                 {"json", test_json},
-                 {"threads", test_threads},
-                 {"refine_options", test_refine_options},
-                 {"refine_register", test_refine_register},
-                 {"refine_command", test_refine_command},
-                 {"refine_initial", test_refine_initial},
-                 {"refine_roundtrip", test_refine_roundtrip},
-                 {"validity_options", test_validity_options},
-                 {"refine_rule_options", test_refine_rule_options},
-                 {"ground_options", test_ground_options},
-                 {"ground_command", test_ground_command}};
-    for (const auto &c : cases) {
-        if (which != c.name) continue;
-        c.run();
-        std::fprintf(stderr, "%s %s\n", harness_failed ? "[FAIL]" : "[ ok ]", c.name);
-        return TEST_SUMMARY();
-    }
-    std::fprintf(stderr, "unknown case '%s'\n", which.c_str());
-    return 2;
+    const CliCase cases[] = {{"usage", test_usage},
+                             {"errors", test_errors},
+                             {"malformed", test_malformed},
+                             {"demo", test_demo},
+                             {"json", test_json},
+                             {"threads", test_threads},
+                             {"refine_options", test_refine_options},
+                             {"refine_register", test_refine_register},
+                             {"refine_command", test_refine_command},
+                             {"refine_initial", test_refine_initial},
+                             {"refine_roundtrip", test_refine_roundtrip},
+                             {"validity_options", test_validity_options},
+                             {"refine_rule_options", test_refine_rule_options},
+                             {"ground_options", test_ground_options},
+                             {"ground_command", test_ground_command}};
+    return run_named_case(which, cases);
 }

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Unit tests of the command-line tool's own pieces: checksums, the deflate/PNG encoder, the JSON writer,
 // the PLY writer, the transform file, the argument parsers, the result's JSON and summary, the top view and
-// its coarse/refined detail, and the demo scene simulator.
+// its coarse/refined detail, the demo scene simulator, and batch's pairs file, results lines, resume scan and
+// progress line.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +16,9 @@
 #include <kissm.h>
 
 #include "alignment_figure.hpp"
+#include "batch_pairs.hpp"
+#include "batch_progress.hpp"
+#include "batch_run.hpp"
 #include "cli_args.hpp"
 #include "cli_result_check.hpp"
 #include "cli_test_util.hpp"
@@ -661,6 +665,126 @@ void test_demo_scene() {
     CHECK(other.source.xyz != a.source.xyz);
 }
 
+// The UsageError's message of f(), or "" when it did not throw.
+template <typename F>
+std::string usage_error_of(F f) {
+    try {
+        f();
+    } catch (const UsageError &e) {
+        return e.what();
+    }
+    return std::string();
+}
+
+void test_batch_pairs() {
+    const PairsTable t = parse_pairs("# comment\r\n\r\nid\tsource\ttarget\tgt\r\n"
+                                     "a\tx y.ply\t/abs/b.ply\tgt1.txt\r\n"
+                                     "  # another comment\n"
+                                     "b\tsub/c.ply\td.ply\t\n",
+                                     "p.tsv");
+    CHECK(t.has_gt_column);
+    REQUIRE(t.rows.size() == 2);
+    CHECK(t.rows[0].index == 1 && t.rows[0].line == 4 && t.rows[0].source == "x y.ply" &&
+          t.rows[0].target == "/abs/b.ply" && t.rows[0].gt == "gt1.txt");
+    CHECK(t.rows[1].index == 2 && t.rows[1].line == 6 && t.rows[1].source == "sub/c.ply" && t.rows[1].gt.empty());
+    const PairsTable no_gt = parse_pairs("target\tsource\nb\ta", "p.tsv"); // any column order, no final newline
+    CHECK(!no_gt.has_gt_column && no_gt.rows.size() == 1 && no_gt.rows[0].source == "a" && no_gt.rows[0].target == "b");
+    CHECK(parse_pairs("source\ttarget\n", "p.tsv").rows.empty());
+
+    const struct {
+        const char *text, *message;
+    } bad[] = {
+        {"", "p.tsv: no header line"},
+        {"source target\na b\n", "p.tsv line 1: the header has no 'source' column"},
+        {"source\n", "p.tsv line 1: the header has no 'target' column"},
+        {"target\tsource\tgt\tgt\n", "p.tsv line 1: the header names the column 'gt' twice"},
+        {"source\ttarget\na\tb\tc\n", "p.tsv line 2: 3 tab-separated fields, the header has 2"},
+        {"source\ttarget\na\t\n", "p.tsv line 2: empty target path"},
+    };
+    for (const auto &b : bad) {
+        const std::string message = usage_error_of([&] { parse_pairs(b.text, "p.tsv"); });
+        CHECK_MSG(message.find(b.message) == 0, "[%s]: [%s], expected [%s]", b.text, message.c_str(), b.message);
+    }
+    CHECK(resolve_pair_path("data/pairs.tsv", "a.ply") == (std::filesystem::path("data") / "a.ply").string());
+    CHECK(resolve_pair_path("pairs.tsv", "a.ply") == "a.ply");
+    const std::string abs = std::filesystem::absolute("x.ply").string();
+    CHECK(resolve_pair_path("data/pairs.tsv", abs) == abs);
+}
+
+void test_batch_lines_and_resume() {
+    PairRow row;
+    row.index = 3;
+    row.source = "we\"ird\tname\x01.ply";
+    row.target = "t.ply";
+    row.gt = "gt.txt";
+    kissm_result r{};
+    REQUIRE(kissm_result_init(&r, sizeof r) == KISSM_OK);
+    r.valid = 1;
+    r.time_total_ms = 12.5;
+    double gt[16] = {1, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    for (int i = 0; i < 16; ++i) r.transform[i] = gt[i];
+    r.transform[3] = 1.25; // 0.25 off in x
+    const std::string ok = batch_line_ok(row, true, r, KISSM_REFINE_NONE, gt);
+    CHECK(ok.back() == '\n' && ok.find('\n') == ok.size() - 1);
+    CHECK(!cli_test::contains(ok, "time_ms") && !cli_test::contains(ok, "12.5"));
+    CHECK(cli_test::starts_with(ok, "{\"pair\": 3, \"source\": \"we\\\"ird\\tname\\u0001.ply\", \"target\": \"t.ply\", "
+                                    "\"gt\": \"gt.txt\", \"status\": \"ok\", \"valid\": true, \"reason\": "));
+    CHECK(cli_test::contains(ok, "\"rotation_error_deg\": 0, \"translation_error_m\": 0.25}\n"));
+    std::string error;
+    CHECK_MSG(cli_test::json_valid(ok, &error), "%s", error.c_str());
+    PairRow plain = row;
+    plain.index = 4;
+    plain.source = "s.ply";
+    plain.gt.clear();
+    const std::string failed = batch_line_error(plain, true, "source 's.ply': cannot read it:\nno such file");
+    CHECK(failed == "{\"pair\": 4, \"source\": \"s.ply\", \"target\": \"t.ply\", \"gt\": null, \"status\": \"error\", "
+                    "\"message\": \"source 's.ply': cannot read it: no such file\", \"valid\": false, "
+                    "\"transform\": null}\n");
+    CHECK(!cli_test::contains(batch_line_error(plain, false, "x"), "\"gt\""));
+
+    // The scan reads the lines back, keys and all.
+    const std::string two = ok + failed;
+    ResultsScan scan = scan_results(two, "r");
+    REQUIRE(scan.done.size() == 2);
+    CHECK(scan.keep_bytes == two.size() && !scan.dropped_partial);
+    CHECK(scan.done[0].pair == 3 && scan.done[0].source == row.source && scan.done[0].target == "t.ply" &&
+          scan.done[0].valid && !scan.done[0].error && scan.done[0].line == 1);
+    CHECK(scan.done[1].pair == 4 && scan.done[1].error && !scan.done[1].valid && scan.done[1].line == 2);
+    // A killed run's last line: cut anywhere, even just before its newline, it is dropped.
+    for (size_t cut = 0; cut < failed.size(); ++cut) {
+        scan = scan_results(ok + failed.substr(0, cut), "r");
+        CHECK_MSG(scan.done.size() == 1 && scan.keep_bytes == ok.size() && scan.dropped_partial == (cut > 0),
+                  "cut at %zu: %zu records", cut, scan.done.size());
+    }
+    scan = scan_results(ok + "{\"pair\": 5}\n", "r"); // complete but not a record: the last line, dropped
+    CHECK(scan.done.size() == 1 && scan.dropped_partial && scan.keep_bytes == ok.size());
+    CHECK(scan_results("", "r").done.empty());
+    const std::string middle = usage_error_of([&] { scan_results(ok + "{\"pair\": 5\n" + failed, "r"); });
+    CHECK_MSG(middle.find("r line 2 is not a kissm batch record") == 0, "%s", middle.c_str());
+    const std::string blank = usage_error_of([&] { scan_results(ok + "\n" + failed, "r"); });
+    CHECK_MSG(blank.find("r line 2 is not") == 0, "%s", blank.c_str());
+}
+
+void test_batch_progress() {
+    CHECK(progress_text(0, 40, 0.0) == "0/40 pairs (0%)");
+    CHECK(progress_text(12, 40, 4.0) == "12/40 pairs (30%), 3 pairs/s, ETA 9 s");
+    CHECK(progress_text(1, 1000, 2.0) == "1/1000 pairs (0%), 0.5 pairs/s, ETA 33 min");
+    CHECK(progress_text(1, 10000, 2.0) == "1/10000 pairs (0%), 0.5 pairs/s, ETA 5.6 h");
+    CHECK(progress_text(40, 40, 8.0) == "40/40 pairs (100%), 5 pairs/s, ETA 0 s");
+    // One-line JSON: the batch's records.
+    JsonWriter json(true);
+    json.begin_object();
+    json.field("a", 1.5);
+    json.field_vector("v", std::vector<double>{1, 2}.data(), 2);
+    json.key("o");
+    json.begin_object();
+    json.key("n");
+    json.null();
+    json.end_object();
+    json.end_object();
+    CHECK(json.str() == "{\"a\": 1.5, \"v\": [1, 2], \"o\": {\"n\": null}}\n");
+}
+
 } // namespace
 
 int main() {
@@ -677,5 +801,8 @@ int main() {
     RUN_TEST(test_rng);
     RUN_TEST(test_pose_math);
     RUN_TEST(test_demo_scene);
+    RUN_TEST(test_batch_pairs);
+    RUN_TEST(test_batch_lines_and_resume);
+    RUN_TEST(test_batch_progress);
     return TEST_SUMMARY();
 }
