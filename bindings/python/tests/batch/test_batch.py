@@ -19,27 +19,7 @@ import kissm.batch
 from kissm._batch_jobs import pair_job
 
 import batchcases
-from batchcases import Batch, ComputeCounter, Events
-
-
-@pytest.fixture(scope="module")
-def synthetic() -> Batch:
-    return batchcases.synthetic_batch()
-
-
-@pytest.fixture(scope="module")
-def synthetic_serial(synthetic: Batch) -> list[kissm.Result]:
-    return batchcases.serial(synthetic)
-
-
-@pytest.fixture(scope="module")
-def kitti(real_data: Path) -> Batch:
-    return batchcases.kitti_batch(real_data)
-
-
-@pytest.fixture(scope="module")
-def kitti_serial(kitti: Batch) -> list[kissm.Result]:
-    return batchcases.serial(kitti)
+from batchcases import ComputeCounter, Events
 
 
 def test_the_module_is_an_attribute_of_kissm() -> None:
