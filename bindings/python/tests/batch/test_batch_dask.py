@@ -57,25 +57,8 @@ def test_synthetic_on_dask(client, synthetic, synthetic_serial) -> None:
     assert_each_described_once(describes, synthetic)
 
 
-def test_describe_many_on_dask(client, synthetic, tmp_path) -> None:
-    clouds = {**synthetic.clouds, "missing": str(tmp_path / "gone.ply")}
-    got = kissm.batch.describe_many(clouds, client, voxel_size=synthetic.voxel_size)
-    assert list(got) == list(clouds)
-    assert type(got["missing"]) is kissm.IoError
-    with kissm.Matcher(voxel_size=synthetic.voxel_size) as matcher:
-        for key, cloud in synthetic.clouds.items():
-            features = got[key]
-            assert isinstance(features, kissm.Features)
-            assert features.to_bytes() == matcher.compute_features(cloud).to_bytes()
-
-
-def test_failures_are_values_on_dask(client, synthetic, tmp_path) -> None:
-    clouds = {**synthetic.clouds, "missing": tmp_path / "gone.ply", "tiny": synthetic.clouds["source"][:3]}
-    pairs = [("source", "target0"), ("missing", "source"), ("source", "tiny")]
-    good, missing, tiny = kissm.batch.register_many(pairs, clouds, client, voxel_size=synthetic.voxel_size)
-    assert good.ok and good.result is not None
-    assert type(missing.error) is kissm.IoError and missing.result is None
-    assert type(tiny.error) is kissm.TooFewPointsError
+def test_describe_many_and_failures_on_dask(client, synthetic, tmp_path) -> None:
+    batchcases.assert_describe_many_and_failures(client, synthetic, tmp_path)
 
 
 def test_kitti_on_dask(client, kitti, kitti_serial) -> None:
