@@ -30,9 +30,9 @@ from ._config import Config, RefineMode
 from ._errors import Error, InternalError
 from ._matcher import Features
 
-#: What ``progress`` accepts: True (a bar on stderr: tqdm's if installed), False, None (a bar only when
-#: stderr is a terminal), or a callable called with a :class:`Progress` after each job.
 ProgressLike = bool | None | Callable[[Progress], object]
+"""What ``progress`` accepts: True (a bar on stderr: tqdm's if installed), False, None (a bar only when stderr is a
+terminal), or a callable called with a :class:`Progress` after each job."""
 
 
 def _run(executor: Any, work: Work, progress: ProgressLike) -> Sink:
