@@ -68,10 +68,11 @@ def main() -> None:
             saved.append(str(Path(scratch.name) / f"{len(saved)}.features"))
             Path(saved[-1]).write_bytes(data)
             describe = child("describe", voxel, fmt, path)
+            keypoints = features.num_keypoints
             print(
-                f"{path}: {features.num_points} points, {features.num_keypoints} keypoints, "
-                f"memory_bytes {features.memory_bytes} ({features.memory_bytes / features.num_keypoints:.0f}/keypoint), "
-                f"to_bytes {len(data)} ({len(data) / features.num_keypoints:.0f}/keypoint), "
+                f"{path}: {features.num_points} points, {keypoints} keypoints, "
+                f"memory_bytes {features.memory_bytes} ({features.memory_bytes / keypoints:.0f}/keypoint), "
+                f"to_bytes {len(data)} ({len(data) / keypoints:.0f}/keypoint), "
                 f"describe job peak {describe['peak_kib'] / 1024:.1f} MiB"
             )
         for (i, earlier), (j, later) in itertools.combinations(enumerate(saved), 2):
