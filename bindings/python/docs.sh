@@ -5,8 +5,8 @@
 # pdoc (pinned) runs in its own venv ($KISSM_DOCS_VENV, default ${KISSM_BUILD_DIR:-<repo>/build}/venv-docs)
 # on the package's sources, with the library of a CMake build: $KISSM_LIBRARY, else
 # $KISSM_BUILD_DIR/libkissm.so (tools/build.sh makes it). Fails when a public name (anything in
-# kissm.__all__, and the public methods, properties and fields of its classes) has no docstring, and on
-# any warning or error from pdoc.
+# kissm.__all__ or kissm.batch, and the public methods, properties and fields of their classes) has no
+# docstring, and on any warning or error from pdoc.
 set -euo pipefail
 if (($# != 1)); then
   echo "usage: $0 OUTDIR" >&2
@@ -39,6 +39,7 @@ import sys
 import pdoc.doc
 
 import kissm
+import kissm.batch
 
 
 def undocumented(doc: pdoc.doc.Namespace, inherited_ok: frozenset[str] = frozenset()) -> list[str]:
@@ -55,7 +56,7 @@ def undocumented(doc: pdoc.doc.Namespace, inherited_ok: frozenset[str] = frozens
     return missing
 
 
-missing = undocumented(pdoc.doc.Module(kissm))
+missing = undocumented(pdoc.doc.Module(kissm)) + undocumented(pdoc.doc.Module(kissm.batch))
 if missing:
     sys.exit("docs: public names without a docstring: " + ", ".join(missing))
 EOF

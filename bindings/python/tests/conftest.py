@@ -15,6 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # tests/testdata.py, t
 
 import kissm  # noqa: E402
 
+import batchcases  # noqa: E402
 import testdata  # noqa: E402
 from realdata import RealPair, load_pairs  # noqa: E402
 
@@ -98,3 +99,26 @@ def cc() -> str:
     if compiler is None:
         pytest.skip("no C compiler")
     return compiler
+
+
+# ---- the kissm.batch tests (test_batch*.py): their batches and serial results, computed once per module ----
+
+
+@pytest.fixture(scope="module")
+def synthetic() -> batchcases.Batch:
+    return batchcases.synthetic_batch()
+
+
+@pytest.fixture(scope="module")
+def synthetic_serial(synthetic: batchcases.Batch) -> list[kissm.Result]:
+    return batchcases.serial(synthetic)
+
+
+@pytest.fixture(scope="module")
+def kitti(real_data: Path) -> batchcases.Batch:
+    return batchcases.kitti_batch(real_data)
+
+
+@pytest.fixture(scope="module")
+def kitti_serial(kitti: batchcases.Batch) -> list[kissm.Result]:
+    return batchcases.serial(kitti)

@@ -57,6 +57,18 @@ def test_mapping_and_pickling(cls: type[kissm.Error]) -> None:
         assert (again.status, again.status_name) == (cls.status, cls.status_name)
 
 
+@pytest.mark.parametrize("cls", list(_errors.ERROR_CLASSES.values()), ids=lambda c: c.__name__)
+def test_pickling_as_tblib_does(cls: type[kissm.Error]) -> None:
+    """Dask installs tblib's exception pickling in every process that imports it, and kissm.batch returns errors
+    as values from Dask workers: each class must survive tblib's reducer (MemoryError's __new__ refused it)."""
+    pickling_support = pytest.importorskip("tblib.pickling_support", reason="tblib (from kissm[dask]) is not installed")
+    error = cls("a message", cls.status)
+    function, args, *_ = pickling_support.pickle_exception(error)
+    again = function(*args)
+    assert type(again) is cls and again.message == "a message"
+    assert (again.status, again.status_name) == (cls.status, cls.status_name)
+
+
 def test_unknown_status_is_a_plain_error() -> None:
     kissm.Config()
     with pytest.raises(kissm.Error) as info:

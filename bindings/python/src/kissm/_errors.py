@@ -31,6 +31,12 @@ class Error(Exception):
         """The library's message."""
         return str(self.args[0]) if self.args else ""
 
+    def __reduce__(self) -> tuple[type[Error], tuple[str, int]]:
+        # Rebuilt through __init__ (message, status). Without its own __reduce__, tblib's exception pickling
+        # (installed by Dask) takes an Error for one it must rebuild through __new__, which MemoryError's refuses
+        # for OutOfMemoryError: a job's error could not travel back from a Dask worker.
+        return (type(self), (self.message, self.status))
+
 
 class InvalidArgumentError(Error, ValueError):
     """A config value or argument is out of its documented range (KISSM_ERR_INVALID_ARGUMENT)."""
