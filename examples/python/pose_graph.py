@@ -301,7 +301,8 @@ def simulated_consistency(
         measurements = {}
         for e in accepted:
             assert e.result is not None
-            covariance = np.linalg.inv(information_as_documented(e.result))
+            # The documented meaning, spelled out here rather than through ``information``: that is under test.
+            covariance = np.linalg.inv(e.result.information)
             xi = rng.multivariate_normal(np.zeros(6), (covariance + covariance.T) / 2)
             measurements[(e.source, e.target)] = (
                 np.linalg.inv(gt[e.target]) @ gt[e.source] @ gtsam.Pose3.Expmap(xi).matrix()
