@@ -129,6 +129,17 @@ def test_pickle_round_trip(case: Case, described: Any) -> None:
         assert_same_result(matcher.register_features(*pair), expected)
 
 
+def test_cloudpickle_round_trip(case: Case, described: Any) -> None:
+    """Dask and Ray pickle with cloudpickle, which pickled the bound classmethod Features.from_bytes by value
+    (and failed on the library's locks): the features must travel by reference to a module function."""
+    cloudpickle = pytest.importorskip("cloudpickle", reason="cloudpickle (from kissm[dask]) is not installed")
+    source, target, expected = described
+    loaded_source, loaded_target = cloudpickle.loads(cloudpickle.dumps((source, target)))
+    assert loaded_source.to_bytes() == source.to_bytes()
+    with kissm.Matcher(case.config) as matcher:
+        assert_same_result(matcher.register_features(loaded_source, loaded_target), expected)
+
+
 def _register_in_worker(config: kissm.Config, source: kissm.Features, target: kissm.Features) -> tuple[Any, ...]:
     """Runs in a spawned process: registers the unpickled features."""
     with kissm.Matcher(config) as matcher:

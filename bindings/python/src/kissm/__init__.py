@@ -147,6 +147,9 @@ def refine(
         return matcher.refine(source, target, initial)
 
 
+# The batch API (kissm.batch), a submodule that needs everything above; importing it imports no Dask or Ray.
+from . import batch  # noqa: E402
+
 __all__ = [
     "FORMATS",
     "MIN_POINTS",
@@ -178,6 +181,7 @@ __all__ = [
     "VoxelRangeError",
     "__version__",
     "as_point_array",
+    "batch",
     "ground_mask",
     "library_path",
     "read_points",

@@ -142,7 +142,14 @@ class Features:
         return cls._adopt(out[0])
 
     def __reduce__(self) -> tuple[Any, tuple[bytes]]:
-        return (Features.from_bytes, (self.to_bytes(),))
+        return (_features_from_bytes, (self.to_bytes(),))
+
+
+def _features_from_bytes(data: bytes) -> Features:
+    """``Features.from_bytes`` as a module-level function: cloudpickle (Dask's and Ray's) pickles a bound
+    classmethod by value, with the module globals it reaches (cffi's library, locks), and fails; a plain
+    function it pickles by reference, as pickle does."""
+    return Features.from_bytes(data)
 
 
 def _check_features(source: Features, target: Features) -> None:

@@ -1,0 +1,66 @@
+# SPDX-License-Identifier: MIT
+"""A batch as the engines see it: the distinct clouds to describe, the pairs as indices into them, and the sink
+that collects what the jobs return (in input order, whatever order they finish in)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Hashable
+
+from ._batch_args import Checked
+from ._batch_progress import Reporter
+from ._batch_values import PairResult
+from ._config import Config
+from ._errors import Error
+from ._matcher import Features
+from ._result import Result
+
+
+@dataclasses.dataclass
+class Work:
+    config: Config
+    keys: list[Hashable]
+    """The distinct clouds, in order of first use."""
+    inputs: list[Checked]
+    """Per cloud: points, a CloudFile, or Features given already described (no describe job)."""
+    pairs: list[tuple[int, int]]
+    """Per pair: the indices of its source and target in ``keys``."""
+    keep_features: bool
+    """Whether the features come back to the caller (describe_many) or stay with the engine."""
+
+    def users(self) -> list[list[int]]:
+        """Per cloud, the pairs that use it (a pair of a cloud with itself once)."""
+        users: list[list[int]] = [[] for _ in self.keys]
+        for j, (s, t) in enumerate(self.pairs):
+            users[s].append(j)
+            if t != s:
+                users[t].append(j)
+        return users
+
+
+class Sink:
+    """Where the engines put what finished; tells the reporter about each job."""
+
+    def __init__(self, work: Work, reporter: Reporter) -> None:
+        self._work = work
+        self._reporter = reporter
+        self.features: list[Features | Error | None] = [None] * len(work.keys)
+        self.pairs: list[PairResult | None] = [None] * len(work.pairs)
+
+    def described(self, i: int, value: Features | Error | None) -> None:
+        """Cloud ``i`` was described (``value`` is None when the engine keeps it)."""
+        if self._work.keep_features:
+            self.features[i] = value
+        self._reporter.described(self._work.keys[i], i)
+
+    def registered(self, j: int, value: Result | Error) -> None:
+        s, t = self._work.pairs[j]
+        source, target = self._work.keys[s], self._work.keys[t]
+        if isinstance(value, Error):
+            pair = PairResult(source, target, None, value)
+        elif isinstance(value, Result):
+            pair = PairResult(source, target, value, None)
+        else:
+            raise TypeError(f"a kissm.batch pair job returned {type(value).__name__}")  # a bug of this module
+        self.pairs[j] = pair
+        self._reporter.registered(j, pair)
