@@ -143,8 +143,9 @@ def register_pairs(
     clouds: dict[Hashable, np.ndarray] = {k: points for k, points in keyframes.clouds.items()}
     done = kissm.batch.register_many(pairs, clouds, executor, voxel_size=voxel, refine="gicp")
     edges = []
+    ordered = sorted(keyframes.clouds)
     for (source, target), pair in zip(pairs, done, strict=True):
-        odometry = abs(source - target) == 1
+        odometry = abs(ordered.index(source) - ordered.index(target)) == 1  # as candidate_pairs says
         if pair.result is None:
             edges.append(Edge(source, target, odometry, None, f"error: {pair.error}"))
         elif not pair.result.valid:
@@ -175,9 +176,7 @@ def build_graph(
     graph.add(gtsam.PriorFactorPose3(anchor, gtsam.Pose3(), gtsam.noiseModel.Isotropic.Sigma(6, ANCHOR_SIGMA)))
     for e in accepted:
         assert e.result is not None
-        measured = e.result.transform if measurements is None else measurements.get((e.source, e.target))
-        if measured is None:
-            measured = e.result.transform
+        measured = (measurements or {}).get((e.source, e.target), e.result.transform)
         noise = gtsam.noiseModel.Gaussian.Information(information(e.result))
         graph.add(gtsam.BetweenFactorPose3(e.target, e.source, gtsam.Pose3(measured), noise))
     initial = gtsam.Values()
