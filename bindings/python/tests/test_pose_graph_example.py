@@ -199,7 +199,7 @@ def test_a_wrong_reading_fails(
 
 
 def test_the_script_prints_its_report(example: ModuleType, real_data: Path, keyframes: Any, capsys) -> None:
-    assert example.main(["--data", str(real_data), "--voxel", str(VOXEL), "--draws", "20"]) == 0
+    assert example.main(["--data", str(real_data), "--voxel", str(VOXEL), "--draws", str(DRAWS)]) == 0
     out = capsys.readouterr().out
     assert "0 <- 1                odometry  accepted" in out
     assert "absolute error against graph.txt" in out and "relative error" in out
