@@ -203,7 +203,7 @@ def test_the_script_prints_its_report(example: ModuleType, real_data: Path, keyf
     out = capsys.readouterr().out
     assert "0 <- 1                odometry  accepted" in out
     assert "absolute error against graph.txt" in out and "relative error" in out
-    assert "simulated noise of the documented meaning" in out
+    assert "simulated noise of the documented meaning" in out and "both near expectation" in out
 
 
 def test_the_script_says_when_the_data_is_missing(example: ModuleType, tmp_path: Path, capsys) -> None:
