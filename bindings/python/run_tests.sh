@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # The Python binding's suite: makes a venv, installs the package the way users do
-# (pip install ./bindings/python[test], which copies the core into bindings/python/_core and builds
-# libkissm, incrementally in $KISSM_BUILD_DIR/python-build), adds open3d-cpu, then runs pytest.
+# (pip install ./bindings/python[test,dask,ray], which copies the core into bindings/python/_core and builds
+# libkissm, incrementally in $KISSM_BUILD_DIR/python-build), adds open3d-cpu, then runs pytest. The extras
+# dask and ray bring the engines tests/batch runs kissm.batch on (package_test.sh installs only [test]: there
+# those tests skip).
 # bindings/python/package_test.sh tests the sdist and the manylinux wheel away from the repository.
 #
 # Run by tools/test.sh with KISSM_BUILD_DIR (the CMake build: its `kissm` CLI is the reference for the
@@ -47,7 +49,7 @@ echo "python: $("$py" --version) in $venv"
 pip_build_dir="$build/python-build"
 install_package() {
   "$py" -m pip install --quiet --disable-pip-version-check \
-    --config-settings=build-dir="$pip_build_dir" "$here/bindings/python[test]"
+    --config-settings=build-dir="$pip_build_dir" "$here/bindings/python[test,dask,ray]"
 }
 start=$(date +%s)
 "$py" -m pip uninstall --quiet --yes kissm >/dev/null 2>&1 || true
@@ -56,7 +58,7 @@ if ! install_package; then
   rm -rf "$pip_build_dir"
   install_package
 fi
-echo "python: pip install ./bindings/python[test] took $(($(date +%s) - start)) s"
+echo "python: pip install ./bindings/python[test,dask,ray] took $(($(date +%s) - start)) s"
 
 # Open3D for the interop test (tests/test_inputs.py, which fails here without it): large, so only in this
 # venv, not in package_test.sh's fresh ones. pip returns at once when the pinned version is there.

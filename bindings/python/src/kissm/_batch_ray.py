@@ -14,11 +14,23 @@ from typing import Any
 from ._batch_jobs import describe_job, pair_job
 from ._batch_values import CloudFile
 from ._batch_work import Sink, Work
+from ._errors import InvalidArgumentError
 from ._matcher import Features
 
 #: Reruns of a task whose worker process died (Ray's default too), and of one that raised something other
 #: than a kissm.Error (Ray's default is none: a job that raised because it ran out of memory may pass alone).
 _RETRIES = 3
+
+
+def check_cpus(threads_per_job: int) -> None:
+    """A task asking for more CPUs than the cluster has would wait forever: refused before any work."""
+    import ray
+
+    cpus = ray.cluster_resources().get("CPU", 0)
+    if threads_per_job > cpus:
+        raise InvalidArgumentError(
+            f"threads_per_job={threads_per_job} but the Ray cluster has {cpus:g} CPUs: its tasks could never start"
+        )
 
 
 def run_ray(work: Work, sink: Sink) -> None:

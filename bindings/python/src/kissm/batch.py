@@ -38,6 +38,10 @@ ProgressLike = bool | None | Callable[[Progress], object]
 def _run(executor: Any, work: Work, progress: ProgressLike) -> Sink:
     engine = engine_name(executor)  # checks it (Ray running, Dask client open) before any work
     check_progress(progress)
+    if engine == "ray":
+        from ._batch_ray import check_cpus
+
+        check_cpus(work.config.num_threads)
     reporter = Reporter(progress, sum(not isinstance(c, Features) for c in work.inputs), len(work.pairs))
     sink = Sink(work, reporter)
     try:

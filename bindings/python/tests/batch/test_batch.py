@@ -19,27 +19,7 @@ import kissm.batch
 from kissm._batch_jobs import pair_job
 
 import batchcases
-from batchcases import Batch, ComputeCounter, Events
-
-
-@pytest.fixture(scope="module")
-def synthetic() -> Batch:
-    return batchcases.synthetic_batch()
-
-
-@pytest.fixture(scope="module")
-def synthetic_serial(synthetic: Batch) -> list[kissm.Result]:
-    return batchcases.serial(synthetic)
-
-
-@pytest.fixture(scope="module")
-def kitti(real_data: Path) -> Batch:
-    return batchcases.kitti_batch(real_data)
-
-
-@pytest.fixture(scope="module")
-def kitti_serial(kitti: Batch) -> list[kissm.Result]:
-    return batchcases.serial(kitti)
+from batchcases import ComputeCounter, Events
 
 
 def test_the_module_is_an_attribute_of_kissm() -> None:
@@ -145,11 +125,9 @@ def test_failed_clouds_fail_their_pairs_only(synthetic, synthetic_serial, tmp_pa
     assert isinstance(garbage.error, kissm.ParseError) and not garbage.ok
 
 
-def test_describe_many_returns_errors_as_values(synthetic, tmp_path) -> None:
-    clouds = {"fine": synthetic.clouds["source"], "missing": str(tmp_path / "gone.pcd")}
-    got = kissm.batch.describe_many(clouds, voxel_size=synthetic.voxel_size)
-    assert isinstance(got["fine"], kissm.Features)
-    assert type(got["missing"]) is kissm.IoError
+def test_describe_many_and_failures_on_threads(synthetic, tmp_path) -> None:
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        batchcases.assert_describe_many_and_failures(pool, synthetic, tmp_path)
 
 
 # ---- bad arguments: kissm errors naming them, before any work --------------------------------------------------

@@ -118,3 +118,23 @@ def assert_each_once(events: Events, batch: Batch) -> None:
     used = {key for pair in batch.pairs for key in pair}
     assert events.described() == collections.Counter(used)
     assert events.registered() == collections.Counter(range(len(batch.pairs)))
+
+
+def assert_describe_many_and_failures(executor: Any, batch: Batch, tmp_path: Path) -> None:
+    """describe_many gives the serial features bit for bit, and the errors of a missing file and of a tiny cloud
+    as values; register_many fails only the pairs of those clouds, saying which side failed."""
+    clouds = {**batch.clouds, "missing": str(tmp_path / "gone.ply"), "tiny": points(batch.clouds["source"])[:3]}
+    described = kissm.batch.describe_many(clouds, executor, voxel_size=batch.voxel_size)
+    assert list(described) == list(clouds)
+    assert type(described["missing"]) is kissm.IoError
+    assert type(described["tiny"]) is kissm.TooFewPointsError
+    with kissm.Matcher(voxel_size=batch.voxel_size) as matcher:
+        for key, cloud in batch.clouds.items():
+            features = described[key]
+            assert isinstance(features, kissm.Features)
+            assert features.to_bytes() == matcher.compute_features(points(cloud)).to_bytes()
+    pairs = [("source", "target0"), ("missing", "source"), ("source", "tiny")]
+    good, missing, tiny = kissm.batch.register_many(pairs, clouds, executor, voxel_size=batch.voxel_size)
+    assert good.ok and good.result is not None
+    assert type(missing.error) is kissm.IoError and missing.error.message.startswith("source: ")
+    assert type(tiny.error) is kissm.TooFewPointsError and tiny.error.message.startswith("target: ")

@@ -1,0 +1,83 @@
+# SPDX-License-Identifier: MIT
+"""kissm.batch on a real Ray runtime (ray.init(num_cpus=2), started and shut down by this module): results
+bitwise those of the serial loop, each cloud described once, failures as values, num_cpus per task."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+import kissm
+import kissm.batch
+
+import batchcases
+from batchcases import Events
+
+ray: Any = pytest.importorskip(
+    "ray", reason="Ray (pip install 'kissm[ray]') is not installed: the Ray engine is not tested here"
+)
+
+#: Quiet and light: no usage report, no dashboard, no worker logs on the driver, a small object store.
+RAY_ENV = {"RAY_USAGE_STATS_ENABLED": "0", "RAY_DISABLE_DOCKER_CPU_WARNING": "1"}
+
+
+@pytest.fixture(scope="module")
+def runtime() -> Iterator[None]:
+    if ray.is_initialized():
+        pytest.skip("a Ray runtime is already running in this process")
+    saved = {name: os.environ.get(name) for name in RAY_ENV}
+    os.environ.update(RAY_ENV)
+    ray.init(
+        num_cpus=2,
+        include_dashboard=False,
+        log_to_driver=False,
+        logging_level="error",
+        object_store_memory=256 * 1024 * 1024,
+    )
+    try:
+        yield
+    finally:
+        ray.shutdown()
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def test_synthetic_on_ray(runtime, synthetic, synthetic_serial) -> None:
+    events = Events()
+    got = kissm.batch.register_many(
+        synthetic.pairs, synthetic.clouds, "ray", voxel_size=synthetic.voxel_size, progress=events
+    )
+    batchcases.assert_same_as_serial(got, synthetic, synthetic_serial)
+    batchcases.assert_each_once(events, synthetic)
+
+
+def test_two_threads_per_job_on_ray(runtime, synthetic, synthetic_serial) -> None:
+    got = kissm.batch.register_many(
+        synthetic.pairs, synthetic.clouds, "ray", voxel_size=synthetic.voxel_size, threads_per_job=2
+    )
+    batchcases.assert_same_as_serial(got, synthetic, synthetic_serial)
+
+
+def test_more_threads_per_job_than_cpus_is_refused(runtime, synthetic) -> None:
+    """Ray would wait forever for a node with 3 CPUs: refused before any work."""
+    with pytest.raises(kissm.InvalidArgumentError, match=r"threads_per_job=3 .* 2 CPUs"):
+        kissm.batch.register_many(
+            synthetic.pairs, synthetic.clouds, "ray", voxel_size=synthetic.voxel_size, threads_per_job=3
+        )
+
+
+def test_describe_many_and_failures_on_ray(runtime, synthetic, tmp_path) -> None:
+    batchcases.assert_describe_many_and_failures("ray", synthetic, tmp_path)
+
+
+def test_kitti_on_ray(runtime, kitti, kitti_serial) -> None:
+    events = Events()
+    got = kissm.batch.register_many(kitti.pairs, kitti.clouds, "ray", voxel_size=kitti.voxel_size, progress=events)
+    batchcases.assert_same_as_serial(got, kitti, kitti_serial)
+    batchcases.assert_each_once(events, kitti)
