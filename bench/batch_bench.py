@@ -18,7 +18,9 @@ bench/results/batch_coarse_latest.json and docs/batch-throughput-coarse.md).
 
 Every method gets one warm-up run (it starts Dask's and Ray's workers and loads the library in them), then
 the methods' timed runs alternate (method 1, 2, ..., 5, then again) so that a change of load on the machine
-touches all of them alike; the median of --repeats is reported. Settings as in examples/python/pose_graph.py:
+touches all of them alike; the median of --repeats is reported. Dask's and Ray's clusters run one at a time:
+each is started, warmed up, timed once and stopped for each repeat (idle, a Dask cluster keeps a tenth of a
+CPU busy). Settings as in examples/python/pose_graph.py:
 0.5 m voxels, GICP refinement, one library thread per job. The process is pinned to the first two CPUs; the
 pools get two workers. Every method's poses must equal the serial batch's bit for bit (the library is
 deterministic), or the run fails. Also reported: the size of ``Features.to_bytes()`` per keypoint, what a
@@ -133,9 +135,15 @@ class Method:
         done = kissm.batch.register_many(pairs, clouds, self.executor, progress=False, **self.settings)
         return [None if p.result is None else p.result.transform for p in done]
 
+    @property
+    def engine(self) -> bool:
+        """Whether the method runs its own processes (started per timed run, see measure)."""
+        return self.name.startswith(("batch_dask", "batch_ray"))
+
     def stop(self) -> None:
         if self._close is not None:
             self._close()
+            self._close = None
 
 
 def features_size(clouds: Clouds, settings: dict[str, Any]) -> list[dict[str, Any]]:
@@ -217,14 +225,24 @@ def measure(args: argparse.Namespace, results: dict[str, Any]) -> None:
         poses = m.run(pairs, clouds)  # warm-up
         results["methods"][m.name] = {"seconds": [], "failed_pairs": sum(p is None for p in poses), "poses": poses}
         running.append(m)
+        if m.engine:
+            m.stop()
+    # One engine runs at a time, started afresh (and warmed up) for each timed run: an idle Dask cluster keeps
+    # about a tenth of a CPU busy (its scheduler's and workers' heartbeats), an idle Ray runtime a few hundredths,
+    # and that time would be taken from whichever method runs beside them.
     try:
         for repeat in range(args.repeats):
             for m in running:
+                if m.engine:
+                    m.start()
+                    m.run(pairs, clouds)  # the fresh workers' first imports and first calls
                 t0 = time.perf_counter()
                 poses = m.run(pairs, clouds)
                 seconds = time.perf_counter() - t0
                 results["methods"][m.name]["seconds"].append(seconds)
                 print(f"batch_bench: repeat {repeat + 1}/{args.repeats} {m.name}: {seconds:.2f} s", flush=True)
+                if m.engine:
+                    m.stop()
     finally:
         for m in running:
             m.stop()
@@ -291,7 +309,8 @@ def write_report(results: dict[str, Any], path: Path) -> Path:
         f"keyframe in {2 * n_pairs // max(1, len(results['features']))}), {meta['args']['voxel']:g} m voxels, "
         f"{refine_words(meta)}, one library thread "
         "per job, median of "
-        f"{meta['args']['repeats']} timed runs after a warm-up, the methods' runs interleaved.",
+        f"{meta['args']['repeats']} timed runs after a warm-up, the methods' runs interleaved; Dask and Ray started "
+        "afresh, warmed up and stopped around each of their timed runs, one cluster at a time.",
         "",
         f"Machine: {mach.get('cpu', '?')}, {mach.get('cpus_online', '?')} CPUs online, pinned to CPUs "
         f"{meta['cpus']}; load average {fmt(meta['load_start'][0], '.1f')} at the start, "

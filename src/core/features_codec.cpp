@@ -268,13 +268,19 @@ void read_normals(Reader &r, std::size_t num_voxels, const char *flags_name, con
 } // namespace
 
 std::uint64_t features_checksum(const std::uint8_t *data, std::size_t size) {
-    // FNV-1a, 64 bits: every step is a bijection of the state for a given byte, so any change of one byte
-    // (every single-bit flip in particular) changes the result.
+    // FNV-1a's step over 64-bit little-endian words, then over the last size % 8 bytes one by one. Each step is
+    // a bijection of the state for a given word (or byte), so any change of one word (every single-bit flip in
+    // particular) changes the result. By words, not bytes: a step is a multiply that waits for the one
+    // before, and loading a keyframe's features spent 2-3 ms in the byte-wise loop.
+    constexpr std::uint64_t kPrime = 1099511628211ull;
     std::uint64_t h = 14695981039346656037ull;
-    for (std::size_t i = 0; i < size; ++i) {
-        h ^= data[i];
-        h *= 1099511628211ull;
+    std::size_t i = 0;
+    for (; i + 8 <= size; i += 8) {
+        std::uint64_t w = 0;
+        for (int k = 0; k < 8; ++k) w |= static_cast<std::uint64_t>(data[i + k]) << (8 * k);
+        h = (h ^ w) * kPrime;
     }
+    for (; i < size; ++i) h = (h ^ data[i]) * kPrime;
     return h;
 }
 

@@ -33,14 +33,15 @@ double load_f64(const std::uint8_t *p) {
     return v;
 }
 
-// The format's checksum (FNV-1a 64 over everything before the last 8 bytes), written from the format document.
+// The format's checksum (over everything before the last 8 bytes: FNV-1a steps on 64-bit little-endian words,
+// then on the remaining bytes), written from the format document.
 void reseal(std::vector<std::uint8_t> &b) {
+    const std::size_t n = b.size() - 8;
     std::uint64_t h = 14695981039346656037ull;
-    for (std::size_t i = 0; i + 8 < b.size(); ++i) {
-        h ^= b[i];
-        h *= 1099511628211ull;
-    }
-    for (int i = 0; i < 8; ++i) b[b.size() - 8 + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(h >> (8 * i));
+    std::size_t i = 0;
+    for (; i + 8 <= n; i += 8) h = (h ^ load_u64(b.data() + i)) * 1099511628211ull;
+    for (; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    for (int k = 0; k < 8; ++k) b[n + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(h >> (8 * k));
 }
 
 // A config with the settings of the header (offsets of docs/features-format.md), for a matcher that accepts

@@ -60,6 +60,11 @@ def synthetic_batch() -> Batch:
     return Batch(clouds, pairs, testdata.VOXEL_SIZE)
 
 
+def repeated(batch: Batch, times: int) -> Batch:
+    """The batch with its pair list repeated: enough pairs that Dask and Ray group several in one task."""
+    return Batch(batch.clouds, batch.pairs * times, batch.voxel_size)
+
+
 def points(cloud: Any) -> Any:
     if isinstance(cloud, kissm.batch.CloudFile):
         return kissm.read_points(cloud.path, cloud.format)

@@ -17,6 +17,7 @@ import pytest
 import kissm
 import kissm.batch
 from kissm._batch_jobs import pair_job
+from kissm._batch_work import MAX_PAIRS_PER_TASK, group_pairs
 
 import batchcases
 from batchcases import ComputeCounter, Events
@@ -102,6 +103,29 @@ def test_pair_jobs_take_only_features(synthetic) -> None:
     config = kissm.Config(voxel_size=synthetic.voxel_size)
     with pytest.raises(TypeError, match="takes Features, not ndarray"):
         pair_job(config, synthetic.clouds["source"], synthetic.clouds["target0"])
+
+
+def test_groups_of_pairs_are_guided() -> None:
+    """Large groups first, single pairs last, every pair once and in order (what Dask and Ray tasks take)."""
+    groups = group_pairs(list(range(40)), 40, 2)
+    assert [len(g) for g in groups] == [5, 4, 3, 3, 3, 2, 2, 2, 2] + [1] * 14
+    assert [j for g in groups for j in g] == list(range(40))
+    groups = group_pairs(list(range(100, 1100)), 1000, 4)
+    assert [j for g in groups for j in g] == list(range(100, 1100))
+    assert max(len(g) for g in groups) == len(groups[0]) == MAX_PAIRS_PER_TASK
+    assert [len(g) for g in groups[-15:]] == [1] * 15
+    # Pairs that became ready later (Ray submits them as their clouds are described) count what is left.
+    assert [len(g) for g in group_pairs([7, 8, 9], 3, 1)] == [1, 1, 1]
+    assert [len(g) for g in group_pairs([1, 2, 3, 4, 5], 64, 0)] == [5]
+    assert group_pairs([], 10, 2) == []
+
+
+def test_sys_getsizeof_counts_the_library_memory(synthetic) -> None:
+    """What Dask's memory accounting reads: the features' memory, not a small Python object's."""
+    with kissm.Matcher(voxel_size=synthetic.voxel_size) as matcher:
+        features = matcher.compute_features(synthetic.clouds["source"])
+    assert features.memory_bytes > 10_000
+    assert features.memory_bytes < sys.getsizeof(features) < features.memory_bytes + 1_000
 
 
 # ---- failures are values ------------------------------------------------------------------------------------

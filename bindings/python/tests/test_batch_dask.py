@@ -57,6 +57,21 @@ def test_synthetic_on_dask(client, synthetic, synthetic_serial) -> None:
     assert_each_described_once(describes, synthetic)
 
 
+def test_long_batch_in_groups_on_dask(client, synthetic, synthetic_serial) -> None:
+    """Enough pairs for tasks of several pairs: still each cloud described once, the results bitwise the serial
+    loop's, in input order; fewer register tasks than pairs in the task stream."""
+    batch = batchcases.repeated(synthetic, 8)
+    events = Events()
+    with distributed.get_task_stream(client) as stream:
+        got = kissm.batch.register_many(batch.pairs, batch.clouds, client, voxel_size=batch.voxel_size, progress=events)
+    batchcases.assert_same_as_serial(got, batch, synthetic_serial * 8)
+    batchcases.assert_each_once(events, batch)
+    keys = [str(task["key"]) for task in stream.data]
+    assert_each_described_once(collections.Counter(k for k in keys if "-describe-" in k), batch)
+    registers = sum("-register-" in k for k in keys)
+    assert 0 < registers < len(batch.pairs), registers
+
+
 def test_describe_many_and_failures_on_dask(client, synthetic, tmp_path) -> None:
     batchcases.assert_describe_many_and_failures(client, synthetic, tmp_path)
 

@@ -72,6 +72,20 @@ def test_more_threads_per_job_than_cpus_is_refused(runtime, synthetic) -> None:
         )
 
 
+def test_long_batch_in_groups_on_ray(runtime, synthetic, synthetic_serial) -> None:
+    """Enough pairs for tasks of several pairs, from points and from features described before (whose pair
+    tasks go in at once): each cloud described once, results bitwise the serial loop's, in input order."""
+    batch = batchcases.repeated(synthetic, 8)
+    events = Events()
+    got = kissm.batch.register_many(batch.pairs, batch.clouds, "ray", voxel_size=batch.voxel_size, progress=events)
+    batchcases.assert_same_as_serial(got, batch, synthetic_serial * 8)
+    batchcases.assert_each_once(events, batch)
+    described = kissm.batch.describe_many(synthetic.clouds, "ray", voxel_size=batch.voxel_size)
+    mixed = dict(batch.clouds, source=described["source"], target1=described["target1"])
+    got = kissm.batch.register_many(batch.pairs, mixed, "ray", voxel_size=batch.voxel_size)
+    batchcases.assert_same_as_serial(got, batch, synthetic_serial * 8)
+
+
 def test_describe_many_and_failures_on_ray(runtime, synthetic, tmp_path) -> None:
     batchcases.assert_describe_many_and_failures("ray", synthetic, tmp_path)
 

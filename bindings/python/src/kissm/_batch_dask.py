@@ -2,7 +2,9 @@
 """The batch on a Dask cluster (``distributed.Client``; the extra ``kissm[dask]``, imported only here).
 
 Points held in memory are scattered once, straight to the workers, not shipped with each task. Features are the
-describe tasks' results and stay on the workers, where Dask hands them to the pair tasks that need them.
+describe tasks' results and stay on the workers, where Dask hands them to the pair tasks that need them. A pair
+task registers a group of pairs (kissm._batch_work.group_pairs): Dask's cost per task, on its scheduler and its
+workers, is about a tenth of matching two LiDAR keyframes.
 
 When a worker dies, Dask reruns the tasks that ran there and recomputes the lost results from their inputs, but
 it cannot recompute scattered data: the points that only the dead worker held are gone, and the tasks that need
@@ -16,21 +18,22 @@ from __future__ import annotations
 import uuid
 from typing import Any
 
-from ._batch_jobs import describe_job, pair_job
+from ._batch_jobs import describe_job, pairs_job
 from ._batch_values import CloudFile
-from ._batch_work import Sink, Work
+from ._batch_work import Sink, Work, group_pairs, task_clouds
 from ._matcher import Features
 
 #: Reruns of a task that raised something other than a kissm.Error (a worker lost to a memory limit shows up
 #: as such). Dask reruns the tasks of a worker that died on its own (its ``allowed-failures`` setting).
 _RETRIES = 2
 
-#: Times the driver resubmits one pair whose inputs were lost with their workers, before giving up.
+#: Times the driver resubmits one task whose inputs were lost with their workers, before giving up.
 _RESUBMITS = 3
 
 
 class _Cluster:
-    """The batch's tasks on one client: one describe task per cloud (again only after a loss), one per pair."""
+    """The batch's tasks on one client: one describe task per cloud (again only after a loss), one per group of
+    pairs."""
 
     def __init__(self, client: Any, work: Work) -> None:
         self.client = client
@@ -39,35 +42,56 @@ class _Cluster:
         self.stage: dict[str, tuple[str, int]] = {}
         self.described: list[Any] = [None] * len(work.keys)
         self.attempts = 0
+        self.submits = 0
+        self.slots = sum(client.nthreads().values()) if work.pairs else 0
+        self.groups = group_pairs(list(range(len(work.pairs))), len(work.pairs), self.slots)
 
     def describe(self, clouds: list[int]) -> list[Any]:
         """Submit the describe tasks of ``clouds`` (scattering the points held in memory); their futures."""
         self.attempts += 1
         inputs: dict[int, Any] = {i: self.work.inputs[i] for i in clouds}
         in_memory = [i for i in clouds if not isinstance(inputs[i], CloudFile)]
+        holders: dict[Any, Any] = {}
         if in_memory:
             scattered = self.client.scatter([inputs[i] for i in in_memory], hash=False)
             inputs.update(zip(in_memory, scattered, strict=True))
+            holders = self.client.who_has(scattered)
+        workers = sorted(self.client.scheduler_info().get("workers", {}))
         new = []
-        for i in clouds:
+        for n, i in enumerate(clouds):
             if isinstance(self.work.inputs[i], Features):
                 self.described[i] = inputs[i]  # described before: scattered as they are, no describe task
                 continue
+            # A describe task goes before any pair task, and is placed (loosely: another worker takes it if that
+            # one is gone) where its points are, or in turn on the workers for files. Otherwise the pairs of
+            # the clouds described first keep every worker busy while the pairs that need the last clouds wait:
+            # a worker runs the tasks of one priority last come first, and an unplaced describe of a batch of
+            # more clouds than twice the cluster's threads is held in the scheduler until a worker is idle.
+            place = list(holders.get(getattr(inputs[i], "key", None), ())) or workers[n % len(workers) :][:1]
             key = f"{self.batch}-describe-{i}-{self.attempts}"
             self.described[i] = self.client.submit(
-                describe_job, self.work.config, inputs[i], key=key, pure=False, retries=_RETRIES
+                describe_job,
+                self.work.config,
+                inputs[i],
+                key=key,
+                pure=False,
+                retries=_RETRIES,
+                workers=place or None,
+                allow_other_workers=True,
+                priority=1,
             )
             self.stage[key] = ("describe", i)
             new.append(self.described[i])
         return new
 
-    def register(self, j: int) -> Any:
-        s, t = self.work.pairs[j]
-        key = f"{self.batch}-register-{j}-{self.attempts}"
-        self.stage[key] = ("register", j)
-        return self.client.submit(
-            pair_job, self.work.config, self.described[s], self.described[t], key=key, pure=False, retries=_RETRIES
-        )
+    def register(self, g: int) -> Any:
+        """Submit the task of group ``g`` of pairs; its future."""
+        clouds, pairs = task_clouds(self.work, self.groups[g])
+        self.submits += 1
+        key = f"{self.batch}-register-{self.groups[g][0]}-{self.submits}"
+        self.stage[key] = ("register", g)
+        features = [self.described[i] for i in clouds]
+        return self.client.submit(pairs_job, self.work.config, features, pairs, key=key, pure=False, retries=_RETRIES)
 
 
 def run_dask(client: Any, work: Work, sink: Sink) -> None:
@@ -75,9 +99,15 @@ def run_dask(client: Any, work: Work, sink: Sink) -> None:
 
     cluster = _Cluster(client, work)
     futures = cluster.describe(list(range(len(work.keys))))
-    futures += [cluster.register(j) for j in range(len(work.pairs))]
+    # Pair tasks go in as others finish, at most two per job slot at a time: Dask places a task when it is
+    # submitted, by where its inputs are, and moves it later only if work stealing finds it worth it, which on
+    # these batches left one worker with 60% more pairs than the other. Submitted as slots free, each lands on a
+    # worker with room for it, and every worker still has the next one queued.
+    window = 2 * max(1, cluster.slots)
+    submitted = min(window, len(cluster.groups))
+    futures += [cluster.register(g) for g in range(submitted)]
     uses = [len(u) for u in work.users()]
-    resubmits = [0] * len(work.keys) if work.keep_features else [0] * len(work.pairs)
+    resubmits = [0] * len(work.keys) if work.keep_features else [0] * len(cluster.groups)
     reported: set[int] = set()
     redescribed: set[str] = set()  # the describe tasks submitted again after a loss
     completed = distributed.as_completed(futures)
@@ -91,7 +121,12 @@ def run_dask(client: Any, work: Work, sink: Sink) -> None:
     for future in completed:
         kind, index = cluster.stage.pop(future.key)
         try:
-            value = future.result()
+            value: Any = None
+            if kind == "describe" and not work.keep_features and future.status == "finished":
+                pass  # the features stay on the cluster for the pair tasks: gathered here, they would be moved
+                # to the driver and loaded there, for nothing
+            else:
+                value = future.result()  # the job's value; its exception if it raised; cancelled if it was lost
         except distributed.client.FutureCancelledError:
             # Its inputs were lost with a worker. In register_many a cancelled describe's pairs are cancelled too
             # and bring it back with them; describe_many has no pairs, so the describe itself comes back.
@@ -106,7 +141,7 @@ def run_dask(client: Any, work: Work, sink: Sink) -> None:
             # A cloud is described again unless its features are there or already coming again.
             stale = [
                 i
-                for i in sorted(set(work.pairs[index]))
+                for i in task_clouds(work, cluster.groups[index])[0]
                 if _lost(cluster.described[i])
                 or (cluster.described[i].status != "finished" and cluster.described[i].key not in redescribed)
             ]
@@ -118,11 +153,15 @@ def run_dask(client: Any, work: Work, sink: Sink) -> None:
                 reported.add(index)
                 sink.described(index, value if work.keep_features else None)
             continue
-        sink.registered(index, value)
-        for i in set(work.pairs[index]):
-            uses[i] -= 1
-            if uses[i] == 0:
-                cluster.described[i] = None  # the cluster may forget these features: no pair needs them now
+        if submitted < len(cluster.groups):
+            completed.add(cluster.register(submitted))
+            submitted += 1
+        for j, result in zip(cluster.groups[index], value, strict=True):
+            sink.registered(j, result)
+            for i in set(work.pairs[j]):
+                uses[i] -= 1
+                if uses[i] == 0:
+                    cluster.described[i] = None  # the cluster may forget these features: no pair needs them now
 
 
 def _lost(future: Any) -> bool:

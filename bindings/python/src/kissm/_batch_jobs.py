@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""The two jobs of ``kissm.batch``, as module-level functions so that every engine (a process pool, Dask, Ray)
-can pickle them by reference: describe one cloud, register one pair of described clouds.
+"""The jobs of ``kissm.batch``, as module-level functions so that every engine (a process pool, Dask, Ray) can
+pickle them by reference: describe one cloud, register one pair of described clouds, or several pairs in one task.
 
 A job returns a library failure as its value instead of raising it, so that the engines carry it back like a
 result and one bad cloud or pair cannot abort the others. Anything else (a bug, a lost worker) still raises.
@@ -9,6 +9,7 @@ result and one bad cloud or pair cannot abort the others. Anything else (a bug, 
 from __future__ import annotations
 
 import threading
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -66,3 +67,11 @@ def pair_job(config: Config, source: Features | Error, target: Features | Error)
         return _matcher(config).register_features(source, target)
     except Error as e:
         return e
+
+
+def pairs_job(
+    config: Config, features: Sequence[Features | Error], pairs: Sequence[tuple[int, int]]
+) -> list[Result | Error]:
+    """:func:`pair_job` for each ``(s, t)`` of ``pairs``, indices into ``features``: several pairs in one task,
+    for the engines that pay a fixed cost per task (a cloud in several of them is moved once)."""
+    return [pair_job(config, features[s], features[t]) for s, t in pairs]

@@ -83,6 +83,11 @@ class Features:
         self.memory_bytes = int(lib.kissm_features_memory_bytes(ptr))
         return self
 
+    def __sizeof__(self) -> int:
+        # What sys.getsizeof() reports, and Dask's memory accounting with it: the library's memory, not only
+        # this small Python object's.
+        return object.__sizeof__(self) + self.memory_bytes
+
     def __repr__(self) -> str:
         return f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, {self.num_keypoints} keypoints>"
 
