@@ -1,10 +1,13 @@
 # SPDX-License-Identifier: MIT
 """kissm.batch on a real Ray runtime (ray.init(num_cpus=2), started and shut down by this module): results
-bitwise those of the serial loop, each cloud described once, failures as values, num_cpus per task."""
+bitwise those of the serial loop, each cloud described once, failures as values, num_cpus per task, and a worker
+killed mid-run changing no bit of the results."""
 
 from __future__ import annotations
 
 import os
+import signal
+import sys
 from collections.abc import Iterator
 from typing import Any
 
@@ -93,5 +96,52 @@ def test_describe_many_and_failures_on_ray(runtime, synthetic, tmp_path) -> None
 def test_kitti_on_ray(runtime, kitti, kitti_serial) -> None:
     events = Events()
     got = kissm.batch.register_many(kitti.pairs, kitti.clouds, "ray", voxel_size=kitti.voxel_size, progress=events)
+    batchcases.assert_same_as_serial(got, kitti, kitti_serial)
+    batchcases.assert_each_once(events, kitti)
+
+
+def running_pair_workers() -> list[int]:
+    """The pids of this process's Ray workers running a pair task now (Ray names its worker processes after
+    the task they run: ``ray::cached_pairs_job``)."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+            except OSError:  # gone meanwhile
+                continue
+            children.setdefault(ppid, []).append(int(entry))
+    found, todo = [], list(children.get(os.getpid(), []))
+    while todo:
+        pid = todo.pop()
+        todo += children.get(pid, [])
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                if f.read().startswith(b"ray::cached_pairs_job"):
+                    found.append(pid)
+        except OSError:
+            continue
+    return found
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="finds Ray's worker processes in /proc")
+def test_kitti_with_a_worker_killed_mid_run(runtime, kitti, kitti_serial) -> None:
+    """SIGKILL, after the first pair, a worker running a pair task: Ray reruns the task on another worker
+    (max_retries), which loads the features it needs again (the dead worker's cache is gone); the results must
+    not change by a bit and every pair must be reported once."""
+    events = Events()
+    victims: list[int] = []
+
+    def kill_once(event: kissm.batch.Progress) -> None:
+        events(event)
+        if event.stage == "register" and not victims:
+            busy = running_pair_workers()
+            if busy:
+                victims.append(busy[0])
+                os.kill(busy[0], signal.SIGKILL)
+
+    got = kissm.batch.register_many(kitti.pairs, kitti.clouds, "ray", voxel_size=kitti.voxel_size, progress=kill_once)
+    assert len(victims) == 1, "no Ray worker was running a pair task after the first pair"
     batchcases.assert_same_as_serial(got, kitti, kitti_serial)
     batchcases.assert_each_once(events, kitti)
