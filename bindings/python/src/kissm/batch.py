@@ -125,10 +125,11 @@ def register_many(
     * ``None``: the calling thread, one job at a time.
     * a ``concurrent.futures.Executor``: a ``ThreadPoolExecutor`` (the library releases the GIL) or a
       ``ProcessPoolExecutor`` (spawn or fork); features are pickled to each pair job in a process pool.
-    * a Dask ``distributed.Client``: points held in memory are scattered once (each to two workers, so one
-      lost worker loses none of them); the features stay on the workers; a pair whose worker died is recomputed.
-    * ``"ray"``: the running Ray runtime (``ray.init()`` first); points are ``ray.put`` once and every job asks
-      for ``num_cpus=threads_per_job``.
+    * a Dask ``distributed.Client``: points held in memory are scattered once; the features stay on the
+      workers; a pair whose inputs died with a worker is recomputed (the driver scatters and describes the lost
+      clouds again). A task registers a group of pairs.
+    * ``"ray"``: the running Ray runtime (``ray.init()`` first); points are ``ray.put`` once, every task asks
+      for ``num_cpus=threads_per_job``, and a task registers a group of pairs.
 
     ``threads_per_job`` is each job's :attr:`kissm.Config.num_threads` (results do not depend on it): keep it at
     1 and let the executor run one job per core, or raise it for fewer, larger jobs.
