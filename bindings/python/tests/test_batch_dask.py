@@ -72,6 +72,18 @@ def test_long_batch_in_groups_on_dask(client, synthetic, synthetic_serial) -> No
     assert 0 < registers < len(batch.pairs), registers
 
 
+def test_few_tasks_in_flight_on_dask(client, synthetic, synthetic_serial, monkeypatch) -> None:
+    """With at most 2 pair tasks in flight the rest go in as those finish: the same results, every pair once."""
+    import kissm._batch_dask
+
+    monkeypatch.setattr(kissm._batch_dask, "_IN_FLIGHT", 2)
+    batch = batchcases.repeated(synthetic, 4)
+    events = Events()
+    got = kissm.batch.register_many(batch.pairs, batch.clouds, client, voxel_size=batch.voxel_size, progress=events)
+    batchcases.assert_same_as_serial(got, batch, synthetic_serial * 4)
+    batchcases.assert_each_once(events, batch)
+
+
 def test_describe_many_and_failures_on_dask(client, synthetic, tmp_path) -> None:
     batchcases.assert_describe_many_and_failures(client, synthetic, tmp_path)
 

@@ -27,6 +27,9 @@ from ._matcher import Features
 #: as such). Dask reruns the tasks of a worker that died on its own (its ``allowed-failures`` setting).
 _RETRIES = 2
 
+#: Pair tasks submitted and not yet finished, at most (each of up to MAX_PAIRS_PER_TASK pairs).
+_IN_FLIGHT = 1024
+
 #: Times the driver resubmits one task whose inputs were lost with their workers, before giving up.
 _RESUBMITS = 3
 
@@ -99,12 +102,10 @@ def run_dask(client: Any, work: Work, sink: Sink) -> None:
 
     cluster = _Cluster(client, work)
     futures = cluster.describe(list(range(len(work.keys))))
-    # Pair tasks go in as others finish, at most two per job slot at a time: Dask places a task when it is
-    # submitted, by where its inputs are, and moves it later only if work stealing finds it worth it, which on
-    # these batches left one worker with 60% more pairs than the other. Submitted as slots free, each lands on a
-    # worker with room for it, and every worker still has the next one queued.
-    window = 2 * max(1, cluster.slots)
-    submitted = min(window, len(cluster.groups))
+    # At most _IN_FLIGHT pair tasks at a time, the next as one finishes: a batch of millions of pairs is not
+    # millions of tasks on the scheduler at once. Enough that Dask sees the whole of an ordinary batch (its work
+    # stealing balances the workers, and an adaptive cluster scales to the work it sees).
+    submitted = min(_IN_FLIGHT, len(cluster.groups))
     futures += [cluster.register(g) for g in range(submitted)]
     uses = [len(u) for u in work.users()]
     resubmits = [0] * len(work.keys) if work.keep_features else [0] * len(cluster.groups)
