@@ -207,8 +207,9 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 /** No viewpoint: the descriptors do not depend on the normals' signs at all, so features depend on no cloud's
  * coordinate frame (docs/frames.md). */
 #define KISSM_VIEWPOINT_SIGN_FREE 2
-/** No viewpoint: each normal turned away from the centroid of its neighbours within the FPFH radius, a rule
- * of the local shape alone, so features depend on no cloud's coordinate frame (docs/frames.md). */
+/** No viewpoint (the default): each normal turned away from the centroid of its neighbours within the FPFH
+ * radius, a rule of the local shape alone, so features depend on no cloud's coordinate frame; where that
+ * centroid lies too close to the surface to say, the descriptors ignore the normal's sign (docs/frames.md). */
 #define KISSM_VIEWPOINT_LOCAL 3
 /** @} */
 
@@ -319,8 +320,9 @@ typedef struct kissm_config {
     int32_t min_inliers;
     /** KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT. */
     int32_t nonfinite_policy;
-    /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_FIXED (scans in their sensor frame);
-     * #KISSM_VIEWPOINT_LOCAL or #KISSM_VIEWPOINT_SIGN_FREE for clouds in any other frame (docs/frames.md). */
+    /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_LOCAL (features that depend on no
+     * cloud's frame); #KISSM_VIEWPOINT_FIXED for scans in their sensor frame when kissm_config.viewpoint is
+     * known (docs/frames.md). */
     int32_t viewpoint_mode;
     /** Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN. */
     int32_t log_level;

@@ -90,6 +90,9 @@ struct Neighborhoods {
 struct Normals {
     std::vector<Vec3f> normal;
     std::vector<std::uint8_t> valid;
+    // 1 where the orientation rule left the sign open (NormalParams::open_sign_offset): the pair features then
+    // ignore that normal's sign. Empty when every sign is decided. Only the descriptors read it.
+    std::vector<std::uint8_t> open_sign;
 };
 
 constexpr int kDescriptorDim = 33;

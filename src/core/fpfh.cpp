@@ -40,6 +40,8 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
         std::uint32_t lowest = static_cast<std::uint32_t>(b);
         PairBatch batch;
         int rev[3];
+        const bool mixed = signs == NormalSigns::Mixed && !normals.open_sign.empty();
+        auto open = [&](std::size_t k) { return mixed && normals.open_sign[k] != 0; };
         for (std::size_t i = b; i < e; ++i) {
             if (!normals.valid[i]) continue;
             const std::uint64_t begin = nb.offsets[i];
@@ -59,10 +61,11 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
                 batch.x[size] = q.x(), batch.y[size] = q.y(), batch.z[size] = q.z();
                 batch.nx[size] = m.x(), batch.ny[size] = m.y(), batch.nz[size] = m.z();
                 batch.index[size] = j, batch.slot[size] = k;
+                if (signs == NormalSigns::Mixed) batch.open[size] = open(j) ? ~std::uint32_t(0) : 0;
                 ++size;
             }
             batch.size = size;
-            batch_pair_codes(points[i], normals.normal[i], signs, batch);
+            batch_pair_codes(points[i], normals.normal[i], open(i), signs, batch);
             float *hi = &spfh[i * D];
             for (std::size_t m = 0; m < size; ++m) {
                 const std::int32_t c = batch.code[m];
@@ -70,7 +73,8 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
                 if (c & kLaneFrame) add_code(hi, static_cast<std::uint16_t>(c));
                 std::uint16_t back = c & kLaneFrame ? static_cast<std::uint16_t>(c & (kLaneFrame | 0xFFF)) : 0;
                 if (c & kLaneTie) {
-                    back = pair_feature_bins(points[j], normals.normal[j], points[i], normals.normal[i], signs, rev)
+                    back = pair_feature_bins(points[j], normals.normal[j], points[i], normals.normal[i], signs, rev,
+                                             open(j), open(i))
                                ? pack_bins(rev)
                                : 0;
                 }

@@ -47,6 +47,10 @@ NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighbor
     out.valid.assign(n, 0);
     const bool planes = plane_radius > 0.0f;
     if (planes) sets.planes = out;
+    const bool open_signs =
+        params.orientation == NormalOrientation::AwayFromNeighbours && params.open_sign_offset > 0.0f;
+    if (open_signs) out.open_sign.assign(n, 0);
+    const double open_offset = params.open_sign_offset;
     const float rn2 = params.normal_radius * params.normal_radius, rp2 = plane_radius * plane_radius;
     const std::uint64_t tau = static_cast<std::uint64_t>(params.min_neighbors);
     const std::uint64_t plane_tau = std::max<std::uint64_t>(kPlaneMinNeighbors, tau);
@@ -112,7 +116,9 @@ NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighbor
                 const Eigen::Vector3d p = points[i].cast<double>();
                 Eigen::Vector3d to_centroid = Eigen::Vector3d::Zero();
                 for (std::size_t t = 0; t < size; ++t) to_centroid += points[row[t]].cast<double>() - p;
-                if (normal.dot(to_centroid) > 0.0) normal = -normal;
+                const double along = normal.dot(to_centroid);
+                if (along > 0.0) normal = -normal;
+                if (open_signs && std::fabs(along) < open_offset * static_cast<double>(size)) out.open_sign[i] = 1;
             }
             out.normal[i] = normal.cast<float>();
             out.valid[i] = 1;

@@ -19,7 +19,9 @@ KISSM_DETAIL_BEGIN
 // How a normal's sign is chosen. TowardViewpoint: n . (viewpoint - p) >= 0. AwayFromNeighbours: n . (c - p) <= 0,
 // c the centroid of all of p's neighbours (the FPFH radius, the point itself included): outward on convex
 // shapes, a rule of the local shape alone, so it does not depend on the cloud's frame (when c - p is
-// perpendicular to n to the last bit the eigenvector's sign stays). Unoriented: the eigenvector's sign as the
+// perpendicular to n to the last bit the eigenvector's sign stays); where the neighbours' mean offset along n is
+// below NormalParams::open_sign_offset (flat or evenly curved surfaces, where the rule reads noise) the sign is
+// left open (Normals::open_sign). Unoriented: the eigenvector's sign as the
 // solver gives it, for sign-free descriptors.
 enum class NormalOrientation { TowardViewpoint, AwayFromNeighbours, Unoriented };
 
@@ -29,6 +31,8 @@ struct NormalParams {
     double max_linearity; // tau_lin
     Vec3f viewpoint;      // in the cloud's local frame
     NormalOrientation orientation = NormalOrientation::TowardViewpoint;
+    // AwayFromNeighbours only: |n . (c - p)| below this leaves the sign open; 0 = every sign decided.
+    float open_sign_offset = 0.0f;
 };
 
 // A point gets a normal when it has at least tau_num neighbours within the FPFH radius and within the normal

@@ -55,8 +55,8 @@ const AngleBins kAngleBins(-kPi, 2.0 * kPi), kHalfAngleBins(-0.5 * kPi, kPi);
 // two normals make exactly the same angle with the line (or a comparison is NaN), because otherwise both
 // orders pick the same source point, and the reversed direction is an exact negation in float, so every
 // intermediate value is the same.
-inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, NormalSigns signs,
-                      int bins[3], bool &order_matters) {
+inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, bool open1, const Vec3f &p2, const Vec3f &n2, bool open2,
+                      NormalSigns signs, int bins[3], bool &order_matters) {
     order_matters = false;
     Vec3f d = p2 - p1;
     const float len2 = d.squaredNorm();
@@ -83,21 +83,31 @@ inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const V
         bins[2] = bin_of(f3, -1.0f, 1.0f);
         return true;
     }
-    // The representative of the four sign choices: u turned toward the other point, then nb toward u.
-    // Turning u negates v and keeps w; turning nb negates every dot product with it.
-    if (f3 < 0.0f) f3 = -f3, b = -b, f2 = -f2;
-    if (b < 0.0f) b = -b, a = -a, f2 = -f2;
+    // The representative of the sign choices left: u (when its sign is free) turned toward the other point, then
+    // nb (when free) toward u. Turning u negates v and keeps w; turning nb negates every dot product with it.
+    const bool ignored = signs == NormalSigns::Ignored;
+    const bool free_u = ignored || (swap ? open2 : open1), free_b = ignored || (swap ? open1 : open2);
+    if (free_u && f3 < 0.0f) f3 = -f3, b = -b, f2 = -f2;
+    if (free_b && b < 0.0f) b = -b, a = -a, f2 = -f2;
     // Where f3 or b is zero (exactly planar synthetic scenes have many such pairs) the turn it decides is
-    // still open; the remaining choices are settled on a, then f2.
-    const bool f3_zero = f3 == 0.0f, b_zero = b == 0.0f;
-    if (f3_zero) a = std::fabs(a); // u and n_b both turned: only a changes sign
+    // still open; the remaining choices are settled on a, then f2 (or on b, then f2, when only u is free).
+    const bool f3_zero = free_u && f3 == 0.0f, b_zero = free_b && b == 0.0f;
+    if (f3_zero && free_b) a = std::fabs(a); // u and n_b both turned: only a changes sign
     if (f3_zero && b_zero)
         f2 = std::fabs(f2);
     else if (b_zero && (a < 0.0f || (a == 0.0f && f2 < 0.0f)))
         a = -a, f2 = -f2; // n_b turned
-    bins[0] = kHalfAngleBins(a, b);
-    bins[1] = bin_of(f2, -1.0f, 1.0f);
-    bins[2] = bin_of(f3, 0.0f, 1.0f);
+    else if (f3_zero && !free_b && (b < 0.0f || (b == 0.0f && f2 < 0.0f)))
+        b = -b, f2 = -f2; // u turned
+    if (ignored) {
+        bins[0] = kHalfAngleBins(a, b);
+        bins[1] = bin_of(f2, -1.0f, 1.0f);
+        bins[2] = bin_of(f3, 0.0f, 1.0f);
+    } else {
+        bins[0] = kAngleBins(a, b);
+        bins[1] = bin_of(f2, -1.0f, 1.0f);
+        bins[2] = bin_of(f3, -1.0f, 1.0f);
+    }
     return true;
 }
 
@@ -106,11 +116,12 @@ inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const V
 #if KISSM_PAIR_FEATURES_SSE2
 // Intrinsics because GCC does not vectorise the plain loop: under its default -ftrapping-math the selects
 // become branches around comparisons and products that may trap, which it will not if-convert.
-void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBatch &batch) {
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, bool open, NormalSigns signs, PairBatch &batch) {
     // Padding lanes (copies of p itself) only produce codes nobody reads; NaNs in them are harmless.
     for (std::size_t m = batch.size; m < ((batch.size + 3) & ~std::size_t(3)); ++m) {
         batch.x[m] = p.x(), batch.y[m] = p.y(), batch.z[m] = p.z();
         batch.nx[m] = n.x(), batch.ny[m] = n.y(), batch.nz[m] = n.z();
+        batch.open[m] = 0;
     }
     const __m128 px = _mm_set1_ps(p.x()), py = _mm_set1_ps(p.y()), pz = _mm_set1_ps(p.z());
     const __m128 n1x = _mm_set1_ps(n.x()), n1y = _mm_set1_ps(n.y()), n1z = _mm_set1_ps(n.z());
@@ -118,7 +129,9 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBat
     const __m128 sign = _mm_set1_ps(-0.0f);
     // Sector boundaries of the angle bins: lanes with y >= 0 use k = 6..10, the others k = 1..5.
     __m128 cl[5], sl[5], cu[5], su[5];
-    const bool sign_free = signs == NormalSigns::Ignored;
+    const bool sign_free = signs == NormalSigns::Ignored, mixed = signs == NormalSigns::Mixed;
+    const __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    const __m128 open1 = sign_free || open ? all : zero;
     const AngleBins &angle_bins = sign_free ? kHalfAngleBins : kAngleBins;
     for (int k = 0; k < 5; ++k) {
         cl[k] = _mm_set1_ps(angle_bins.c[1 + k]), sl[k] = _mm_set1_ps(angle_bins.s[1 + k]);
@@ -174,19 +187,28 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBat
         const __m128 wz = _mm_sub_ps(_mm_mul_ps(ux, vy), _mm_mul_ps(uy, vx));
         __m128 ay = dot(wx, wy, wz, bx, by, bz), ax = dot(ux, uy, uz, bx, by, bz);
         __m128 f2 = dot(vx, vy, vz, bx, by, bz);
-        if (sign_free) { // the scalar code's two turns, as sign flips where the comparison holds
-            const __m128 turn_u = _mm_and_ps(_mm_cmplt_ps(f3, zero), sign);
+        if (sign_free || mixed) { // the scalar code's turns, as sign flips where the comparisons hold
+            const __m128 open2 =
+                sign_free ? all : _mm_castsi128_ps(_mm_loadu_si128(reinterpret_cast<const __m128i *>(&batch.open[m])));
+            const __m128 free_u = select(swap, open2, open1), free_b = select(swap, open1, open2);
+            const __m128 turn_u = _mm_and_ps(_mm_and_ps(free_u, _mm_cmplt_ps(f3, zero)), sign);
             f3 = _mm_xor_ps(f3, turn_u), ax = _mm_xor_ps(ax, turn_u), f2 = _mm_xor_ps(f2, turn_u);
-            const __m128 turn_b = _mm_and_ps(_mm_cmplt_ps(ax, zero), sign);
+            const __m128 turn_b = _mm_and_ps(_mm_and_ps(free_b, _mm_cmplt_ps(ax, zero)), sign);
             ax = _mm_xor_ps(ax, turn_b), ay = _mm_xor_ps(ay, turn_b), f2 = _mm_xor_ps(f2, turn_b);
-            const __m128 f3_zero = _mm_cmpeq_ps(f3, zero), b_zero = _mm_cmpeq_ps(ax, zero);
-            ay = select(f3_zero, _mm_andnot_ps(sign, ay), ay);
+            const __m128 f3_zero = _mm_and_ps(free_u, _mm_cmpeq_ps(f3, zero));
+            const __m128 b_zero = _mm_and_ps(free_b, _mm_cmpeq_ps(ax, zero));
+            ay = select(_mm_and_ps(f3_zero, free_b), _mm_andnot_ps(sign, ay), ay);
             const __m128 both = _mm_and_ps(f3_zero, b_zero);
             f2 = select(both, _mm_andnot_ps(sign, f2), f2);
-            const __m128 negative =
+            const __m128 negative_a =
                 _mm_or_ps(_mm_cmplt_ps(ay, zero), _mm_and_ps(_mm_cmpeq_ps(ay, zero), _mm_cmplt_ps(f2, zero)));
-            const __m128 turn_b0 = _mm_and_ps(_mm_andnot_ps(f3_zero, _mm_and_ps(b_zero, negative)), sign);
+            const __m128 turn_b0 = _mm_and_ps(_mm_andnot_ps(both, _mm_and_ps(b_zero, negative_a)), sign);
             ay = _mm_xor_ps(ay, turn_b0), f2 = _mm_xor_ps(f2, turn_b0);
+            // Only u free and f3 zero: settled on b, then f2 (exclusive with the turn above, which needs n_b free).
+            const __m128 negative_b =
+                _mm_or_ps(_mm_cmplt_ps(ax, zero), _mm_and_ps(_mm_cmpeq_ps(ax, zero), _mm_cmplt_ps(f2, zero)));
+            const __m128 turn_u0 = _mm_and_ps(_mm_andnot_ps(free_b, _mm_and_ps(f3_zero, negative_b)), sign);
+            ax = _mm_xor_ps(ax, turn_u0), f2 = _mm_xor_ps(f2, turn_u0);
         }
 
         const __m128 upper = _mm_cmpge_ps(ay, zero);
@@ -208,21 +230,21 @@ void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBat
     }
 }
 #else
-void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBatch &batch) {
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, bool open, NormalSigns signs, PairBatch &batch) {
     int bins[3];
     for (std::size_t m = 0; m < batch.size; ++m) {
         bool order_matters;
         const Vec3f q(batch.x[m], batch.y[m], batch.z[m]), nq(batch.nx[m], batch.ny[m], batch.nz[m]);
-        const bool frame = pair_bins(p, n, q, nq, signs, bins, order_matters);
+        const bool frame = pair_bins(p, n, open, q, nq, batch.open[m] != 0, signs, bins, order_matters);
         batch.code[m] = (frame ? pack_bins(bins) : 0) | (order_matters ? kLaneTie : 0);
     }
 }
 #endif
 
 bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, NormalSigns signs,
-                       int bins[3]) {
+                       int bins[3], bool open1, bool open2) {
     bool order_matters;
-    return pair_bins(p1, n1, p2, n2, signs, bins, order_matters);
+    return pair_bins(p1, n1, open1, p2, n2, open2, signs, bins, order_matters);
 }
 
 KISSM_DETAIL_END

@@ -30,15 +30,17 @@ constexpr int kBinsPerFeature = 11;
 // either normal changes nothing and unoriented normals will do: f1 then lies in [-pi/2, pi/2] and f3 in
 // [0, 1], each still binned into 11 bins over its range. What is lost is only what the signs carried (a convex
 // edge and a concave one look alike); what is gained is features that do not depend on any viewpoint, so
-// on no cloud's frame (docs/frames.md).
-enum class NormalSigns { Oriented, Ignored };
+// on no cloud's frame (docs/frames.md). Mixed: as Oriented, but a normal whose sign is open (Normals::open_sign)
+// is turned to the representative of its two choices: u so that f3 >= 0, n_b so that u . n_b >= 0 (the bins
+// stay those of the whole ranges, so that pairs of decided normals keep what their signs carry).
+enum class NormalSigns { Oriented, Ignored, Mixed };
 
 // Bins (0..10) of the three Darboux-frame angle features of a pair of oriented points; false when the pair
 // has no defined frame (coincident points, or a normal parallel to the connecting line). The source point
 // of the frame is the one whose normal makes the smaller angle with the connecting line, so the result
-// does not depend on the order of the two points.
+// does not depend on the order of the two points. open1 and open2: whether a normal's sign is open (Mixed only).
 bool pair_feature_bins(const Vec3f &p1, const Vec3f &n1, const Vec3f &p2, const Vec3f &n2, NormalSigns signs,
-                       int bins[3]);
+                       int bins[3], bool open1 = false, bool open2 = false);
 
 // A pair's bins for the second point of the pair, parked in the edge's slot until that point's owner
 // collects them: 4 bits per feature, bit 12 set when the pair has a frame (0 = nothing to add).
@@ -57,13 +59,14 @@ struct PairBatch {
     std::vector<std::uint32_t> index; // the neighbour's point index
     std::vector<std::uint64_t> slot;  // its position in the neighbour list
     std::vector<std::int32_t> code;   // bins and flags, see below
+    std::vector<std::uint32_t> open;  // NormalSigns::Mixed: all ones where the neighbour's sign is open, else 0
     std::size_t size = 0;
 
     void reserve(std::size_t n) {
         n = (n + 3) & ~std::size_t(3);
         if (x.size() >= n) return;
         for (auto *v : {&x, &y, &z, &nx, &ny, &nz}) v->resize(n);
-        index.resize(n), slot.resize(n), code.resize(n);
+        index.resize(n), slot.resize(n), code.resize(n), open.resize(n);
     }
 };
 
@@ -74,6 +77,7 @@ constexpr std::int32_t kLaneFrame = kCodeValid, kLaneTie = kCodeValid << 1;
 // Fills batch.code[0, batch.size) with the codes of the pairs (p, n) - (batch point m, its normal): exactly
 // the bins pair_feature_bins gives for that order, kLaneFrame when the pair has a frame, kLaneTie when the
 // other order must be evaluated separately. Uses (and may overwrite) the padding lanes up to a multiple of 4.
-void batch_pair_codes(const Vec3f &p, const Vec3f &n, NormalSigns signs, PairBatch &batch);
+// Under NormalSigns::Mixed, open says whether n's sign is open and batch.open the neighbours'.
+void batch_pair_codes(const Vec3f &p, const Vec3f &n, bool open, NormalSigns signs, PairBatch &batch);
 
 KISSM_DETAIL_END

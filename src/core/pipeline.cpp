@@ -26,6 +26,12 @@ namespace {
 // reported no wrong pose as valid (docs/parameters.md, "FPFH weighting").
 constexpr int kFpfhWeightPower = 2;
 
+// Under ViewpointMode::Local a normal whose neighbours' mean offset along it is below this fraction of the normal
+// radius keeps no sign: its pair features ignore it. Deciding those signs from noise cost a tenth of the
+// coarse rotation accuracy of the sensor viewpoint on LiDAR pairs; leaving them open recovers it
+// (docs/frames.md, "Open signs").
+constexpr double kOpenSignGain = 0.1;
+
 class Stopwatch {
 public:
     Stopwatch() : last_(std::chrono::steady_clock::now()) {}
@@ -124,6 +130,8 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         np.orientation = params.viewpoint_mode == ViewpointMode::SignFree ? NormalOrientation::Unoriented
                          : params.viewpoint_mode == ViewpointMode::Local  ? NormalOrientation::AwayFromNeighbours
                                                                           : NormalOrientation::TowardViewpoint;
+        if (params.viewpoint_mode == ViewpointMode::Local)
+            np.open_sign_offset = static_cast<float>(kOpenSignGain * params.normal_radius());
         NormalSets sets = estimate_normal_sets(pts, nb, np, static_cast<float>(params.refine_normal_radius()), ctx);
         f.normals = std::move(sets.normals);
         f.plane_normals = std::move(sets.planes);
@@ -131,11 +139,13 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         if (with_descriptors) {
             std::vector<std::uint32_t> keypoints = select_keypoints(nb, f.normals, params.min_normal_neighbors);
             if (params.suppression == Suppression::Ground) suppress_ground(params, keypoints, f, ctx);
-            const NormalSigns signs =
-                params.viewpoint_mode == ViewpointMode::SignFree ? NormalSigns::Ignored : NormalSigns::Oriented;
+            const NormalSigns signs = params.viewpoint_mode == ViewpointMode::SignFree ? NormalSigns::Ignored
+                                      : params.viewpoint_mode == ViewpointMode::Local  ? NormalSigns::Mixed
+                                                                                       : NormalSigns::Oriented;
             f.descriptors = compute_fpfh(pts, nb, f.normals, signs, std::move(keypoints),
                                          static_cast<float>(params.voxel_size), kFpfhWeightPower, ctx);
         }
+        f.normals.open_sign = std::vector<std::uint8_t>(); // read by the descriptors only
     } else {
         f.normals.normal.assign(pts.size(), Vec3f::Zero());
         f.normals.valid.assign(pts.size(), 0);

@@ -149,6 +149,7 @@ static void test_nonfinite_features(void) {
  * differ accepts them (and equals its own kissm_register). */
 static void test_mismatch(void) {
     kissm_config c = scn_config(VOXEL);
+    c.viewpoint_mode = KISSM_VIEWPOINT_FIXED; /* so that the viewpoint itself matters (case 6) */
     kissm_matcher *m = NULL;
     kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
     kissm_features *fs = NULL, *ft = NULL;
@@ -159,7 +160,7 @@ static void test_mismatch(void) {
     kissm_destroy(m);
 
     for (i = 0; i < 8; ++i) {
-        kissm_config d = scn_config(VOXEL);
+        kissm_config d = c;
         kissm_matcher *other = NULL;
         kissm_result r;
         const char *what = "";
@@ -225,7 +226,7 @@ static void test_mismatch(void) {
 
     /* Settings that only affect matching, pruning, the solver or threads: accepted. */
     for (i = 0; i < 5; ++i) {
-        kissm_config d = scn_config(VOXEL);
+        kissm_config d = c;
         kissm_matcher *other = NULL;
         kissm_result via, direct;
         switch (i) {

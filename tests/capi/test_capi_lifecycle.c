@@ -53,7 +53,7 @@ static void check_defaults(const kissm_config *c, uint32_t expected_size) {
     CHECK_EQ_INT(c->max_correspondences, 5000);
     CHECK_EQ_INT(c->min_inliers, 15);
     CHECK_EQ_INT(c->nonfinite_policy, KISSM_NONFINITE_REJECT);
-    CHECK_EQ_INT(c->viewpoint_mode, KISSM_VIEWPOINT_FIXED);
+    CHECK_EQ_INT(c->viewpoint_mode, KISSM_VIEWPOINT_LOCAL);
     CHECK_EQ_INT(c->log_level, KISSM_LOG_WARN);
     CHECK(c->log_fn == NULL);
     CHECK(c->log_user_data == NULL);

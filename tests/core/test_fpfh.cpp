@@ -152,6 +152,43 @@ static void test_sign_free_pair_features() {
         for (int k = 0; k < 11; ++k) CHECK_MSG(seen[f][k] > 0, "feature %d never in bin %d", f + 1, k);
 }
 
+// Mixed signs: a pair feature ignores the sign of an open normal and reads that of a decided one. Flipping an
+// open normal changes no bin; with both open the bins are the sign-free representative's, on the whole ranges;
+// with neither open they are the oriented bins.
+static void test_mixed_pair_features() {
+    TestRng rng(22);
+    int checked = 0, open_flip_changed = 0, decided_flip_changed = 0, both_unlike_sign_free = 0, neither_unlike = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3f p1 = Vec3d(rng.normal(), rng.normal(), rng.normal()).cast<float>();
+        const Vec3f p2 = Vec3d(rng.normal(), rng.normal(), rng.normal()).cast<float>();
+        const Vec3f n1 = Vec3d(rng.normal(), rng.normal(), rng.normal()).normalized().cast<float>();
+        const Vec3f n2 = Vec3d(rng.normal(), rng.normal(), rng.normal()).normalized().cast<float>();
+        const bool open1 = (i & 1) != 0, open2 = (i & 2) != 0;
+        int bins[3], other[3];
+        if (!pair_feature_bins(p1, n1, p2, n2, NormalSigns::Mixed, bins, open1, open2)) continue;
+        ++checked;
+        for (int flips = 1; flips < 4; ++flips) {
+            const Vec3f m1 = (flips & 1) ? Vec3f(-n1) : n1, m2 = (flips & 2) ? Vec3f(-n2) : n2;
+            REQUIRE(pair_feature_bins(p1, m1, p2, m2, NormalSigns::Mixed, other, open1, open2));
+            const bool changed = other[0] != bins[0] || other[1] != bins[1] || other[2] != bins[2];
+            const bool only_open = (!(flips & 1) || open1) && (!(flips & 2) || open2);
+            (only_open ? open_flip_changed : decided_flip_changed) += changed;
+        }
+        if (!open1 && !open2) {
+            REQUIRE(pair_feature_bins(p1, n1, p2, n2, NormalSigns::Oriented, other));
+            neither_unlike += other[0] != bins[0] || other[1] != bins[1] || other[2] != bins[2];
+        }
+        if (open1 && open2) { // the sign-free representative: f1 in [-pi/2, pi/2], f3 in [0, 1]
+            both_unlike_sign_free += bins[0] < 2 || bins[0] > 8 || bins[2] < 5; // sectors of 360/11 degrees
+        }
+    }
+    CHECK(checked > 19900);
+    CHECK_MSG(open_flip_changed == 0, "%d flips of open normals changed a bin", open_flip_changed);
+    CHECK_MSG(decided_flip_changed > 10000, "flips of decided normals changed only %d bins", decided_flip_changed);
+    CHECK_EQ_INT(neither_unlike, 0);
+    CHECK_EQ_INT(both_unlike_sign_free, 0);
+}
+
 // Sign-free descriptors do not depend on the normals' signs (bitwise), so on no viewpoint; oriented ones do.
 static void test_sign_free_descriptors_ignore_normal_signs() {
     const std::vector<Vec3f> pts = scene(11);
@@ -194,6 +231,7 @@ int main() {
     RUN_TEST(test_pair_feature_symmetric);
     RUN_TEST(test_sign_free_pair_features);
     RUN_TEST(test_sign_free_descriptors_ignore_normal_signs);
+    RUN_TEST(test_mixed_pair_features);
     RUN_TEST(test_invalid_neighbours_do_not_leak_in);
     return TEST_SUMMARY();
 }

@@ -13,6 +13,10 @@ using namespace kissm::detail;
 // compute_spfh evaluates each unordered pair once and counts it for both points; it must give exactly what
 // evaluating every ordered pair gives, including the pairs where the order matters (equal angles of the
 // two normals with the line) and the pairs without a frame.
+static bool open(const Normals &normals, std::size_t i) {
+    return !normals.open_sign.empty() && normals.open_sign[i] != 0;
+}
+
 static std::vector<float> reference_spfh(const std::vector<Vec3f> &points, const Neighborhoods &nb,
                                          const Normals &normals, NormalSigns signs) {
     const std::size_t n = points.size();
@@ -25,7 +29,9 @@ static std::vector<float> reference_spfh(const std::vector<Vec3f> &points, const
         for (std::size_t t = 0; t < nb.count(i); ++t) {
             const std::uint32_t j = nb.row(i)[t];
             if (j == i || !normals.valid[j]) continue;
-            if (!pair_feature_bins(points[i], normals.normal[i], points[j], normals.normal[j], signs, bins)) continue;
+            if (!pair_feature_bins(points[i], normals.normal[i], points[j], normals.normal[j], signs, bins,
+                                   open(normals, i), open(normals, j)))
+                continue;
             h[bins[0]] += 1.0f;
             h[kBinsPerFeature + bins[1]] += 1.0f;
             h[2 * kBinsPerFeature + bins[2]] += 1.0f;
@@ -77,6 +83,7 @@ static Scene make_scene(std::uint64_t seed, std::size_t n, bool spatial_order) {
         const double r = rng.uniform();
         s.normals.valid.push_back(r < 0.1 ? 0 : 1);
         s.normals.normal.push_back(r < 0.1 ? Vec3f::Zero() : r < 0.6 ? palette[i % 4] : random_unit(rng));
+        s.normals.open_sign.push_back(rng.uniform() < 0.4 ? 1 : 0); // read under NormalSigns::Mixed only
     }
     return s;
 }
@@ -94,16 +101,17 @@ static void check_scene(std::uint64_t seed, std::size_t n, bool spatial_order, N
         for (std::size_t t = 0; t < nb.count(i); ++t) {
             const std::uint32_t j = nb.row(i)[t];
             if (j <= i || !s.normals.valid[i] || !s.normals.valid[j]) continue;
+            const bool oi = open(s.normals, i), oj = open(s.normals, j);
             const bool da =
-                pair_feature_bins(s.points[i], s.normals.normal[i], s.points[j], s.normals.normal[j], signs, a);
+                pair_feature_bins(s.points[i], s.normals.normal[i], s.points[j], s.normals.normal[j], signs, a, oi, oj);
             const bool db =
-                pair_feature_bins(s.points[j], s.normals.normal[j], s.points[i], s.normals.normal[i], signs, b);
+                pair_feature_bins(s.points[j], s.normals.normal[j], s.points[i], s.normals.normal[i], signs, b, oj, oi);
             ties += da != db || (da && (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]));
             frameless += !da;
         }
     // Sign-free bins of this scene's tied pairs (equal or opposite palette normals) come out the same in both
     // orders, but the tie path still runs: its pairs are evaluated in the other order all the same.
-    if (signs == NormalSigns::Oriented) CHECK_MSG(ties > 10, "only %zu order-dependent pairs", ties);
+    if (signs != NormalSigns::Ignored) CHECK_MSG(ties > 10, "only %zu order-dependent pairs", ties);
     CHECK_MSG(frameless > 10, "only %zu pairs without a frame", frameless);
 
     for (int threads = 1; threads <= 3; ++threads) {
@@ -114,12 +122,15 @@ static void check_scene(std::uint64_t seed, std::size_t n, bool spatial_order, N
         CHECK_MSG(std::memcmp(got.data(), ref.data(), ref.size() * sizeof(float)) == 0,
                   "seed %llu, %zu points, %s order, %s, %d threads: SPFH differs",
                   static_cast<unsigned long long>(seed), n, spatial_order ? "spatial" : "random",
-                  signs == NormalSigns::Ignored ? "sign-free" : "oriented", threads);
+                  signs == NormalSigns::Ignored ? "sign-free"
+                  : signs == NormalSigns::Mixed ? "mixed"
+                                                : "oriented",
+                  threads);
     }
 }
 
 static void test_spfh_matches_per_direction_pairs() {
-    for (const NormalSigns signs : {NormalSigns::Oriented, NormalSigns::Ignored}) {
+    for (const NormalSigns signs : {NormalSigns::Oriented, NormalSigns::Ignored, NormalSigns::Mixed}) {
         check_scene(1, 3000, true, signs);
         check_scene(2, 3000, false, signs);
         check_scene(3, 700, true, signs); // a single chunk
@@ -138,7 +149,7 @@ static void test_spfh_empty_and_tiny() {
     normals.normal = {Vec3f(0, 0, 1), Vec3f(0, 0, 1)};
     normals.valid = {1, 1};
     nb = radius_neighbors(two, 1.0f, ctx);
-    for (const NormalSigns signs : {NormalSigns::Oriented, NormalSigns::Ignored}) {
+    for (const NormalSigns signs : {NormalSigns::Oriented, NormalSigns::Ignored, NormalSigns::Mixed}) {
         const auto two_spfh = compute_spfh(two, nb, normals, signs, ctx);
         CHECK(std::vector<float>(two_spfh.begin(), two_spfh.end()) == reference_spfh(two, nb, normals, signs));
     }

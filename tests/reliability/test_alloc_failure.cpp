@@ -246,8 +246,9 @@ void test_read_points() {
 
 int main(int argc, char **argv) {
     g_file = argc > 1 ? argv[1] : nullptr; // a point file to read (tests/data/roundtrip_source.ply)
-    // A small pair keeps the sweep (one registration per allocation) to seconds.
-    scn_make_pair(&g_pair, 3, 3.0, 0.01);
+    // A small pair keeps the sweep (one registration per allocation) to seconds; one that the default config
+    // registers (valid), so that every stage allocates.
+    scn_make_pair(&g_pair, 6, 3.0, 0.01);
     // The thread's last-error message keeps its buffer: let it grow once before anything is counted.
     if (kissm_create(nullptr, nullptr) == KISSM_OK) return 1;
     RUN_TEST(test_create_and_features);

@@ -224,7 +224,7 @@ def test_enumerations_take_names_or_the_c_constants() -> None:
     assert kissm.Config(viewpoint_mode=1).viewpoint_mode == "cloud_center"
     assert kissm.Config(viewpoint_mode=_ffi.lib.KISSM_VIEWPOINT_SIGN_FREE).viewpoint_mode == "sign_free"
     assert kissm.Config(viewpoint_mode=3) == kissm.Config(viewpoint_mode="local")
-    assert kissm.Config().nonfinite_policy == "reject" and kissm.Config().viewpoint_mode == "fixed"
+    assert kissm.Config().nonfinite_policy == "reject" and kissm.Config().viewpoint_mode == "local"
     with pytest.raises(ValueError, match="'reject', 'drop'"):
         kissm.Config(nonfinite_policy="ignore")
 

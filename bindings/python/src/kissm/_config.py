@@ -166,10 +166,11 @@ class Config:
     nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]
     """'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are skipped and counted)."""
     viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
-    """How normals are oriented: 'fixed' (toward ``viewpoint``, in each cloud's frame: single scans in their
-    sensor frame), 'cloud_center' (toward each cloud's bounding-box centre), or, with no viewpoint at all, so that
-    features depend on no cloud's frame (scans in a world frame, maps; docs/frames.md): 'local' (each normal
-    turned away from its neighbours' centroid) or 'sign_free' (descriptors blind to the normals' signs)."""
+    """How normals are oriented. With no viewpoint at all, so that features depend on no cloud's frame (scans in
+    any frame, maps; docs/frames.md): 'local' (the default: each normal turned away from its neighbours'
+    centroid, its sign ignored where that centroid is too close to the surface to say) or 'sign_free'
+    (descriptors blind to every normal's sign). With a viewpoint: 'fixed' (toward ``viewpoint``, in each cloud's
+    frame: single scans in their sensor frame) or 'cloud_center' (toward each cloud's bounding-box centre)."""
     log_level: int = _DEFAULTS["log_level"]
     """Most verbose level passed to a log callback (0..4); kept for completeness: the Python package installs no log
     callback, and the library itself never prints."""

@@ -174,8 +174,9 @@ pub struct kissm_config {
     pub min_inliers: i32,
     /// KISSM_NONFINITE_*. Default #KISSM_NONFINITE_REJECT.
     pub nonfinite_policy: i32,
-    /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_FIXED (scans in their sensor frame);
- #KISSM_VIEWPOINT_LOCAL or #KISSM_VIEWPOINT_SIGN_FREE for clouds in any other frame (docs/frames.md).*/
+    /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_LOCAL (features that depend on no
+ cloud's frame); #KISSM_VIEWPOINT_FIXED for scans in their sensor frame when kissm_config.viewpoint is
+ known (docs/frames.md).*/
     pub viewpoint_mode: i32,
     /// Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN.
     pub log_level: i32,

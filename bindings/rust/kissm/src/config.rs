@@ -63,21 +63,23 @@ impl RefineMode {
 /// Where surface normals are oriented toward.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Viewpoint {
-    /// A fixed sensor position, in each cloud's own input frame (single scans; the default is the origin).
+    /// A fixed sensor position, in each cloud's own input frame (single scans in their sensor frame, when the
+    /// sensor position is known).
     Fixed([f64; 3]),
     /// Each cloud's bounding-box centre.
     CloudCenter,
     /// No viewpoint: descriptors that do not depend on the normals' signs, so on no cloud's frame
     /// (`docs/frames.md`).
     SignFree,
-    /// No viewpoint: each normal turned away from the centroid of its neighbours, a rule of the local shape
-    /// alone, so features depend on no cloud's frame (`docs/frames.md`).
+    /// No viewpoint (the default): each normal turned away from the centroid of its neighbours, a rule of the
+    /// local shape alone, its sign ignored where that centroid is too close to the surface to say, so features
+    /// depend on no cloud's frame (`docs/frames.md`).
     Local,
 }
 
 impl Default for Viewpoint {
     fn default() -> Self {
-        Viewpoint::Fixed([0.0; 3])
+        Viewpoint::Local
     }
 }
 
@@ -589,7 +591,7 @@ impl ConfigBuilder {
         self.raw.noise_bound_max = bound;
         self
     }
-    /// Where normals are oriented toward (default: a fixed sensor at the origin of each cloud's frame).
+    /// Where normals are oriented toward (default: [`Viewpoint::Local`], no viewpoint).
     pub fn viewpoint(mut self, viewpoint: Viewpoint) -> Self {
         match viewpoint {
             Viewpoint::Fixed(position) => {

@@ -48,7 +48,8 @@ fn config_defaults_are_the_documented_ones() {
     assert_eq!(c.prune_noise_bound_gain(), 1.0);
     assert_eq!(c.solver_noise_bound_gain(), 0.75);
     assert_eq!(c.noise_bound_max(), 0.0);
-    assert_eq!(c.viewpoint(), Viewpoint::Fixed([0.0; 3]));
+    assert_eq!(c.viewpoint(), Viewpoint::Local);
+    assert_eq!(c.viewpoint(), Viewpoint::default());
     assert_eq!(c.min_normal_neighbors(), 3);
     assert_eq!(c.max_correspondences(), 5000);
     assert_eq!(c.min_inliers(), 15);
