@@ -61,7 +61,7 @@ impl RefineMode {
 }
 
 /// Where surface normals are oriented toward.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub enum Viewpoint {
     /// A fixed sensor position, in each cloud's own input frame (single scans in their sensor frame, when the
     /// sensor position is known).
@@ -74,13 +74,8 @@ pub enum Viewpoint {
     /// No viewpoint (the default): each normal turned away from the centroid of its neighbours, a rule of the
     /// local shape alone, its sign ignored where that centroid is too close to the surface to say, so features
     /// depend on no cloud's frame (`docs/frames.md`).
+    #[default]
     Local,
-}
-
-impl Default for Viewpoint {
-    fn default() -> Self {
-        Viewpoint::Local
-    }
 }
 
 /// Geometric suppression before keypoints (`kissm_config.suppression`): voxels it picks get no descriptor, so
