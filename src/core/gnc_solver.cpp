@@ -46,7 +46,6 @@ public:
 
     // mu <= 0: residuals (and their maximum) only. Otherwise also the GNC-TLS weights for c2 and mu.
     Partial run(const Eigen::Matrix3d &R, double c2, double mu, RunContext &ctx) {
-        const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2, scale = c2 * mu * (mu + 1.0);
         const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2),
                      r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
         const auto chunk = [&](std::size_t begin, std::size_t end) {
@@ -64,16 +63,7 @@ public:
                 for (std::size_t k = begin; k < end; ++k) p.max_r2 = std::max(p.max_r2, r2[k]);
                 return p;
             }
-            bool binary = true;
-            for (std::size_t k = begin; k < end; ++k) {
-                const double e = r2[k];
-                double wk = e >= hi ? 0.0 : 1.0;
-                if (e > lo && e < hi) { // the few measurements inside the band: a sqrt each
-                    wk = std::sqrt(scale / e) - mu;
-                    binary = false;
-                }
-                w[k] = wk;
-            }
+            const bool binary = gnc_tls_weights(r2, w, begin, end, c2, mu);
             // Outliers add exact zeros, so no test is needed.
             double cost = 0.0, h00 = 0, h01 = 0, h02 = 0, h10 = 0, h11 = 0, h12 = 0, h20 = 0, h21 = 0, h22 = 0;
             for (std::size_t k = begin; k < end; ++k) {

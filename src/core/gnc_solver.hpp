@@ -50,6 +50,25 @@ bool gnc_tls_rotation(const std::vector<Eigen::Vector3d> &a, const std::vector<E
                       const SolverParams &params, Eigen::Matrix3d &rotation, std::vector<double> &weights,
                       int &iterations, RunContext &ctx);
 
+// The GNC-TLS weights of the residuals r2[begin, end) for the squared bound c2 and the current mu (Yang et al.): 1
+// up to mu / (mu + 1) c2, 0 from (mu + 1) / mu c2 on, sqrt(c2 mu (mu + 1) / r2) - mu between (the few measurements
+// inside the band: a sqrt each). Returns whether every weight came out 0 or 1. Both rotation passes call it, so
+// their weights are the same function of their residuals.
+inline bool gnc_tls_weights(const double *r2, double *w, std::size_t begin, std::size_t end, double c2, double mu) {
+    const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2, scale = c2 * mu * (mu + 1.0);
+    bool binary = true;
+    for (std::size_t k = begin; k < end; ++k) {
+        const double e = r2[k];
+        double wk = e >= hi ? 0.0 : 1.0;
+        if (e > lo && e < hi) {
+            wk = std::sqrt(scale / e) - mu;
+            binary = false;
+        }
+        w[k] = wk;
+    }
+    return binary;
+}
+
 // The GNC-TLS schedule both rotation solvers share (Yang et al.): from `estimate`, mu starts where the surrogate is
 // convex over all residuals and grows by gnc_factor until the weights are binary or the cost settles. Each
 // pass.run(estimate, c2, mu, ctx) evaluates the residuals of the previous estimate and the weights for this mu in

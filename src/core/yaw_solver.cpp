@@ -59,7 +59,6 @@ public:
     // mu <= 0: residuals (and their maximum) only. Otherwise the GNC-TLS weights for c2
     // and mu and the weighted sums.
     Partial run(double theta, double c2, double mu, RunContext &ctx) {
-        const double lo = mu / (mu + 1.0) * c2, hi = (mu + 1.0) / mu * c2, scale = c2 * mu * (mu + 1.0);
         const double c = std::cos(theta), s = std::sin(theta);
         const auto chunk = [&](std::size_t begin, std::size_t end) {
             Partial p;
@@ -74,16 +73,7 @@ public:
                 for (std::size_t k = begin; k < end; ++k) p.max_r2 = std::max(p.max_r2, r2[k]);
                 return p;
             }
-            bool binary = true;
-            for (std::size_t k = begin; k < end; ++k) {
-                const double e = r2[k];
-                double wk = e >= hi ? 0.0 : 1.0;
-                if (e > lo && e < hi) { // the few measurements inside the band: a sqrt each
-                    wk = std::sqrt(scale / e) - mu;
-                    binary = false;
-                }
-                w[k] = wk;
-            }
+            const bool binary = gnc_tls_weights(r2, w, begin, end, c2, mu);
             double cross = 0.0, dot = 0.0, cost = 0.0;
             for (std::size_t k = begin; k < end; ++k) {
                 const double wk = w[k];
