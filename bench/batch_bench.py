@@ -43,7 +43,6 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Hashable
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -52,7 +51,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
-from bench import cpus_for, machine_info  # noqa: E402
+from bench import cpus_for, machine_info, package_versions  # noqa: E402
 
 DATASET = "kitti07_keyframes_gtsam_points"
 KEYFRAMES = 5
@@ -447,12 +446,7 @@ def main(argv: list[str] | None = None) -> int:
     stem += "_latest.json"
     raw = HERE / "results" / stem if committed else args.out / "batch_raw.json"
     command = "python bench/batch_bench.py " + " ".join(shlex.quote(a) for a in argv)
-    packages = {}
-    for dist in ("kissm", "numpy", "dask", "distributed", "ray"):
-        try:
-            packages[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            packages[dist] = None
+    packages = package_versions(("kissm", "numpy", "dask", "distributed", "ray"))
     results: dict[str, Any] = {
         "meta": {
             "command": command.strip(),

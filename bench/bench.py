@@ -1078,6 +1078,19 @@ def run_scaling(args, methods, threads, tmp, log, results) -> None:
 
 # ---- machine description --------------------------------------------------------------------------------
 
+def package_versions(dists) -> dict[str, str | None]:
+    """The installed version of each distribution, None where it is not installed (every bench's report)."""
+    from importlib import metadata
+
+    out: dict[str, str | None] = {}
+    for dist in dists:
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
 def machine_info(python: str) -> dict:
     info = {"platform": platform.platform(), "python": platform.python_version(), "cpus_online": os.cpu_count()}
     with contextlib.suppress(OSError):
@@ -1091,13 +1104,8 @@ def machine_info(python: str) -> dict:
                 info["mem_total_gb"] = round(int(line.split()[1]) / 2**20, 1)
     if hasattr(os, "sched_getaffinity"):
         info["cpus_allowed"] = sorted(os.sched_getaffinity(0))
-    versions = {}
-    from importlib import metadata
-
-    for dist in ("kissm", "kiss-matcher", "open3d-cpu", "open3d", "small-gicp", "numpy", "matplotlib"):
-        with contextlib.suppress(metadata.PackageNotFoundError):
-            versions[dist] = metadata.version(dist)
-    info["packages"] = versions
+    versions = package_versions(("kissm", "kiss-matcher", "open3d-cpu", "open3d", "small-gicp", "numpy", "matplotlib"))
+    info["packages"] = {dist: version for dist, version in versions.items() if version is not None}
     with contextlib.suppress(Exception):
         head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
                               text=True, timeout=10).stdout.strip()

@@ -51,7 +51,6 @@ import statistics
 import sys
 import tempfile
 import time
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -61,7 +60,13 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(REPO / "bindings" / "python" / "tests"))
-from bench import REFERENCE_MIN_INLIERS, cpus_for, machine_info, reference_transform  # noqa: E402
+from bench import (  # noqa: E402
+    REFERENCE_MIN_INLIERS,
+    cpus_for,
+    machine_info,
+    package_versions,
+    reference_transform,
+)
 
 YAWS_DEG = (60.0, 120.0, 180.0, -90.0)  # source turned about up (z): fixed angles, no randomness needed
 WRONG_UP_DEG = (30.0, 90.0)  # source turned about x with suppression on: its +z is no longer up
@@ -1089,13 +1094,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 def versions() -> dict[str, str | None]:
-    out: dict[str, str | None] = {}
-    for dist in ("kissm", "kiss-matcher", "pypatchworkpp", "numpy", "matplotlib"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = None
-    return out
+    return package_versions(("kissm", "kiss-matcher", "pypatchworkpp", "numpy", "matplotlib"))
 
 
 def main(argv: list[str] | None = None) -> int:

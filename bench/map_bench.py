@@ -43,7 +43,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -58,6 +57,7 @@ from bench import (  # noqa: E402
     _trim_heap,
     cpus_for,
     machine_info,
+    package_versions,
     reference_transform,
 )
 
@@ -872,13 +872,7 @@ def run_worker(argv: list[str], threads: int, out: Path) -> int:
 
 
 def versions() -> dict[str, str | None]:
-    out: dict[str, str | None] = {}
-    for dist in ("kissm", "kiss-matcher", "numpy", "matplotlib"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = None
-    return out
+    return package_versions(("kissm", "kiss-matcher", "numpy", "matplotlib"))
 
 
 def main(argv: list[str] | None = None) -> int:
