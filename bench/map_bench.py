@@ -385,9 +385,15 @@ def one_map(
     size, k = where["size"], where["keyframe"]
     scan, gt = cloud[k], chain[k]
     base = np.concatenate([apply(chain[j], cloud[j]) for j in range(len(cloud)) if j != k])
-    extra = max(0, size - len(base))
-    world_map = np.ascontiguousarray(np.concatenate([base, stream.points(extra)]))
-    res["maps"].append({**where, "points": len(world_map), "base_points": len(base), "tiles": stream.tiles_in(extra)})
+    if args.absent:  # a control: the scan's place left out, so every pose reported valid is wrong
+        extra = size
+        world_map = np.ascontiguousarray(stream.points(extra))
+    else:
+        extra = max(0, size - len(base))
+        world_map = np.ascontiguousarray(np.concatenate([base, stream.points(extra)]))
+    res["maps"].append(
+        {**where, "points": len(world_map), "base_points": 0 if args.absent else len(base), "tiles": stream.tiles_in(extra)}
+    )
     use_reference = km is not None and (args.reference_max_points is None or size <= args.reference_max_points)
     once = size > args.reference_once_above
     # Warm-up (untimed): every method once on this map and scan; the reference above --reference-once-above
@@ -831,6 +837,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         help="above this many map points the reference is called once per scan (1500000)",
     )
     p.add_argument("--no-reference", action="store_true", help="kissm only")
+    p.add_argument(
+        "--absent",
+        action="store_true",
+        help="a control: maps of distractor tiles only, without the scan's place (any valid pose is wrong)",
+    )
     p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/scan_to_map.md and OUT/img/ (docs)")
     p.add_argument(
         "--raw",

@@ -79,6 +79,42 @@ std::vector<float> project(const Descriptors &d, const DescriptorProjection &p, 
 
 } // namespace
 
+void RankedNeighbours::add(float dist, std::uint32_t index) {
+    int i = count_;
+    while (i > 0 && (dist < dist_[i - 1] || (dist == dist_[i - 1] && index < index_[i - 1]))) {
+        if (i < k_) {
+            dist_[i] = dist_[i - 1];
+            index_[i] = index_[i - 1];
+        }
+        --i;
+    }
+    if (i >= k_) return;
+    dist_[i] = dist;
+    index_[i] = index;
+    if (count_ < k_) ++count_;
+}
+
+float descriptor_dist2(const float *a, const float *b) {
+    float s = 0.0f;
+    for (int c = 0; c < kDescriptorDim; ++c) {
+        const float d = a[c] - b[c];
+        s += d * d;
+    }
+    return s;
+}
+
+RankedNeighbours DescriptorIndex::nearest(const float *query, int k) const {
+    static_assert(kCandidates <= ProjectedKdTree::kMaxK, "the tree returns at most kMaxK neighbours");
+    float projected[kProjDim];
+    projection_.apply(query, projected);
+    std::uint32_t cand[kCandidates], cand_slot[kCandidates];
+    float cand_dist[kCandidates];
+    const int found = tree_->nearest(projected, kCandidates, cand, cand_dist, cand_slot);
+    RankedNeighbours best(k);
+    for (int i = 0; i < found; ++i) best.add(descriptor_dist2(query, slot_descriptor(cand_slot[i])), cand[i]);
+    return best;
+}
+
 void DescriptorProjection::apply(const float *descriptor, float *out) const {
     const Eigen::Map<const Eigen::Matrix<float, kDescriptorDim, 1>> x(descriptor);
     const Eigen::Matrix<float, kDim, 1> y = basis * (x - mean);

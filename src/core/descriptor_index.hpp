@@ -4,6 +4,7 @@
 // scan against it costs in proportion to the scan (docs/frames.md, "Scan-to-map cost").
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -29,8 +30,33 @@ struct DescriptorProjection {
     void apply(const float *descriptor, float *out) const;
 };
 
+// The nearest few of a query by exact 33-D distance, ties by the lower index, so that the answer is a function
+// of the data alone.
+class RankedNeighbours {
+public:
+    static constexpr int kMaxK = 4;
+    explicit RankedNeighbours(int k) : k_(k) {}
+    void add(float dist, std::uint32_t index);
+    int found() const { return count_; }
+    std::uint32_t index(int i) const { return index_[i]; }
+    float dist(int i) const { return dist_[i]; }
+
+private:
+    int k_, count_ = 0;
+    std::uint32_t index_[kMaxK] = {};
+    float dist_[kMaxK] = {};
+};
+
+// Squared 33-D distance, summed in dimension order.
+float descriptor_dist2(const float *a, const float *b);
+
 class DescriptorIndex {
 public:
+    // A search takes the kCandidates nearest in the projection and re-ranks them by exact 33-D distance, which
+    // keeps the exact search's success rate (docs/parameters.md, "Descriptor matching": instructions and
+    // successes per projection size).
+    static constexpr int kCandidates = 16;
+
     DescriptorIndex() = default;
 
     bool empty() const { return !tree_; }
@@ -40,6 +66,10 @@ public:
     // sit in a few neighbouring leaves, are read from neighbouring memory.
     const float *slot_descriptor(std::size_t slot) const { return &by_slot_[slot * kDescriptorDim]; }
     std::size_t bytes() const; // heap memory held (the tree, itself on the heap, whole)
+
+    // The k (at most RankedNeighbours::kMaxK) nearest of `query` (33 floats, from any cloud) by exact distance,
+    // among the kCandidates nearest in this index's projection; indexes are keypoint indexes of this cloud.
+    RankedNeighbours nearest(const float *query, int k) const;
 
     // Indexes of several clouds' descriptors (empty descriptors give an empty index). The principal axes and
     // projections use every thread; the trees, one thread each, are built side by side.

@@ -7,69 +7,6 @@
 
 KISSM_DETAIL_BEGIN
 
-namespace {
-
-constexpr int kProjDim = DescriptorProjection::kDim;
-// The kCandidates nearest in a projected space are re-ranked by exact 33-D distance, which keeps the exact
-// search's success rate (docs/parameters.md, "Descriptor matching": instructions and successes per projection
-// size).
-constexpr int kCandidates = 16;
-static_assert(kCandidates <= ProjectedKdTree::kMaxK, "the tree returns at most kMaxK neighbours");
-
-// The k nearest by exact 33-D distance among the projected search's candidates, ties by the lower index
-// so that the answer is a function of the data alone.
-class NearestK {
-public:
-    explicit NearestK(int k) : k_(k) {}
-    void add(float dist, std::uint32_t index) {
-        int i = count_;
-        while (i > 0 && (dist < dist_[i - 1] || (dist == dist_[i - 1] && index < index_[i - 1]))) {
-            if (i < k_) {
-                dist_[i] = dist_[i - 1];
-                index_[i] = index_[i - 1];
-            }
-            --i;
-        }
-        if (i >= k_) return;
-        dist_[i] = dist;
-        index_[i] = index;
-        if (count_ < k_) ++count_;
-    }
-    int found() const { return count_; }
-    std::uint32_t index(int i) const { return index_[i]; }
-    float dist(int i) const { return dist_[i]; }
-
-private:
-    static constexpr int kCap = 2;
-    int k_, count_ = 0;
-    std::uint32_t index_[kCap] = {};
-    float dist_[kCap] = {};
-};
-
-float exact_dist2(const float *a, const float *b) {
-    float s = 0.0f;
-    for (int c = 0; c < kDescriptorDim; ++c) {
-        const float d = a[c] - b[c];
-        s += d * d;
-    }
-    return s;
-}
-
-// The k exact nearest of `query` (33 floats, from the other cloud) in `index`, among the candidates of a
-// search in that index's own projection; ties by index.
-NearestK nearest(const DescriptorIndex &index, const float *query, int k) {
-    float projected[kProjDim];
-    index.projection().apply(query, projected);
-    std::uint32_t cand[kCandidates], cand_slot[kCandidates];
-    float cand_dist[kCandidates];
-    const int found = index.tree().nearest(projected, kCandidates, cand, cand_dist, cand_slot);
-    NearestK best(k);
-    for (int i = 0; i < found; ++i) best.add(exact_dist2(query, index.slot_descriptor(cand_slot[i])), cand[i]);
-    return best;
-}
-
-} // namespace
-
 std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, const IndexedDescriptors &target,
                                               const MatchParams &params, RunContext &ctx) {
     std::vector<Correspondence> out;
@@ -84,6 +21,8 @@ std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, 
     // neighbouring leaves of the other tree, which stay cached) changes nothing in the results. A query whose
     // projection is not finite never finds a neighbour: its distances are never finite.
     const std::size_t nq = Q.descriptors->keypoint.size();
+    // Against a much larger cloud (a map), the part of it the queries' own votes single out, when they do.
+    const PlaceRegion region = PlaceRegion::find(Q, R, ctx);
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> forward(nq, kNone);
     std::vector<float> ratio(nq, 0.0f);
@@ -92,7 +31,9 @@ std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, 
         for (std::size_t s = b; s < e; ++s) {
             const std::uint32_t q = qtree.slot_index(s);
             if (q == ProjectedKdTree::kNoPoint) continue;
-            const NearestK r = nearest(*R.index, Q.index->slot_descriptor(s), use_ratio ? 2 : 1);
+            const float *query = Q.index->slot_descriptor(s);
+            const int k = use_ratio ? 2 : 1;
+            const RankedNeighbours r = region.empty() ? R.index->nearest(query, k) : region.nearest(query, k);
             if (r.found() < 1) continue;
             if (use_ratio) {
                 if (r.found() < 2 || !(r.dist(1) > 0.0f)) continue; // ambiguous: two identical candidates
@@ -116,7 +57,8 @@ std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, 
     const float *rvalues = R.descriptors->values.data();
     ctx.parallel_for(picked.size(), 256, [&](std::size_t b, std::size_t e) {
         for (std::size_t k = b; k < e; ++k) {
-            const NearestK n = nearest(*Q.index, &rvalues[static_cast<std::size_t>(picked[k]) * kDescriptorDim], 1);
+            const RankedNeighbours n =
+                Q.index->nearest(&rvalues[static_cast<std::size_t>(picked[k]) * kDescriptorDim], 1);
             if (n.found() >= 1) backward[k] = n.index(0);
         }
     });

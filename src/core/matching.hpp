@@ -10,6 +10,7 @@
 #include "cloud.hpp"
 #include "descriptor_index.hpp"
 #include "detail_namespace.hpp"
+#include "place_gate.hpp"
 #include "run_context.hpp"
 
 KISSM_DETAIL_BEGIN
@@ -19,17 +20,12 @@ struct MatchParams {
     int max_correspondences; // keep at most this many, most distinctive (lowest ratio) first
 };
 
-// A cloud's descriptors with their index (DescriptorIndex::build of those descriptors), both borrowed.
-struct IndexedDescriptors {
-    const Descriptors *descriptors;
-    const DescriptorIndex *index;
-};
-
 // Mutual nearest neighbours that pass the ratio test, capped. A query's candidates come from the other cloud's
 // index (its descriptors projected on their own leading principal components) and are ranked by exact 33-D
 // distance. The cloud with fewer keypoints queries the other (ties: source queries target), and only the keypoints
-// it reaches search back, so the larger side costs little beyond the log of its size. The result is sorted by
-// (source, target) keypoint index, so it depends only on the descriptors, never on threads or input order.
+// it reaches search back, so the larger side costs little beyond the log of its size. Against a cloud much larger
+// than the queries (a map), the queries search only the place their votes single out (place_gate.hpp). The result is
+// sorted by (source, target) keypoint index, so it depends only on the descriptors, never on threads or input order.
 std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, const IndexedDescriptors &target,
                                               const MatchParams &params, RunContext &ctx);
 

@@ -312,9 +312,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     Stopwatch clock;
     ctx.checkpoint(Stage::Matching, 0.0);
     MatchParams mp{params.ratio_test, params.max_correspondences};
-    const std::vector<Correspondence> matches =
-        match_descriptors(IndexedDescriptors{&source.descriptors, &source.descriptor_index},
-                          IndexedDescriptors{&target.descriptors, &target.descriptor_index}, mp, ctx);
+    const std::vector<Correspondence> matches = match_descriptors(
+        IndexedDescriptors{&source.descriptors, &source.descriptor_index, &source.voxels.points},
+        IndexedDescriptors{&target.descriptors, &target.descriptor_index, &target.voxels.points}, mp, ctx);
     r.num_initial_correspondences = matches.size();
     r.time_matching_ms = clock.lap();
     if (matches.size() < 3) {

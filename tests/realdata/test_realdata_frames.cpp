@@ -3,7 +3,8 @@
 // (KISSM_VIEWPOINT_LOCAL): scan-to-map against leave-one-out maps in the world frame, directly and from
 // features described once (bitwise the same, at 1 and 2 threads), map-to-map in world frames hundreds of
 // metres apart, clouds in moved and turned frames, and an exact georeferenced shift (bitwise the same
-// rotation). No run may report a wrong pose as valid, the fixed viewpoint included.
+// rotation); scan-to-map with other real places in the map, and with the scan's own place left out. No run may report a
+// wrong pose as valid, the fixed viewpoint included.
 #include <cstring>
 
 #include "harness.h"
@@ -168,6 +169,73 @@ void test_scan_to_map(const Keyframes &kf) {
     kissm_destroy(one);
 }
 
+// Other places: four real LiDAR scans, three times each, turned about z and set 700-1300 m from keyframe 0, so a
+// map of them plus the leave-one-out map is several times the scan (the matching then searches only the place the
+// scan's votes single out, src/core/place_gate.hpp).
+std::vector<double> distractor_tiles(const std::string &root) {
+    const std::pair<const char *, int32_t> files[] = {
+        {"/kitti_demo_scans_unverified/000000.bin", KISSM_FORMAT_KITTI_BIN},
+        {"/kitti_demo_scans_unverified/000015.bin", KISSM_FORMAT_KITTI_BIN},
+        {"/small_gicp_lidar/target.ply", KISSM_FORMAT_PLY},
+        {"/small_gicp_lidar/source.ply", KISSM_FORMAT_PLY}};
+    std::vector<double> tiles;
+    Rng rng{15};
+    for (int t = 0; t < 4; ++t) {
+        const std::vector<double> cloud = read_cloud(root + files[t].first, files[t].second);
+        CHECK_MSG(!cloud.empty(), "cannot read %s", files[t].first);
+        for (int copy = 0; copy < 3; ++copy) {
+            Pose p;
+            p.r = axis_angle(0, 0, 1, 2 * kPi * rng.uniform());
+            const double bearing = kPi / 6 * (3 * t + copy) + 0.3, range = 700 + 600 * rng.uniform();
+            p.t[0] = range * std::cos(bearing);
+            p.t[1] = range * std::sin(bearing);
+            append_moved(p, cloud, tiles);
+        }
+    }
+    return tiles;
+}
+
+// Scan-to-map among other places: every keyframe right and valid (directly and from features described once,
+// bitwise the same), and with its own place left out of the map every keyframe valid = 0.
+void test_scan_to_map_among_other_places(const Keyframes &kf, const std::string &root) {
+    const std::vector<double> tiles = distractor_tiles(root);
+    if (harness_failed) return;
+    kissm_matcher *m = make_matcher(KISSM_VIEWPOINT_LOCAL, 2), *one = make_matcher(KISSM_VIEWPOINT_LOCAL, 1);
+    const kissm_points absent = view(tiles);
+    kissm_features *absent_features = nullptr;
+    REQUIRE(kissm_features_compute(m, &absent, &absent_features) == KISSM_OK);
+    for (int k = 0; k < 5; ++k) {
+        std::vector<double> map = tiles;
+        for (int j = 0; j < 5; ++j)
+            if (j != k) append_moved(kf.world[j], kf.cloud[j], map);
+        const kissm_points scan = view(kf.cloud[k]), map_points = view(map);
+        kissm_result direct = new_result(), reused = new_result(), serial = new_result(), away = new_result();
+        CHECK(kissm_register(m, &scan, &map_points, &direct) == KISSM_OK);
+        const Errors e = errors(direct, kf.world[k], kf.cloud[k]);
+        std::printf(
+            "scan-to-map among other places kf%d: valid %d, %.3f deg, %.3f m, %llu inliers, %llu map keypoints\n", k,
+            direct.valid, e.rot_deg, e.trans_m, static_cast<unsigned long long>(direct.num_final_inliers),
+            static_cast<unsigned long long>(direct.num_target_keypoints));
+        CHECK_MSG(direct.valid && e.rot_deg < 2.0 && e.trans_m < 0.5, "keyframe %d among other places", k);
+        kissm_features *map_features = nullptr, *scan_features = nullptr;
+        REQUIRE(kissm_features_compute(m, &map_points, &map_features) == KISSM_OK);
+        REQUIRE(kissm_features_compute(one, &scan, &scan_features) == KISSM_OK);
+        CHECK(kissm_register_features(m, scan_features, map_features, &reused) == KISSM_OK);
+        CHECK(kissm_register_features(one, scan_features, map_features, &serial) == KISSM_OK);
+        CHECK_MSG(same_pose(direct, reused) && same_pose(direct, serial), "keyframe %d: reused map differs", k);
+        // The scan's place left out: nothing may be reported valid.
+        CHECK(kissm_register_features(m, scan_features, absent_features, &away) == KISSM_OK);
+        std::printf("  its place left out: valid %d, %llu inliers\n", away.valid,
+                    static_cast<unsigned long long>(away.num_final_inliers));
+        CHECK_MSG(!away.valid, "keyframe %d valid against a map without its place", k);
+        kissm_features_destroy(map_features);
+        kissm_features_destroy(scan_features);
+    }
+    kissm_features_destroy(absent_features);
+    kissm_destroy(m);
+    kissm_destroy(one);
+}
+
 void test_map_to_map(const Keyframes &kf) {
     kissm_matcher *local = make_matcher(KISSM_VIEWPOINT_LOCAL, 2), *fixed = make_matcher(KISSM_VIEWPOINT_FIXED, 2);
     for (std::uint64_t seed = 1; seed <= 2; ++seed) {
@@ -246,6 +314,7 @@ int main() {
     for (const auto &c : kf.cloud) CHECK(!c.empty());
     if (harness_failed) return TEST_SUMMARY(); // a keyframe could not be read
     test_scan_to_map(kf);
+    test_scan_to_map_among_other_places(kf, root);
     test_map_to_map(kf);
     test_moved_frames_and_shift(kf);
     return TEST_SUMMARY();
