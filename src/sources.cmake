@@ -12,6 +12,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/fpfh.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/kdtree.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/descriptor_index.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/keypoint_grid.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/place_gate.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/matching.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/compat_graph.cpp

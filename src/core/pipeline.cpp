@@ -173,6 +173,9 @@ void index_descriptors(const std::vector<CloudFeatures *> &clouds, RunContext &c
         keypoints += static_cast<double>(f->descriptors.keypoint.size());
     }
     std::vector<DescriptorIndex> built = DescriptorIndex::build(descriptors, ctx);
+    ctx.parallel_for(clouds.size(), 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) clouds[c]->keypoint_grid = keypoint_grid_of(*clouds[c]);
+    });
     const double ms = clock.lap();
     for (std::size_t c = 0; c < clouds.size(); ++c) {
         clouds[c]->descriptor_index = std::move(built[c]);
@@ -183,12 +186,16 @@ void index_descriptors(const std::vector<CloudFeatures *> &clouds, RunContext &c
 
 } // namespace
 
+KeypointGrid keypoint_grid_of(const CloudFeatures &f) {
+    return KeypointGrid(f.voxels.points, f.descriptors.keypoint, kKeypointColumnVoxels * f.params.voxel_size);
+}
+
 std::size_t features_bytes(const CloudFeatures &f) {
     return f.voxels.points.capacity() * sizeof(Vec3f) +
            (f.normals.normal.capacity() + f.plane_normals.normal.capacity()) * sizeof(Vec3f) +
            f.normals.valid.capacity() + f.plane_normals.valid.capacity() +
            f.descriptors.keypoint.capacity() * sizeof(std::uint32_t) + f.descriptors.values.capacity() * sizeof(float) +
-           f.descriptor_index.bytes() + f.index.bytes();
+           f.descriptor_index.bytes() + f.keypoint_grid.bytes() + f.index.bytes();
 }
 
 CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
@@ -313,8 +320,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     ctx.checkpoint(Stage::Matching, 0.0);
     MatchParams mp{params.ratio_test, params.max_correspondences};
     const std::vector<Correspondence> matches = match_descriptors(
-        IndexedDescriptors{&source.descriptors, &source.descriptor_index, &source.voxels.points},
-        IndexedDescriptors{&target.descriptors, &target.descriptor_index, &target.voxels.points}, mp, ctx);
+        IndexedDescriptors{&source.descriptors, &source.descriptor_index, &source.voxels.points, &source.keypoint_grid},
+        IndexedDescriptors{&target.descriptors, &target.descriptor_index, &target.voxels.points, &target.keypoint_grid},
+        mp, ctx);
     r.num_initial_correspondences = matches.size();
     r.time_matching_ms = clock.lap();
     if (matches.size() < 3) {

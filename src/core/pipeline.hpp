@@ -11,6 +11,7 @@
 #include "cloud.hpp"
 #include "descriptor_index.hpp"
 #include "detail_namespace.hpp"
+#include "keypoint_grid.hpp"
 #include "params.hpp"
 #include "point_index.hpp"
 #include "refine.hpp"
@@ -31,6 +32,7 @@ struct CloudFeatures {
     Normals plane_normals; // per voxel, within refine_normal_radius: the planes refinement aligns
     Descriptors descriptors;
     DescriptorIndex descriptor_index; // empty when there are no descriptors
+    KeypointGrid keypoint_grid;       // the keypoints by position (columns of kKeypointColumnVoxels voxels)
     PointIndex index;                 // empty unless params.refine_mode != None
     std::uint64_t num_suppressed = 0; // voxels suppression kept from becoming keypoints
     double time_voxelize_ms = 0.0;
@@ -74,6 +76,13 @@ struct Registration {
     double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0,
            time_refine_ms = 0, time_suppression_ms = 0;
 };
+
+// The keypoint grid's column side, in voxels: a KITTI scan's place-gate box (about 300 m at 0.5 m voxels) spans
+// about 20 columns each way, and a column holds a few dozen keypoints.
+constexpr double kKeypointColumnVoxels = 32.0;
+
+// The keypoint grid of `f` (its voxels and keypoints), as describe_cloud and the features loader build it.
+KeypointGrid keypoint_grid_of(const CloudFeatures &f);
 
 // Heap memory held by the features, in bytes (the struct itself not included).
 std::size_t features_bytes(const CloudFeatures &f);

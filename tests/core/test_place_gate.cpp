@@ -52,12 +52,16 @@ std::vector<std::uint32_t> add_copy(Cloud &map, const Cloud &scan, TestRng &rng,
 
 struct Indexed {
     std::vector<DescriptorIndex> index;
-    IndexedDescriptors view(const Cloud &c, bool with_points = true) const {
-        return IndexedDescriptors{&c.d, &index[0], with_points ? &c.points : nullptr};
+    KeypointGrid grid;
+    // The view of `c`, which must be the cloud indexed (or one with the same descriptors, for bad positions).
+    IndexedDescriptors view(const Cloud &c, bool with_points = true, bool with_grid = true) const {
+        return IndexedDescriptors{&c.d, &index[0], with_points ? &c.points : nullptr, with_grid ? &grid : nullptr};
     }
 };
 
-Indexed index_of(const Cloud &c, RunContext &ctx) { return Indexed{DescriptorIndex::build({&c.d}, ctx)}; }
+Indexed index_of(const Cloud &c, RunContext &ctx) {
+    return Indexed{DescriptorIndex::build({&c.d}, ctx), KeypointGrid(c.points, c.d.keypoint, 16.0)};
+}
 
 constexpr std::size_t kScan = 2000;
 
@@ -167,6 +171,7 @@ static void test_no_region_when_the_rules_say_search_it_all() {
         CHECK(!PlaceRegion::find(si.view(scan), mi.view(map), ctx).empty());
         CHECK(PlaceRegion::find(si.view(scan, false), mi.view(map), ctx).empty());
         CHECK(PlaceRegion::find(si.view(scan), mi.view(map, false), ctx).empty());
+        CHECK(PlaceRegion::find(si.view(scan), mi.view(map, true, false), ctx).empty());
         // (every scan keypoint votes here, so every planted keypoint is some voter's nearest)
         Cloud bad = map;
         bad.points[map.d.keypoint[planted[5]]].y() = std::numeric_limits<float>::quiet_NaN();
