@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "radix_sort.hpp"
+#include "uninitialized.hpp"
 
 // SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
@@ -53,6 +54,11 @@ std::size_t append_within(const float *px, const float *py, const float *pz, con
     }
     return count;
 }
+
+// Per thread: the scratch list of the chunk it runs, kept for its next chunk. A list per chunk (grown by
+// doubling) was the largest share of a description's page faults wherever freed memory goes straight back to
+// the system, as in a Dask worker (docs/performance.md, "Buffers kept across chunks and iterations").
+thread_local UninitVector<std::uint32_t> t_chunk_scratch;
 
 } // namespace
 
@@ -133,11 +139,17 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
     constexpr std::size_t kChunk = Neighborhoods::kBlockRows;
     std::vector<std::uint32_t> counts(n, 0);
 
+    // The pool's threads end with the call; the caller's scratch goes when this returns or throws, so that a
+    // library call keeps no memory after it.
+    struct ReleaseScratch {
+        ~ReleaseScratch() { UninitVector<std::uint32_t>().swap(t_chunk_scratch); }
+    } release_scratch;
+
     // One block per chunk, indexed by chunk.
     nb.blocks = ctx.map_chunks(n, kChunk, [&](std::size_t b, std::size_t e) {
         // The chunk's rows go to a scratch list first (its final length is known only at the end), then
         // into the block at its exact size.
-        std::vector<std::uint32_t> idx;
+        UninitVector<std::uint32_t> &idx = t_chunk_scratch;
         std::size_t used = 0;
         for (std::size_t i = b; i < e; ++i) {
             const Vec3f &q = points[i];

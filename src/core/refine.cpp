@@ -100,7 +100,8 @@ public:
     // The nearest target voxel within max_distance of each source voxel in `which` moved by (R, t). Each answer
     // is the next search's hint for that voxel: the pose moves little between iterations, so the previous
     // nearest voxel bounds the search from the start (the answer is the same, found faster).
-    Matches match(const std::vector<std::uint32_t> &which, const Eigen::Matrix3d &R, const Eigen::Vector3d &t) {
+    // The result lives in matches_ until the next call.
+    const Matches &match(const std::vector<std::uint32_t> &which, const Eigen::Matrix3d &R, const Eigen::Vector3d &t) {
         const float max_d2 = static_cast<float>(params_.max_distance * params_.max_distance);
         auto parts = ctx_.map_chunks(which.size(), kChunk, [&](std::size_t begin, std::size_t end) {
             Matches out;
@@ -117,7 +118,9 @@ public:
             }
             return out;
         });
-        Matches all;
+        Matches &all = matches_;
+        all.pairs.clear(); // keeps its capacity: see matches_
+        all.hits = 0;
         std::size_t total = 0;
         for (const auto &p : parts) total += p.pairs.size();
         all.pairs.reserve(total);
@@ -128,10 +131,11 @@ public:
         return all;
     }
 
-    // Terms of the correspondences at (R, t) under the cost of `mode`: weight matrices and Cauchy weights.
-    UninitVector<Term> terms(const std::vector<Pair> &pairs, const Eigen::Matrix3d &R, const Eigen::Vector3d &t,
-                             RefineMode mode) {
-        UninitVector<Term> out;
+    // Terms of the correspondences at (R, t) under the cost of `mode`: weight matrices and Cauchy weights. The
+    // result lives in terms_ until the next call.
+    const UninitVector<Term> &terms(const std::vector<Pair> &pairs, const Eigen::Matrix3d &R, const Eigen::Vector3d &t,
+                                    RefineMode mode) {
+        UninitVector<Term> &out = terms_;
         out.resize(pairs.size()); // every term is written below
         const double k2 = params_.kernel_scale * params_.kernel_scale;
         ctx_.parallel_for(pairs.size(), kChunk, [&](std::size_t begin, std::size_t end) {
@@ -196,9 +200,9 @@ public:
         double damping = kInitialDamping;
         for (int it = 0; it < params_.max_iterations; ++it) {
             ctx_.checkpoint(Stage::Refine, static_cast<double>(it) / static_cast<double>(params_.max_iterations));
-            const std::vector<Pair> pairs = match(candidates_, R, t).pairs;
+            const std::vector<Pair> &pairs = match(candidates_, R, t).pairs;
             if (pairs.size() < 6) break; // fewer than the pose's degrees of freedom
-            const UninitVector<Term> ts = terms(pairs, R, t, params_.mode);
+            const UninitVector<Term> &ts = terms(pairs, R, t, params_.mode);
             const Sums s = sums(ts, R, t, true);
             const Matrix6d H = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(s.H);
             const Vector6d g = Eigen::Map<const Vector6d>(s.g);
@@ -250,7 +254,7 @@ private:
     void finish(RefineOutput &out) {
         const Eigen::Matrix3d &R = out.rotation;
         const Eigen::Vector3d &t = out.translation;
-        const Matches final_matches = match(all_, R, t);
+        const Matches &final_matches = match(all_, R, t);
         const std::vector<Pair> &pairs = final_matches.pairs;
         if (!src_.empty()) out.overlap = static_cast<double>(final_matches.hits) / static_cast<double>(src_.size());
         out.num_correspondences = pairs.size();
@@ -258,7 +262,7 @@ private:
         // The pose's numbers come from the point-to-plane term in both modes: GICP's plane regularisation gives
         // every correspondence 1/eps less weight along its plane, which is a model, not a measurement; counted
         // as information it would make a lone plane look constrained along itself.
-        const UninitVector<Term> ts = terms(pairs, R, t, RefineMode::PointToPlane);
+        const UninitVector<Term> &ts = terms(pairs, R, t, RefineMode::PointToPlane);
         const Sums s = sums(ts, R, t, true);
         out.weight_sum = s.wsum;
         out.rmse = s.wsum > 0.0 ? std::sqrt(s.cost / s.wsum) : 0.0;
@@ -309,6 +313,12 @@ private:
     std::vector<std::uint32_t> all_;        // every source voxel (the overlap counts them all)
     std::vector<std::uint32_t> candidates_; // those with a normal
     std::vector<std::uint32_t> hint_;       // per source voxel: its last nearest target voxel
+    // The correspondences and terms of the current iteration, kept across iterations (only the last one's are
+    // read): a new megabyte-sized array per iteration is fresh pages every time wherever freed memory goes back
+    // to the system at once (a Dask worker's MALLOC_TRIM_THRESHOLD_), and three quarters of a pair's page
+    // faults were these (docs/performance.md, "Buffers kept across chunks and iterations").
+    Matches matches_;
+    UninitVector<Term> terms_;
 };
 
 } // namespace
