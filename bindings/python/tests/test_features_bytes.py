@@ -129,6 +129,27 @@ def test_pickle_round_trip(case: Case, described: Any) -> None:
         assert_same_result(matcher.register_features(*pair), expected)
 
 
+def test_pickle_protocol_5_sends_the_bytes_out_of_band(case: Case, described: Any) -> None:
+    """With a buffer_callback (Dask's and Ray's picklers), the features' bytes leave the pickle as one buffer, and
+    loading reads that buffer in place (a read-only view of it too, as Ray's shared memory gives)."""
+    source, target, expected = described
+    buffers: list[pickle.PickleBuffer] = []
+    stream = pickle.dumps((source, target), protocol=5, buffer_callback=buffers.append)
+    sizes = sorted(len(b.raw()) for b in buffers)
+    assert sizes == sorted([len(source.to_bytes()), len(target.to_bytes())])
+    assert len(stream) < 1024  # the function's name and two buffer references, not the bytes
+    loaded_source, loaded_target = pickle.loads(stream, buffers=buffers)
+    assert loaded_source.to_bytes() == source.to_bytes()
+    read_only = [memoryview(bytes(b.raw())) for b in buffers]
+    again_source, again_target = pickle.loads(stream, buffers=read_only)
+    assert again_target.to_bytes() == target.to_bytes()
+    with kissm.Matcher(case.config) as matcher:
+        assert_same_result(matcher.register_features(loaded_source, loaded_target), expected)
+        assert_same_result(matcher.register_features(again_source, again_target), expected)
+    # Without a callback, protocol 5 keeps the bytes in the pickle, as the older protocols do.
+    assert pickle.loads(pickle.dumps(source, protocol=5)).to_bytes() == source.to_bytes()
+
+
 def test_cloudpickle_round_trip(case: Case, described: Any) -> None:
     """Dask and Ray pickle with cloudpickle, which pickled the bound classmethod Features.from_bytes by value
     (and failed on the library's locks): the features must travel by reference to a module function."""

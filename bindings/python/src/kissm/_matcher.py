@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import pickle
 import threading
 import warnings
 from typing import Any
@@ -98,15 +99,19 @@ class Features:
         voxels, normals, descriptors, counts and the descriptor settings, not the search indexes (rebuilt on
         load): about 170 bytes per voxel when most voxels are keypoints.
         """
+        # The one copy beyond the library's makes the result immutable.
+        return bytes(self._serialized())
+
+    def _serialized(self) -> bytearray:
+        """The bytes of :meth:`to_bytes`, written by the library straight into a new bytearray."""
         size = ffi.new("uint64_t *")
         check(lib.kissm_features_serialize(self._ptr, ffi.NULL, 0, size))
         buffer = bytearray(int(size[0]))
-        # The library writes straight into the bytearray; the one copy left makes the result immutable.
         with ffi.from_buffer("char[]", buffer, require_writable=True) as c:
             check(lib.kissm_features_serialize(self._ptr, c, len(buffer), size))
         if int(size[0]) != len(buffer):
             raise InternalError(f"kissm_features_serialize wrote {int(size[0])} bytes after announcing {len(buffer)}")
-        return bytes(buffer)
+        return buffer
 
     @classmethod
     def from_bytes(cls, data: bytes | bytearray | memoryview) -> Features:
@@ -146,11 +151,16 @@ class Features:
                     check(lib.kissm_features_deserialize(c_bytes, size, out))
         return cls._adopt(out[0])
 
-    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
+    def __reduce_ex__(self, protocol: Any) -> tuple[Any, tuple[Any]]:
+        # Protocol 5 gets the bytes as a buffer, which a pickler with a buffer_callback (Dask's, Ray's) sends out
+        # of band: a keyframe's 2.5 MB are not copied into the pickle, nor out of it on the other side, where
+        # from_bytes reads the received buffer in place (docs/batch.md, "Where Dask's time goes").
+        if isinstance(protocol, int) and protocol >= 5:
+            return (_features_from_bytes, (pickle.PickleBuffer(self._serialized()),))
         return (_features_from_bytes, (self.to_bytes(),))
 
 
-def _features_from_bytes(data: bytes) -> Features:
+def _features_from_bytes(data: Any) -> Features:
     """``Features.from_bytes`` as a module-level function: cloudpickle (Dask's and Ray's) pickles a bound
     classmethod by value, with the module globals it reaches (cffi's library, locks), and fails; a plain
     function it pickles by reference, as pickle does."""
