@@ -62,6 +62,7 @@ step "bench.py --smoke" bench_smoke bench.py bench-smoke
 step "map_bench.py --smoke" bench_smoke map_bench.py map-bench-smoke
 step "ground_bench.py --smoke" bench_smoke ground_bench.py ground-bench-smoke
 step "batch_bench.py --smoke" bench_smoke batch_bench.py batch-bench-smoke
+step "batch_accounting.py --smoke" bench_smoke batch_accounting.py batch-accounting-smoke
 
 echo "== tools/docs.sh =="
 step docs bash "$here/tools/docs.sh"
