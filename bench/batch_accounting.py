@@ -12,7 +12,8 @@ starts every engine afresh per timed run), and per run:
   so every large array of a call is fresh pages);
 * how much of the CPUs the run left unused (CPUs x wall - CPU time).
 
-Dask runs twice: as it comes, and with its nannies' ``MALLOC_TRIM_THRESHOLD_`` unset.
+Dask runs twice: as it comes, and with its nannies' ``MALLOC_TRIM_THRESHOLD_`` unset; then Ray
+(``ray.init(num_cpus=2)``) when installed, with the CPU of all the processes it starts.
 
     python bench/batch_accounting.py [--runs 5] [--pair-repeats 1] [--refine gicp|none] [--data DIR] [--out DIR]
     python bench/batch_accounting.py --smoke      # three keyframes, one run each: keeps the script working
@@ -31,6 +32,7 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -50,17 +52,21 @@ def _cpu_and_faults(pids: list[int]) -> tuple[list[float], int]:
 
     cpu, faults = [], 0
     for pid in pids:
-        p = psutil.Process(pid)
-        t = p.cpu_times()
+        try:
+            t = psutil.Process(pid).cpu_times()
+            with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+                faults += int(f.read().rsplit(")", 1)[1].split()[7])  # field 10, minflt
+        except (psutil.NoSuchProcess, FileNotFoundError):  # a process of the engine that ended: counted as idle
+            cpu.append(0.0)
+            continue
         cpu.append(t.user + t.system)
-        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
-            faults += int(f.read().rsplit(")", 1)[1].split()[7])  # field 10, minflt
     return cpu, faults
 
 
-def account(name: str, executor: Any, workers: list[int], pairs: list[tuple[int, int]], clouds: Any,
+def account(name: str, executor: Any, workers: Callable[[], list[int]], pairs: list[tuple[int, int]], clouds: Any,
             settings: dict[str, Any], runs: int) -> tuple[dict[str, Any], list[Any]]:
-    """``runs`` timed runs after a warm-up; the medians of wall, CPU per process and page faults."""
+    """``runs`` timed runs after a warm-up; the medians of wall, CPU per process and page faults. ``workers``
+    names the engine's processes once the warm-up has started them."""
     import kissm.batch
 
     def run() -> list[Any]:
@@ -68,7 +74,7 @@ def account(name: str, executor: Any, workers: list[int], pairs: list[tuple[int,
         return [None if p.result is None else p.result.transform for p in done]
 
     poses = run()  # warm-up: the workers' imports and first calls
-    pids = [os.getpid(), *workers]
+    pids = [os.getpid(), *workers()]
     walls, cpus, faults = [], [], []
     for _ in range(runs):
         cpu0, faults0 = _cpu_and_faults(pids)
@@ -122,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     settings = {"voxel_size": args.voxel, "refine": args.refine}
     rows = []
     with concurrent.futures.ThreadPoolExecutor(WORKERS) as pool:
-        row, reference = account(f"`ThreadPoolExecutor({WORKERS})`", pool, [], pairs, clouds, settings, runs)
+        row, reference = account(f"`ThreadPoolExecutor({WORKERS})`", pool, list, pairs, clouds, settings, runs)
         rows.append(row)
     same = True
     # Dask as it comes, then with its nannies' MALLOC_TRIM_THRESHOLD_ unset (a cluster's own setting, in its
@@ -139,29 +145,45 @@ def main(argv: list[str] | None = None) -> int:
             ) as cluster,
             Client(cluster) as client,
         ):
-            workers = sorted(_worker_pids(client))
             trims = set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values())
             if trim and trims != {None}:
                 raise SystemExit(f"batch_accounting: the workers still have MALLOC_TRIM_THRESHOLD_={trims}")
             name = f"Dask `LocalCluster({WORKERS} x 1)`{label}"
-            row, poses = account(name, client, workers, pairs, clouds, settings, runs)
+            row, poses = account(name, client, lambda: sorted(_worker_pids(client)), pairs, clouds, settings, runs)
             rows.append(row)
         if inherited is None:
             os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
         else:
             os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
-        same = same and all(
-            (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
-            for a, b in zip(poses, reference, strict=True)
-        )
+        same = same and _same(poses, reference)
+    try:
+        import ray
+    except ImportError:
+        ray = None
+    if ray is not None:
+        # Every process Ray starts (GCS, raylet, workers...) descends from this one.
+        ray.init(num_cpus=WORKERS, include_dashboard=False, log_to_driver=False)
+        try:
+            name = f"Ray (`num_cpus={WORKERS}`), all its processes"
+            row, poses = account(name, "ray", _descendants, pairs, clouds, settings, runs)
+            rows.append(row)
+        finally:
+            ray.shutdown()
+        same = same and _same(poses, reference)
     lines = [
         f"{len(pairs)} pairs of {count} keyframes, refine {args.refine}, {runs} timed run(s) (medians), CPUs pinned:",
         "",
-        "| | wall per run | CPU, calling process | CPU, workers | CPU, total | CPUs unused | page faults |",
+        "| | wall per run | CPU, calling process | CPU, engine's processes | CPU, total | CPUs unused | page faults |",
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
-        workers_cpu = " + ".join(f"{c:.2f}" for c in r["cpu_workers_s"]) + " s" if r["cpu_workers_s"] else "(threads)"
+        w = r["cpu_workers_s"]
+        if not w:
+            workers_cpu = "(threads)"
+        elif len(w) <= WORKERS:
+            workers_cpu = " + ".join(f"{c:.2f}" for c in w) + " s"
+        else:
+            workers_cpu = f"{sum(w):.2f} s in {len(w)}"
         lines.append(
             f"| {r['method']} | {r['wall_s']:.2f} s | {r['cpu_caller_s']:.2f} s | {workers_cpu} | "
             f"{r['cpu_total_s']:.2f} s | {100 * r['unused_cpu_fraction']:.0f}% | {r['page_faults'] / 1000:.1f}K |"
@@ -171,9 +193,22 @@ def main(argv: list[str] | None = None) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "batch-accounting.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     if not same:
-        print("batch_accounting: Dask's poses differ from the thread pool's", file=sys.stderr)
+        print("batch_accounting: an engine's poses differ from the thread pool's", file=sys.stderr)
         return 1
     return 0
+
+
+def _same(poses: list[Any], reference: list[Any]) -> bool:
+    return all(
+        (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
+        for a, b in zip(poses, reference, strict=True)
+    )
+
+
+def _descendants() -> list[int]:
+    import psutil
+
+    return sorted(p.pid for p in psutil.Process().children(recursive=True))
 
 
 def _worker_pids(client: Any) -> set[int]:
