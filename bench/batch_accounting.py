@@ -12,10 +12,14 @@ starts every engine afresh per timed run), and per run:
   so every large array of a call is fresh pages);
 * how much of the CPUs the run left unused (CPUs x wall - CPU time).
 
-Dask runs twice: as it comes, and with its nannies' ``MALLOC_TRIM_THRESHOLD_`` unset; then Ray
-(``ray.init(num_cpus=2)``) when installed, with the CPU of all the processes it starts.
+Dask runs three times: as it comes, with its nannies' ``MALLOC_TRIM_THRESHOLD_`` unset, and with all the settings
+docs/batch.md suggests for kissm clusters (batch_bench.DASK_FOR_KISSM); then Ray (``ray.init(num_cpus=2)``) when
+installed, with the CPU of all the processes it starts. With ``--blocks B`` every method is started afresh B times,
+the methods taking turns, and the medians are over all B x --runs runs (the machine's speed drifts by 10% within
+minutes; blocks spread that over all rows).
 
-    python bench/batch_accounting.py [--runs 5] [--pair-repeats 1] [--refine gicp|none] [--data DIR] [--out DIR]
+    python bench/batch_accounting.py [--runs 5] [--blocks 1] [--pair-repeats 1] [--refine gicp|none] [--data DIR]
+                                     [--out DIR]
     python bench/batch_accounting.py --smoke      # three keyframes, one run each: keeps the script working
 
 Prints a Markdown table (the one in docs/batch.md, "Where Dask's time goes on this machine"). The process is
@@ -27,23 +31,31 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import contextlib
 import os
 import statistics
 import sys
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from collections.abc import Callable
 from typing import Any
-
-import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from batch_bench import DATASET, KEYFRAMES, SMOKE_KEYFRAMES, WORKERS, all_pairs, load_clouds  # noqa: E402
+from batch_bench import (  # noqa: E402
+    DASK_FOR_KISSM,
+    DASK_UNTRIMMED,
+    DATASET,
+    KEYFRAMES,
+    SMOKE_KEYFRAMES,
+    WORKERS,
+    all_pairs,
+    dask_client,
+    load_clouds,
+    same_poses,
+)
+
 from bench import cpus_for  # noqa: E402
-
-
-_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
 
 
 def _cpu_and_faults(pids: list[int]) -> tuple[list[float], int]:
@@ -63,10 +75,16 @@ def _cpu_and_faults(pids: list[int]) -> tuple[list[float], int]:
     return cpu, faults
 
 
-def account(name: str, executor: Any, workers: Callable[[], list[int]], pairs: list[tuple[int, int]], clouds: Any,
-            settings: dict[str, Any], runs: int) -> tuple[dict[str, Any], list[Any]]:
-    """``runs`` timed runs after a warm-up; the medians of wall, CPU per process and page faults. ``workers``
-    names the engine's processes once the warm-up has started them."""
+def account(
+    executor: Any,
+    workers: Callable[[], list[int]],
+    pairs: list[tuple[int, int]],
+    clouds: Any,
+    settings: dict[str, Any],
+    runs: int,
+) -> tuple[list[dict[str, Any]], list[Any]]:
+    """``runs`` timed runs after a warm-up, each its wall time, CPU per process (this one first) and page faults;
+    and the warm-up's poses. ``workers`` names the engine's processes once the warm-up has started them."""
     import kissm.batch
 
     def run() -> list[Any]:
@@ -75,115 +93,129 @@ def account(name: str, executor: Any, workers: Callable[[], list[int]], pairs: l
 
     poses = run()  # warm-up: the workers' imports and first calls
     pids = [os.getpid(), *workers()]
-    walls, cpus, faults = [], [], []
+    samples = []
     for _ in range(runs):
         cpu0, faults0 = _cpu_and_faults(pids)
         t0 = time.perf_counter()
         run()
-        walls.append(time.perf_counter() - t0)
+        wall = time.perf_counter() - t0
         cpu1, faults1 = _cpu_and_faults(pids)
-        cpus.append([b - a for a, b in zip(cpu0, cpu1, strict=True)])
-        faults.append(faults1 - faults0)
-    per_process = [statistics.median(c[i] for c in cpus) for i in range(len(pids))]
-    wall = statistics.median(walls)
-    total = statistics.median(sum(c) for c in cpus)
+        cpu = [b - a for a, b in zip(cpu0, cpu1, strict=True)]
+        samples.append({"wall_s": wall, "cpu_s": cpu, "page_faults": faults1 - faults0})
+    return samples, poses
+
+
+def summary(name: str, samples: list[dict[str, Any]]) -> dict[str, Any]:
+    """The medians over all runs of a method (of every block): wall, CPU of the calling process, of each engine
+    process (when every block had the same number of them) and in all, page faults, CPUs left unused."""
+    wall = statistics.median(s["wall_s"] for s in samples)
+    total = statistics.median(sum(s["cpu_s"]) for s in samples)
+    counts = {len(s["cpu_s"]) for s in samples}
+    per_process = [statistics.median(s["cpu_s"][i] for s in samples) for i in range(1, min(counts))]
     return {
         "method": name,
         "wall_s": wall,
-        "cpu_caller_s": per_process[0],
-        "cpu_workers_s": per_process[1:],
+        "cpu_caller_s": statistics.median(s["cpu_s"][0] for s in samples),
+        "cpu_workers_s": per_process if len(counts) == 1 else [],
+        "cpu_engine_s": statistics.median(sum(s["cpu_s"][1:]) for s in samples),
+        "engine_processes": max(counts) - 1,
         "cpu_total_s": total,
-        "page_faults": statistics.median(faults),
+        "page_faults": statistics.median(s["page_faults"] for s in samples),
         "unused_cpu_fraction": max(0.0, 1.0 - total / (WORKERS * wall)),
-    }, poses
+    }
+
+
+@contextlib.contextmanager
+def started(method: str) -> Iterator[tuple[Any, Callable[[], list[int]]]]:
+    """The executor of ``method`` (a key of METHODS) and what names its processes, for the block's runs."""
+    if method == "threads":
+        with concurrent.futures.ThreadPoolExecutor(WORKERS) as pool:
+            yield pool, list
+    elif method == "ray":
+        import ray
+
+        # Every process Ray starts (GCS, raylet, workers...) descends from this one.
+        ray.init(num_cpus=WORKERS, include_dashboard=False, log_to_driver=False)
+        try:
+            yield "ray", _descendants
+        finally:
+            ray.shutdown()
+    else:
+        with dask_client(METHODS[method][1]) as client:
+            yield client, lambda: sorted(_worker_pids(client))
+
+
+#: The rows: label and, for Dask, the cluster's settings (bench/batch_bench.py; docs/batch.md).
+METHODS: dict[str, tuple[str, dict[str, Any]]] = {
+    "threads": (f"`ThreadPoolExecutor({WORKERS})`", {}),
+    "dask": (f"Dask `LocalCluster({WORKERS} x 1)`", {}),
+    "dask_untrimmed": (f"Dask `LocalCluster({WORKERS} x 1)`, `MALLOC_TRIM_THRESHOLD_` unset", DASK_UNTRIMMED),
+    "dask_kissm": (f"Dask `LocalCluster({WORKERS} x 1)`, settings for kissm", DASK_FOR_KISSM),
+    "ray": (f"Ray (`num_cpus={WORKERS}`), all its processes", {}),
+}
 
 
 def main(argv: list[str] | None = None) -> int:
     default_data = Path(os.environ.get("KISSM_DATA_DIR", HERE.parent.parent / "shared" / "data"))
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
     parser.add_argument("--data", type=Path, default=default_data, help="the shared data folder")
-    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--runs", type=int, default=5, help="timed runs per method and block")
+    parser.add_argument("--blocks", type=int, default=1, help="start every method afresh B times, in turns")
     parser.add_argument("--pair-repeats", type=int, default=1, help="list every pair K times in one batch")
     parser.add_argument("--refine", choices=["gicp", "none"], default="gicp")
     parser.add_argument("--voxel", type=float, default=0.5)
     parser.add_argument("--smoke", action="store_true", help="three keyframes, one run each")
     parser.add_argument("--out", type=Path, default=None, help="also write the table to OUT/batch-accounting.md")
     args = parser.parse_args(argv)
-    if args.runs < 1 or args.pair_repeats < 1:
-        parser.error("--runs and --pair-repeats must be at least 1")
+    if args.runs < 1 or args.blocks < 1 or args.pair_repeats < 1:
+        parser.error("--runs, --blocks and --pair-repeats must be at least 1")
     if not (args.data / DATASET).is_dir():
         print(f"batch_accounting: {args.data / DATASET} is absent: nothing measured", file=sys.stderr)
         return 0
     try:
-        import dask
-        from distributed import Client, LocalCluster
+        import distributed  # noqa: F401
     except ImportError:
         print("batch_accounting: Dask is not installed (pip install 'dask[distributed]'): nothing measured")
         return 0
     os.sched_setaffinity(0, cpus_for(WORKERS))
     count = SMOKE_KEYFRAMES if args.smoke else KEYFRAMES
-    runs = 1 if args.smoke else args.runs
+    runs, blocks = (1, 1) if args.smoke else (args.runs, args.blocks)
     clouds = load_clouds(args.data, count)
     pairs = all_pairs(list(range(count))) * args.pair_repeats
     settings = {"voxel_size": args.voxel, "refine": args.refine}
-    rows = []
-    with concurrent.futures.ThreadPoolExecutor(WORKERS) as pool:
-        row, reference = account(f"`ThreadPoolExecutor({WORKERS})`", pool, list, pairs, clouds, settings, runs)
-        rows.append(row)
-    same = True
-    # Dask as it comes, then with its nannies' MALLOC_TRIM_THRESHOLD_ unset (a cluster's own setting, in its
-    # Dask configuration; docs/batch.md). A nanny also sets the variable in the process that runs it, whose
-    # next workers would inherit it: it goes from there too while the second cluster starts.
-    inherited = os.environ.get("MALLOC_TRIM_THRESHOLD_")
-    for label, trim in (("", {}), (", `MALLOC_TRIM_THRESHOLD_` unset", {_TRIM: None})):
-        if trim:
-            os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-        with (
-            dask.config.set(trim),
-            LocalCluster(
-                n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=40
-            ) as cluster,
-            Client(cluster) as client,
-        ):
-            trims = set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values())
-            if trim and trims != {None}:
-                raise SystemExit(f"batch_accounting: the workers still have MALLOC_TRIM_THRESHOLD_={trims}")
-            name = f"Dask `LocalCluster({WORKERS} x 1)`{label}"
-            row, poses = account(name, client, lambda: sorted(_worker_pids(client)), pairs, clouds, settings, runs)
-            rows.append(row)
-        if inherited is None:
-            os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-        else:
-            os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
-        same = same and _same(poses, reference)
+    methods = list(METHODS)
     try:
-        import ray
+        import ray  # noqa: F401
     except ImportError:
-        ray = None
-    if ray is not None:
-        # Every process Ray starts (GCS, raylet, workers...) descends from this one.
-        ray.init(num_cpus=WORKERS, include_dashboard=False, log_to_driver=False)
-        try:
-            name = f"Ray (`num_cpus={WORKERS}`), all its processes"
-            row, poses = account(name, "ray", _descendants, pairs, clouds, settings, runs)
-            rows.append(row)
-        finally:
-            ray.shutdown()
-        same = same and _same(poses, reference)
+        methods.remove("ray")
+    # Every block starts each method afresh and times it --runs times, kept running; the methods take turns
+    # block by block, so that the machine's own drift touches all of them alike.
+    samples: dict[str, list[dict[str, Any]]] = {m: [] for m in methods}
+    reference: list[Any] | None = None
+    same = True
+    for _ in range(blocks):
+        for method in methods:
+            with started(method) as (executor, workers):
+                runs_of_block, poses = account(executor, workers, pairs, clouds, settings, runs)
+            samples[method] += runs_of_block
+            reference = poses if reference is None else reference
+            same = same and same_poses(poses, reference)
+    rows = [summary(METHODS[m][0], samples[m]) for m in methods]
     lines = [
-        f"{len(pairs)} pairs of {count} keyframes, refine {args.refine}, {runs} timed run(s) (medians), CPUs pinned:",
+        f"{len(pairs)} pairs of {count} keyframes, refine {args.refine}, {blocks} block(s) of {runs} timed run(s) "
+        "per method (medians), CPUs pinned:",
         "",
         "| | wall per run | CPU, calling process | CPU, engine's processes | CPU, total | CPUs unused | page faults |",
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         w = r["cpu_workers_s"]
-        if not w:
+        if r["engine_processes"] == 0:
             workers_cpu = "(threads)"
-        elif len(w) <= WORKERS:
+        elif w and len(w) <= WORKERS:
             workers_cpu = " + ".join(f"{c:.2f}" for c in w) + " s"
         else:
-            workers_cpu = f"{sum(w):.2f} s in {len(w)}"
+            workers_cpu = f"{r['cpu_engine_s']:.2f} s in {r['engine_processes']}"
         lines.append(
             f"| {r['method']} | {r['wall_s']:.2f} s | {r['cpu_caller_s']:.2f} s | {workers_cpu} | "
             f"{r['cpu_total_s']:.2f} s | {100 * r['unused_cpu_fraction']:.0f}% | {r['page_faults'] / 1000:.1f}K |"
@@ -196,13 +228,6 @@ def main(argv: list[str] | None = None) -> int:
         print("batch_accounting: an engine's poses differ from the thread pool's", file=sys.stderr)
         return 1
     return 0
-
-
-def _same(poses: list[Any], reference: list[Any]) -> bool:
-    return all(
-        (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
-        for a, b in zip(poses, reference, strict=True)
-    )
 
 
 def _descendants() -> list[int]:

@@ -7,8 +7,8 @@ keyframe in four pairs), registered
 * ``kissm.batch.register_many`` on the calling thread (each cloud described once);
 * the same with a ``concurrent.futures.ThreadPoolExecutor(2)``;
 * the same on a Dask ``LocalCluster`` of 2 worker processes of 1 thread;
-* the same on such a cluster whose nannies leave ``MALLOC_TRIM_THRESHOLD_`` unset (Dask's configuration
-  ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_: null``, docs/batch.md);
+* the same on such a cluster started with the Dask settings docs/batch.md suggests for kissm clusters
+  (``DASK_FOR_KISSM`` below: ``MALLOC_TRIM_THRESHOLD_`` unset, the workers' profiler off, slower monitors);
 * the same on Ray, ``ray.init(num_cpus=2)``.
 
 Writes bench/results/batch_latest.json and docs/batch-throughput.md (with --refine none:
@@ -19,7 +19,7 @@ bench/results/batch_coarse_latest.json and docs/batch-throughput-coarse.md).
     python bench/batch_bench.py --report-from bench/results/batch_latest.json   # rewrite the page
 
 Every method gets one warm-up run (it starts Dask's and Ray's workers and loads the library in them), then
-the methods' timed runs alternate (method 1, 2, ..., 5, then again) so that a change of load on the machine
+the methods' timed runs alternate (method 1, 2, ..., then again) so that a change of load on the machine
 touches all of them alike; the median of --repeats is reported. Dask's and Ray's clusters run one at a time:
 each is started, warmed up, timed once and stopped for each repeat (idle, a Dask cluster keeps a tenth of a
 CPU busy). Settings as in examples/python/pose_graph.py:
@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import contextlib
 import datetime as _dt
 import itertools
 import json
@@ -44,7 +45,7 @@ import statistics
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -59,8 +60,19 @@ DATASET = "kitti07_keyframes_gtsam_points"
 KEYFRAMES = 5
 SMOKE_KEYFRAMES = 3
 WORKERS = 2
-#: The Dask setting of the second Dask row (None: the nannies leave the variable unset).
-DASK_TRIM = "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_"
+#: Dask settings of the configured Dask rows (docs/batch.md, "Dask settings for kissm clusters"). Untrimmed: the
+#: nannies leave MALLOC_TRIM_THRESHOLD_ unset (Dask's 65536 makes every large array of a call fresh pages).
+DASK_UNTRIMMED: dict[str, Any] = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+#: For kissm: untrimmed, and the periodic work that wakes every Dask process many times a second done less often
+#: (the workers' statistical profiler, every 10 ms; the event loops' health ticks, 20 ms; the memory and system
+#: monitors, 100 and 500 ms). Idle, such a cluster takes 0.014 CPU-s per second instead of 0.12.
+DASK_FOR_KISSM: dict[str, Any] = {
+    **DASK_UNTRIMMED,
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+}
 #: Targets of issue 17: Dask and Ray within 15% of the thread pool; clouds described once >= 1.8x the loop.
 ENGINE_TOLERANCE = 0.15
 BATCH_SPEEDUP = 1.8
@@ -69,7 +81,7 @@ LABEL = {
     "batch_serial": "`register_many`, calling thread",
     "batch_threads": f"`register_many`, `ThreadPoolExecutor({WORKERS})`",
     "batch_dask": f"`register_many`, Dask `LocalCluster` ({WORKERS} workers x 1 thread)",
-    "batch_dask_untrimmed": f"`register_many`, Dask `LocalCluster` ({WORKERS} x 1), `MALLOC_TRIM_THRESHOLD_` unset",
+    "batch_dask_kissm": f"`register_many`, Dask `LocalCluster` ({WORKERS} x 1), settings for kissm (docs/batch.md)",
     "batch_ray": f"`register_many`, Ray (`num_cpus={WORKERS}`)",
 }
 
@@ -86,6 +98,48 @@ def load_clouds(data: Path, count: int) -> Clouds:
 
 def all_pairs(keys: list[int]) -> Pairs:
     return [(b, a) for a, b in itertools.combinations(keys, 2)]
+
+
+def same_poses(poses: list[np.ndarray | None], reference: list[np.ndarray | None]) -> bool:
+    """Whether two runs' poses are bitwise equal, pair by pair (None: the pair failed in both)."""
+    return all(
+        (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
+        for a, b in zip(poses, reference, strict=True)
+    )
+
+
+@contextlib.contextmanager
+def dask_client(settings: dict[str, Any]) -> Iterator[Any]:
+    """A client of a Dask ``LocalCluster`` of WORKERS processes of one thread, started under the Dask settings
+    ``settings`` (DASK_UNTRIMMED, DASK_FOR_KISSM or none); the cluster stops when the block ends."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    # A nanny also sets MALLOC_TRIM_THRESHOLD_ in the process that runs it, whence a later cluster's workers would
+    # inherit it whatever their settings: it goes from there while an untrimmed cluster starts, and the caller's
+    # value comes back afterwards.
+    inherited = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    untrimmed = all(k in settings for k in DASK_UNTRIMMED)
+    try:
+        if untrimmed:
+            os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+        with (
+            dask.config.set(settings),
+            LocalCluster(
+                n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=40
+            ) as cluster,
+            Client(cluster) as client,
+        ):
+            if untrimmed:
+                trims = set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values())
+                if trims != {None}:
+                    raise RuntimeError(f"the untrimmed cluster's workers have MALLOC_TRIM_THRESHOLD_={trims}")
+            yield client
+    finally:
+        if inherited is None:
+            os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+        else:
+            os.environ["MALLOC_TRIM_THRESHOLD_"] = inherited
 
 
 # ------------------------------------------------------------------------------------------------- methods
@@ -105,30 +159,14 @@ class Method:
         if self.name == "batch_threads":
             pool = concurrent.futures.ThreadPoolExecutor(WORKERS)
             self.executor, self._close = pool, pool.shutdown
-        elif self.name in ("batch_dask", "batch_dask_untrimmed"):
+        elif self.name.startswith("batch_dask"):
             try:
-                import dask
-                from distributed import Client, LocalCluster
+                import distributed  # noqa: F401
             except ImportError:
                 return "Dask is not installed (pip install 'dask[distributed]')"
-            # Dask's nannies start their workers with MALLOC_TRIM_THRESHOLD_=65536 (and set it in the process that
-            # runs them, whence later workers would inherit it); the second Dask row is a cluster configured
-            # without it, as docs/batch.md suggests for kissm batches.
-            untrimmed = self.name == "batch_dask_untrimmed"
-            if untrimmed:
-                os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-            with dask.config.set({DASK_TRIM: None} if untrimmed else {}):
-                cluster = LocalCluster(
-                    n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=40
-                )
-            client = Client(cluster)
-            self.executor = client
-
-            def close() -> None:
-                client.close()
-                cluster.close()
-
-            self._close = close
+            dask_settings = DASK_FOR_KISSM if self.name == "batch_dask_kissm" else {}
+            stack = contextlib.ExitStack()
+            self.executor, self._close = stack.enter_context(dask_client(dask_settings)), stack.close
         elif self.name == "batch_ray":
             try:
                 import ray
@@ -225,7 +263,7 @@ def measure(args: argparse.Namespace, results: dict[str, Any]) -> None:
     results["cpu_split"] = cpu_split(pairs, clouds, settings)
     names = ["per_pair", "batch_serial", "batch_threads"]
     if not args.smoke:
-        names += ["batch_dask", "batch_dask_untrimmed", "batch_ray"]
+        names += ["batch_dask", "batch_dask_kissm", "batch_ray"]
     methods = [Method(n, settings) for n in names]
     running = []
     for m in methods:
@@ -263,10 +301,7 @@ def measure(args: argparse.Namespace, results: dict[str, Any]) -> None:
         poses = entry.pop("poses", None)
         if poses is None:
             continue
-        entry["same_as_serial_batch"] = all(
-            (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
-            for a, b in zip(poses, reference, strict=True)
-        )
+        entry["same_as_serial_batch"] = same_poses(poses, reference)
         entry["median_s"] = statistics.median(entry["seconds"])
         entry["pairs_per_s"] = len(pairs) / entry["median_s"]
         entry["best_pairs_per_s"] = len(pairs) / min(entry["seconds"])
@@ -295,7 +330,7 @@ def verdicts(results: dict[str, Any], key: str = "pairs_per_s") -> list[tuple[st
     )
     for engine, name in (
         ("batch_dask", "Dask"),
-        ("batch_dask_untrimmed", "Dask (`MALLOC_TRIM_THRESHOLD_` unset)"),
+        ("batch_dask_kissm", "Dask (settings for kissm)"),
         ("batch_ray", "Ray"),
     ):
         r = ratio(results, engine, "batch_threads", key)

@@ -1,14 +1,20 @@
 # SPDX-License-Identifier: MIT
 """kissm.batch on a real Dask cluster (a LocalCluster of two single-threaded worker processes, shared by the
 module): results bitwise those of the serial loop, one describe task per cloud in the scheduler's task stream,
-failures as values, and a worker killed mid-run changing no bit of the results."""
+failures as values, and a worker killed mid-run changing no bit of the results; and the Dask settings docs/batch.md
+suggests for kissm clusters: real Dask settings, which the workers of a cluster started under them have, and
+under which the results are the same bits."""
 
 from __future__ import annotations
 
+import ast
 import collections
+import importlib.util
 import logging
 import os
+import re
 import signal
+import sys
 from collections.abc import Iterator
 from typing import Any
 
@@ -19,6 +25,7 @@ import kissm.batch
 
 import batchcases
 from batchcases import Batch, Events
+from conftest import REPO_ROOT
 
 distributed: Any = pytest.importorskip(
     "distributed", reason="Dask (pip install 'kissm[dask]') is not installed: the Dask engine is not tested here"
@@ -155,3 +162,69 @@ def test_every_worker_killed_after_the_first_description(client, synthetic, synt
     # Keys are <batch>-describe-<cloud>-<attempt>: the first cloud's features were lost, so it ran again.
     runs = collections.Counter(str(t["key"]).rsplit("-", 2)[1] for t in stream.data if "-describe-" in str(t["key"]))
     assert runs[str(events.seen[0].index)] >= 2, runs
+
+
+def documented_settings() -> dict[str, Any]:
+    """The ``dask.config.set({...})`` of docs/batch.md ("Dask settings for kissm clusters"), as written there."""
+    doc = REPO_ROOT / "docs" / "batch.md"
+    if not doc.is_file():
+        pytest.skip("docs/batch.md is absent (the tests run outside the repository)")
+    blocks = re.findall(r"^```python\n(.*?)^```", doc.read_text(), flags=re.S | re.M)
+    found = [m.group(1) for b in blocks if (m := re.search(r"^dask\.config\.set\((\{.*\})\)$", b, flags=re.S | re.M))]
+    assert len(found) == 1, "docs/batch.md should show the settings in one dask.config.set({...}) block"
+    settings = ast.literal_eval(found[0])
+    assert isinstance(settings, dict)
+    return settings
+
+
+def test_documented_settings_are_dask_settings() -> None:
+    """A misspelt key would be set without a word and change nothing: every one must be a key Dask has (with its
+    default, which the setting changes), durations must parse, and the benchmark must measure these settings."""
+    import dask
+    from dask.utils import parse_timedelta
+
+    settings = documented_settings()
+    assert len(settings) == 5, settings
+    for key, value in settings.items():
+        default = dask.config.get(key, default=KeyError)
+        assert default is not KeyError, f"{key} is not a Dask setting"
+        assert default != value, f"{key}: {value!r} is Dask's default already"
+        if isinstance(value, str):
+            assert parse_timedelta(value) >= parse_timedelta(default), key  # less often, never more
+    assert dask.config.get("distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_") == 65536
+    bench = REPO_ROOT / "bench" / "batch_bench.py"
+    spec = importlib.util.spec_from_file_location("kissm_batch_bench", bench)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    path = list(sys.path)
+    try:
+        spec.loader.exec_module(module)  # it puts bench/ on sys.path, for its own imports
+    finally:
+        sys.path[:] = path
+    assert module.DASK_FOR_KISSM == settings
+
+
+def test_synthetic_on_a_cluster_with_the_documented_settings(
+    synthetic, synthetic_serial, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A LocalCluster started under docs/batch.md's settings: its workers have them (no MALLOC_TRIM_THRESHOLD_,
+    no profiler), and the batch gives the serial loop's bits."""
+    import dask
+
+    settings = documented_settings()
+    # The module's cluster's nannies set MALLOC_TRIM_THRESHOLD_ in this process too; new workers would inherit it.
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    with (
+        dask.config.set(settings),
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        assert set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values()) == {None}
+        profilers = client.run(lambda dask_worker: [k for k in dask_worker.periodic_callbacks if "profile" in k])
+        assert list(profilers.values()) == [[], []], profilers
+        got, events, describes = run_recorded(client, synthetic)
+    batchcases.assert_same_as_serial(got, synthetic, synthetic_serial)
+    batchcases.assert_each_once(events, synthetic)
+    assert_each_described_once(describes, synthetic)
