@@ -10,7 +10,9 @@ starts every engine afresh per timed run), and per run:
   Dask it also holds the client, the scheduler and the nannies) and each worker process;
 * the page faults of all of them (``minflt``: Dask's nannies start workers with ``MALLOC_TRIM_THRESHOLD_=65536``,
   so every large array of a call is fresh pages);
-* how much of the CPUs the run left unused (CPUs x wall - CPU time).
+* how much of the CPUs the run left unused (CPUs x wall - CPU time);
+
+and, after the runs, the CPU time all those processes take per second while nothing runs (``--idle`` seconds).
 
 Dask runs three times: as it comes, with its nannies' ``MALLOC_TRIM_THRESHOLD_`` unset, and with all the settings
 docs/batch.md suggests for kissm clusters (batch_bench.DASK_FOR_KISSM); then Ray (``ray.init(num_cpus=2)``) when
@@ -18,8 +20,8 @@ installed, with the CPU of all the processes it starts. With ``--blocks B`` ever
 the methods taking turns, and the medians are over all B x --runs runs (the machine's speed drifts by 10% within
 minutes; blocks spread that over all rows).
 
-    python bench/batch_accounting.py [--runs 5] [--blocks 1] [--pair-repeats 1] [--refine gicp|none] [--data DIR]
-                                     [--out DIR]
+    python bench/batch_accounting.py [--runs 5] [--blocks 1] [--idle 3] [--pair-repeats 1] [--refine gicp|none]
+                                     [--data DIR] [--out DIR]
     python bench/batch_accounting.py --smoke      # three keyframes, one run each: keeps the script working
 
 Prints a Markdown table (the one in docs/batch.md, "Where Dask's time goes on this machine"). The process is
@@ -82,9 +84,11 @@ def account(
     clouds: Any,
     settings: dict[str, Any],
     runs: int,
-) -> tuple[list[dict[str, Any]], list[Any]]:
+    idle_s: float,
+) -> tuple[list[dict[str, Any]], list[Any], float]:
     """``runs`` timed runs after a warm-up, each its wall time, CPU per process (this one first) and page faults;
-    and the warm-up's poses. ``workers`` names the engine's processes once the warm-up has started them."""
+    the warm-up's poses; and the CPU seconds per second all the processes took while nothing ran, over ``idle_s``
+    seconds after the runs. ``workers`` names the engine's processes once the warm-up has started them."""
     import kissm.batch
 
     def run() -> list[Any]:
@@ -102,10 +106,16 @@ def account(
         cpu1, faults1 = _cpu_and_faults(pids)
         cpu = [b - a for a, b in zip(cpu0, cpu1, strict=True)]
         samples.append({"wall_s": wall, "cpu_s": cpu, "page_faults": faults1 - faults0})
-    return samples, poses
+    time.sleep(min(1.0, idle_s))  # the last run's messages settle
+    cpu0, _ = _cpu_and_faults(pids)
+    t0 = time.perf_counter()
+    time.sleep(idle_s)
+    cpu1, _ = _cpu_and_faults(pids)
+    idle = (sum(cpu1) - sum(cpu0)) / (time.perf_counter() - t0)
+    return samples, poses, idle
 
 
-def summary(name: str, samples: list[dict[str, Any]]) -> dict[str, Any]:
+def summary(name: str, samples: list[dict[str, Any]], idle: list[float]) -> dict[str, Any]:
     """The medians over all runs of a method (of every block): wall, CPU of the calling process, of each engine
     process (when every block had the same number of them) and in all, page faults, CPUs left unused."""
     wall = statistics.median(s["wall_s"] for s in samples)
@@ -122,6 +132,7 @@ def summary(name: str, samples: list[dict[str, Any]]) -> dict[str, Any]:
         "cpu_total_s": total,
         "page_faults": statistics.median(s["page_faults"] for s in samples),
         "unused_cpu_fraction": max(0.0, 1.0 - total / (WORKERS * wall)),
+        "idle_cpu_per_s": statistics.median(idle),
     }
 
 
@@ -161,6 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--data", type=Path, default=default_data, help="the shared data folder")
     parser.add_argument("--runs", type=int, default=5, help="timed runs per method and block")
     parser.add_argument("--blocks", type=int, default=1, help="start every method afresh B times, in turns")
+    parser.add_argument("--idle", type=float, default=3.0, help="seconds of idle CPU measured after the runs")
     parser.add_argument("--pair-repeats", type=int, default=1, help="list every pair K times in one batch")
     parser.add_argument("--refine", choices=["gicp", "none"], default="gicp")
     parser.add_argument("--voxel", type=float, default=0.5)
@@ -169,6 +181,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.runs < 1 or args.blocks < 1 or args.pair_repeats < 1:
         parser.error("--runs, --blocks and --pair-repeats must be at least 1")
+    if not args.idle > 0:
+        parser.error("--idle must be positive")
     if not (args.data / DATASET).is_dir():
         print(f"batch_accounting: {args.data / DATASET} is absent: nothing measured", file=sys.stderr)
         return 0
@@ -179,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     os.sched_setaffinity(0, cpus_for(WORKERS))
     count = SMOKE_KEYFRAMES if args.smoke else KEYFRAMES
-    runs, blocks = (1, 1) if args.smoke else (args.runs, args.blocks)
+    runs, blocks, idle_s = (1, 1, 0.5) if args.smoke else (args.runs, args.blocks, args.idle)
     clouds = load_clouds(args.data, count)
     pairs = all_pairs(list(range(count))) * args.pair_repeats
     settings = {"voxel_size": args.voxel, "refine": args.refine}
@@ -191,22 +205,25 @@ def main(argv: list[str] | None = None) -> int:
     # Every block starts each method afresh and times it --runs times, kept running; the methods take turns
     # block by block, so that the machine's own drift touches all of them alike.
     samples: dict[str, list[dict[str, Any]]] = {m: [] for m in methods}
+    idle: dict[str, list[float]] = {m: [] for m in methods}
     reference: list[Any] | None = None
     same = True
     for _ in range(blocks):
         for method in methods:
             with started(method) as (executor, workers):
-                runs_of_block, poses = account(executor, workers, pairs, clouds, settings, runs)
+                runs_of_block, poses, idle_rate = account(executor, workers, pairs, clouds, settings, runs, idle_s)
             samples[method] += runs_of_block
+            idle[method].append(idle_rate)
             reference = poses if reference is None else reference
             same = same and same_poses(poses, reference)
-    rows = [summary(METHODS[m][0], samples[m]) for m in methods]
+    rows = [summary(METHODS[m][0], samples[m], idle[m]) for m in methods]
     lines = [
         f"{len(pairs)} pairs of {count} keyframes, refine {args.refine}, {blocks} block(s) of {runs} timed run(s) "
         "per method (medians), CPUs pinned:",
         "",
-        "| | wall per run | CPU, calling process | CPU, engine's processes | CPU, total | CPUs unused | page faults |",
-        "|---|---:|---:|---:|---:|---:|---:|",
+        "| | wall per run | CPU, calling process | CPU, engine's processes | CPU, total | CPUs unused | page faults "
+        "| idle, CPU-s per s |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         w = r["cpu_workers_s"]
@@ -218,7 +235,8 @@ def main(argv: list[str] | None = None) -> int:
             workers_cpu = f"{r['cpu_engine_s']:.2f} s in {r['engine_processes']}"
         lines.append(
             f"| {r['method']} | {r['wall_s']:.2f} s | {r['cpu_caller_s']:.2f} s | {workers_cpu} | "
-            f"{r['cpu_total_s']:.2f} s | {100 * r['unused_cpu_fraction']:.0f}% | {r['page_faults'] / 1000:.1f}K |"
+            f"{r['cpu_total_s']:.2f} s | {100 * r['unused_cpu_fraction']:.0f}% | {r['page_faults'] / 1000:.1f}K | "
+            f"{r['idle_cpu_per_s']:.3f} |"
         )
     print("\n".join(lines))
     if args.out is not None:
