@@ -65,7 +65,7 @@ WORKERS = 2
 DASK_UNTRIMMED: dict[str, Any] = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 #: For kissm: untrimmed, and the periodic work that wakes every Dask process many times a second done less often
 #: (the workers' statistical profiler, every 10 ms; the event loops' health ticks, 20 ms; the memory and system
-#: monitors, 100 and 500 ms). Idle, such a cluster takes 0.014 CPU-s per second instead of 0.12.
+#: monitors, 100 and 500 ms). Idle, such a cluster takes 0.014-0.017 CPU-s per second, not 0.12-0.15.
 DASK_FOR_KISSM: dict[str, Any] = {
     **DASK_UNTRIMMED,
     "distributed.worker.profile.enabled": False,
