@@ -1,9 +1,10 @@
 # SPDX-License-Identifier: MIT
-"""Comparisons used by several test modules."""
+"""Comparisons and readers used by several test modules."""
 
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 
@@ -36,3 +37,8 @@ def assert_same_result(a: kissm.Result, b: kissm.Result, ignore: set[str] = TIME
             continue
         va, vb = getattr(a, field.name), getattr(b, field.name)
         assert bits(va) == bits(vb), f"{field.name}: {va!r} != {vb!r}"
+
+
+def python_blocks(text: str) -> list[str]:
+    """The bodies of the ```python blocks of a Markdown text, in order."""
+    return re.findall(r"^```python\n(.*?)^```", text, flags=re.S | re.M)

@@ -26,6 +26,7 @@ import kissm.batch
 import batchcases
 from batchcases import Batch, Events
 from conftest import REPO_ROOT
+from helpers import python_blocks
 
 distributed: Any = pytest.importorskip(
     "distributed", reason="Dask (pip install 'kissm[dask]') is not installed: the Dask engine is not tested here"
@@ -34,11 +35,15 @@ distributed: Any = pytest.importorskip(
 
 @pytest.fixture(scope="module")
 def client() -> Iterator[Any]:
-    cluster = distributed.LocalCluster(
+    with local_cluster() as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+def local_cluster() -> Any:
+    """The cluster of these tests: two single-threaded worker processes."""
+    return distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
     )
-    with cluster, distributed.Client(cluster) as client:
-        yield client
 
 
 def run_recorded(client: Any, batch: Batch) -> tuple[list[kissm.batch.PairResult], Events, collections.Counter[str]]:
@@ -169,7 +174,7 @@ def documented_settings() -> dict[str, Any]:
     doc = REPO_ROOT / "docs" / "batch.md"
     if not doc.is_file():
         pytest.skip("docs/batch.md is absent (the tests run outside the repository)")
-    blocks = re.findall(r"^```python\n(.*?)^```", doc.read_text(), flags=re.S | re.M)
+    blocks = python_blocks(doc.read_text(encoding="utf-8"))
     found = [m.group(1) for b in blocks if (m := re.search(r"^dask\.config\.set\((\{.*\})\)$", b, flags=re.S | re.M))]
     assert len(found) == 1, "docs/batch.md should show the settings in one dask.config.set({...}) block"
     settings = ast.literal_eval(found[0])
@@ -216,9 +221,7 @@ def test_synthetic_on_a_cluster_with_the_documented_settings(
     monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
     with (
         dask.config.set(settings),
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
-        ) as cluster,
+        local_cluster() as cluster,
         distributed.Client(cluster) as client,
     ):
         assert set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values()) == {None}

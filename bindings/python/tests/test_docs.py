@@ -18,6 +18,7 @@ import kissm
 
 import testdata
 from conftest import PACKAGE_ROOT, REPO_ROOT
+from helpers import python_blocks
 from testdata import rotation_error_deg
 
 #: The READMEs with Python examples. Outside the repository (tests run from an installed wheel or sdist)
@@ -39,10 +40,6 @@ def missing_optional_modules(block: str) -> list[str]:
         for name in OPTIONAL_MODULES
         if re.search(rf"^\s*(import|from) {name}\b", block, flags=re.M) and importlib.util.find_spec(name) is None
     ]
-
-
-def python_blocks(text: str) -> list[str]:
-    return re.findall(r"^```python\n(.*?)^```", text, flags=re.S | re.M)
 
 
 def test_python_blocks_are_found() -> None:
