@@ -14,14 +14,8 @@ shift || true
 targets=("$@")
 [[ ${#targets[@]} -gt 0 ]] || targets=(ply pcd npy xyz kitti_bin bin_xyz register stateful features)
 
-if ! command -v clang++ >/dev/null; then
-  if [[ $(id -u) == 0 ]] && command -v apt-get >/dev/null; then
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -q clang >/dev/null
-  else
-    echo "fuzz.sh: clang is needed (apt-get install clang)" >&2
-    exit 2
-  fi
-fi
+# clang and libFuzzer: tools/setup.sh's on-demand group "fuzz" (installed as root, else named).
+bash "$here/tools/setup.sh" --group fuzz || exit 2
 cd "$here"
 # KISSM_FUZZ_NO_BUILD=1: use the binaries as built (several fuzz.sh running side by side must not
 # reconfigure one build tree at the same time: build once, then start them with this set).

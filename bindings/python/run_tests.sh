@@ -18,26 +18,16 @@ venv=${KISSM_PYTHON_VENV:-$build/venv-python}
 python=${PYTHON:-python3}
 mkdir -p "$build"
 
-# ---- a venv (Debian's python3 needs python3-venv for it) ---------------------------------------------
-make_venv() { "$python" -m venv "$venv" >/dev/null 2>&1; }
+# ---- a venv (Debian's python3 needs python3-venv for it: tools/setup.sh installs it) -------------------
 if ! "$python" -c 'import sys; assert sys.version_info >= (3, 10)' >/dev/null 2>&1; then
   echo "python: '$python' is not a working Python >= 3.10 (set PYTHON=/path/to/python3)" >&2
   exit 1
 fi
 if ! "$venv/bin/python" -c 'import sys' >/dev/null 2>&1; then
   rm -rf "$venv"
-  if ! make_venv; then
-    if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
-      echo "python: installing python3-venv"
-      export DEBIAN_FRONTEND=noninteractive
-      apt-get update -qq
-      apt-get install -y -qq --no-install-recommends python3-venv python3-pip >/dev/null
-      rm -rf "$venv"
-      make_venv
-    else
-      echo "python: '$python -m venv' failed; install python3-venv (sudo apt-get install python3-venv)" >&2
-      exit 1
-    fi
+  if ! "$python" -m venv "$venv" >/dev/null 2>&1; then
+    echo "python: '$python -m venv' failed: $(bash "$here/tools/setup.sh" --probe python3-venv || true)" >&2
+    exit 1
   fi
 fi
 py="$venv/bin/python"
@@ -64,18 +54,10 @@ echo "python: pip install ./bindings/python[test,dask,ray] took $(($(date +%s) -
 # venv, not in package_test.sh's fresh ones. pip returns at once when the pinned version is there.
 # (open3d brings dash, whose pytest plugin is kept out with -p no:dash.)
 "$py" -m pip install --quiet --disable-pip-version-check open3d-cpu==0.20.0
-# Its wheel links libusb-1.0, which Debian does not install by default.
-if ! "$py" -c 'import open3d' >/dev/null 2>&1; then
-  if [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
-    echo "python: installing libusb-1.0-0 (needed by open3d)"
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get install -y -qq --no-install-recommends libusb-1.0-0 >/dev/null 2>&1 ||
-      { apt-get update -qq && apt-get install -y -qq --no-install-recommends libusb-1.0-0 >/dev/null; }
-  fi
-  if ! "$py" -c 'import open3d' >/dev/null; then
-    echo "python: open3d does not import (on Debian/Ubuntu: apt-get install libusb-1.0-0)" >&2
-    exit 1
-  fi
+# Its wheel links libusb-1.0, which Debian does not install by default (tools/setup.sh does).
+if ! "$py" -c 'import open3d' >/dev/null; then
+  echo "python: open3d does not import: $(bash "$here/tools/setup.sh" --probe libusb-1.0-0 || true)" >&2
+  exit 1
 fi
 
 # ---- the tests: against the installed package and its own library -----------------------------------
