@@ -7,7 +7,7 @@
 #   tests/abi/layout_table.h                  include/kissm.h + compiler    tools/gen_layout_table.py
 #   tests/abi/layout.json                     the built library's layout    BUILD/tests/abi/abi_layout --json
 #   tests/abi/kissm.symbols                   libkissm.so's exports         tests/abi/check_exports.cmake
-#   tests/abi/kissm.abi                       libkissm.so (libabigail)      abidw (skipped without abigail-tools)
+#   tests/abi/kissm.abi                       libkissm.so (libabigail)      abidw (abigail-tools, tools/setup.sh)
 #   tests/data/golden.json                    the round-trip registration   BUILD/tests/roundtrip/roundtrip_golden
 #   bindings/rust/kissm-sys/src/bindings.rs   include/kissm.h (bindgen)     bindings/rust/kissm-sys/regen-bindings.sh
 #
@@ -21,6 +21,8 @@
 # CTest test `generated_files_current` runs --check.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
+# shellcheck source=skips.sh
+source "$here/tools/skips.sh"
 check=0
 if [[ ${1:-} == --check ]]; then
   check=1
@@ -70,13 +72,13 @@ cmake -DNM="$(command -v nm)" -DLIBRARY="$build/libkissm.so" -DSYMBOLS="$work/ki
   -DHEADER="$here/include/kissm.h" -DUPDATE=1 -P "$here/tests/abi/check_exports.cmake" >/dev/null
 "$build/tests/roundtrip/roundtrip_golden" "$here/tests/data" --write >"$work/golden.json"
 have_abidw=0
-if command -v abidw >/dev/null && [[ -e $build/tests/abi/probe/libkissm.so ]]; then
+if [[ ! -e $build/tests/abi/probe/libkissm.so ]]; then
+  skip "tests/abi/kissm.abi" "$build has no ABI probe library (tests/abi/probe/libkissm.so: a Linux GCC/Clang build)"
+elif needs abigail-tools "tests/abi/kissm.abi"; then
   have_abidw=1
   abidw --headers-dir "$here/include" --drop-private-types --exported-interfaces-only --no-corpus-path \
     --no-comp-dir-path --no-elf-needed --no-show-locs --short-locs --type-id-style hash \
     --out-file "$work/kissm.abi" "$build/tests/abi/probe/libkissm.so"
-else
-  echo "regen: SKIP tests/abi/kissm.abi: abidw (abigail-tools) or the probe library is missing"
 fi
 for f in tests/abi/layout.json tests/abi/kissm.symbols tests/data/golden.json tests/abi/kissm.abi; do
   fresh=$work/$(basename "$f")

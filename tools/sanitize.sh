@@ -14,7 +14,7 @@ if [[ $which == all || $which == asan ]]; then
   echo "== C/C++ tests under ASan + UBSan =="
   cmake --preset asan-ubsan -DKISSM_DATA_DIR="$data_dir" >/dev/null
   cmake --build --preset asan-ubsan
-  ctest --preset asan-ubsan --parallel 2 --timeout 900
+  ctest --preset asan-ubsan --parallel 2 --timeout 900 --output-junit "$here/build-asan/ctest-junit.xml"
 fi
 
 if [[ $which == all || $which == tsan ]]; then
@@ -23,5 +23,5 @@ if [[ $which == all || $which == tsan ]]; then
   # Only what the preset runs: the tests labelled "concurrency".
   mapfile -t targets < <(ctest --test-dir build-tsan -N -L concurrency | sed -n 's/^ *Test *#[0-9]*: //p')
   cmake --build --preset tsan --target "${targets[@]}"
-  ctest --preset tsan --parallel 2 --timeout 900
+  ctest --preset tsan --parallel 2 --timeout 900 --output-junit "$here/build-tsan/ctest-junit.xml"
 fi

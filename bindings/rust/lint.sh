@@ -4,14 +4,18 @@
 #   1. cargo fmt --check (rustfmt.toml of this workspace);
 #   2. cargo clippy --workspace --all-targets -- -D warnings (library, tests, examples, build script);
 #   3. the same clippy run of kissm-sys with the bindgen feature (the code generator in build.rs and the
-#      drift test), when libclang is installed (otherwise a SKIP line for this step only);
-#   4. shellcheck of this folder's scripts, when shellcheck is installed (otherwise a SKIP line).
+#      drift test), which needs libclang-dev;
+#   4. shellcheck of this folder's scripts.
+# Steps 3 and 4 need what tools/setup.sh installs (libclang-dev, shellcheck), probed first: under CI=true a
+# probe that fails fails the script; elsewhere the step is skipped with a recorded SKIP line (tools/skips.sh).
 #
 # Environment: KISSM_BUILD_DIR (a CMake build holding libkissm.a: linked instead of building the C++ core
 # again; default build/), CARGO_TARGET_DIR (default $KISSM_BUILD_DIR/cargo-target).
 set -euo pipefail
 # shellcheck source=common.sh
 source "$(dirname "$0")/common.sh"
+# shellcheck source=../../tools/skips.sh
+source "$repo/tools/skips.sh"
 # Clippy only type-checks, so the already built static library saves building the C++ core here.
 link_cmake_build
 cd "$here"
@@ -23,23 +27,14 @@ echo "== rust lint: cargo clippy --workspace --all-targets -- -D warnings =="
 cargo clippy --locked --workspace --all-targets -- -D warnings
 
 echo "== rust lint: cargo clippy -p kissm-sys --features bindgen =="
-libclang=""
-for dir in ${LIBCLANG_PATH:-} /usr/lib/llvm-*/lib /usr/lib/x86_64-linux-gnu /usr/lib/aarch64-linux-gnu /usr/lib64 /usr/lib; do
-  if compgen -G "$dir/libclang*.so*" >/dev/null; then
-    libclang=$dir
-    break
-  fi
-done
-if [[ -n $libclang ]]; then
+# The probe parses a header including <stddef.h> with the libclang bindgen would load: a libclang file
+# without clang's builtin headers (Debian's libclang1-14, which doxygen brings) fails it, as bindgen would.
+if needs libclang-dev "clippy with the bindgen feature"; then
   cargo clippy --locked -p kissm-sys --features bindgen --all-targets -- -D warnings
-else
-  echo "SKIP clippy with the bindgen feature: libclang not found (apt-get install libclang-dev)"
 fi
 
 echo "== rust lint: shellcheck =="
-if command -v shellcheck >/dev/null 2>&1; then
+if needs shellcheck "shellcheck of bindings/rust"; then
   shellcheck -x ./*.sh kissm-sys/*.sh
-else
-  echo "SKIP shellcheck: not installed (apt-get install shellcheck)"
 fi
 echo "rust lint: all passed"

@@ -24,6 +24,8 @@
 set -euo pipefail
 # shellcheck source=common.sh
 source "$(dirname "$0")/common.sh"
+# shellcheck source=../../tools/skips.sh
+source "$repo/tools/skips.sh"
 export KISSM_DATA_DIR=${KISSM_DATA_DIR:-$repo/../shared/data}
 t0=$SECONDS
 if ! command -v cargo >/dev/null 2>&1; then
@@ -150,4 +152,5 @@ if ! grep -Eq "^test $safe_name/src/lib.rs - \(line [0-9]+\) \.\.\. ok$|^test sr
 fi
 echo "rust package: skipped in the archive run:"
 grep '^SKIP' "$errlog" | sed 's/^/  /' || echo "  (nothing)"
+record_skips "$errlog"
 echo "rust package: both crates build and pass from their archives in $((SECONDS - t0)) s"

@@ -10,8 +10,8 @@
 #      an initial transform) on the demo clouds, the test scene and a KITTI pair when the data is there:
 #      the same exit status and the same --json output byte for byte, times and thread count aside;
 #   3. the bindgen drift check: regenerates the bindings from include/kissm.h and fails if they differ
-#      from the committed kissm-sys/src/bindings.rs. Needs libclang: installed with apt-get when run as
-#      root, otherwise (or when that fails) this step alone is skipped with a SKIP line.
+#      from the committed kissm-sys/src/bindings.rs. Needs libclang-dev (tools/setup.sh), probed first:
+#      under CI=true a failing probe fails the run, elsewhere this step alone is skipped (a recorded SKIP).
 #
 # Environment: KISSM_BUILD_DIR (the CMake build with the kissm tool and libkissm.a; default build/),
 # KISSM_DATA_DIR (default ../shared/data), CARGO_TARGET_DIR (default $KISSM_BUILD_DIR/cargo-target).
@@ -24,6 +24,8 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$build/cargo-target}
 export CARGO_TERM_COLOR=never
 # tests/data is part of the checkout: the tests that read it must not skip here.
 export KISSM_REQUIRE_TEST_DATA=1
+# shellcheck source=../../tools/skips.sh
+source "$repo/tools/skips.sh"
 
 # ---------------------------------------------------------------------------------------------------
 # Toolchain
@@ -34,7 +36,7 @@ fi
 if ! command -v cargo >/dev/null 2>&1; then
   echo "rust: no Rust toolchain (cargo) found; install it with rustup (https://rustup.rs) to run these tests"
   if [[ ${CI:-} == true ]]; then exit 1; fi
-  echo "SKIP: Rust binding tests (not under CI, so this is not a failure)"
+  skip "Rust binding tests" "no cargo (not under CI, so this is not a failure)"
   exit 0
 fi
 echo "rust: $(cargo --version), $(rustc --version)"
@@ -54,7 +56,11 @@ t0=$SECONDS
 # 1. cargo test
 # ---------------------------------------------------------------------------------------------------
 echo "== rust: cargo test --release (the C++ core is built once by kissm-sys's build.rs) =="
-cargo test --release --locked --workspace
+# The tests' SKIP lines (stderr) are recorded for tools/test.sh's list of skips.
+errlog=$(mktemp)
+{ cargo test --release --locked --workspace 2>&1 1>&3 | tee "$errlog" >&2; } 3>&1
+record_skips "$errlog"
+rm -f "$errlog"
 echo "rust: cargo test took $((SECONDS - t0)) s"
 
 # ---------------------------------------------------------------------------------------------------
@@ -116,43 +122,24 @@ if [[ -n ${KISSM_CLI:-} ]]; then
     compare_with_tool "KITTI 07 keyframes 000001 -> 000000, voxel 0.5, GICP" register "${kitti_args[@]}" \
       --refine gicp
   else
-    echo "SKIP rust example on real data: $kitti is absent"
+    skip "rust example on real data" "$kitti is absent"
   fi
 else
-  echo "SKIP rust example comparison: no kissm tool"
+  skip "rust example comparison" "no kissm tool at $cli (bash tools/build.sh makes it)"
 fi
 
 # ---------------------------------------------------------------------------------------------------
 # 3. bindgen drift check
 # ---------------------------------------------------------------------------------------------------
-have_libclang() {
-  local dir
-  if [[ -n ${LIBCLANG_PATH:-} ]] && compgen -G "$LIBCLANG_PATH/libclang*.so*" >/dev/null; then return 0; fi
-  for dir in /usr/lib/llvm-*/lib /usr/lib/x86_64-linux-gnu /usr/lib/aarch64-linux-gnu /usr/lib64 /usr/lib \
-             /usr/local/lib; do
-    if compgen -G "$dir/libclang.so" >/dev/null || compgen -G "$dir/libclang-*.so" >/dev/null; then
-      return 0
-    fi
-  done
-  return 1
-}
-
 echo "== rust: bindgen drift check (kissm-sys/src/bindings.rs vs include/kissm.h) =="
-if ! have_libclang && [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null 2>&1; then
-  echo "rust: installing libclang-dev for the drift check"
-  if ! { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libclang-dev >/dev/null; }; then
-    echo "rust: could not install libclang-dev"
-  fi
-fi
-if have_libclang; then
+# The probe parses a header including <stddef.h> as bindgen would (tools/probe_libclang.py).
+if needs libclang-dev "bindgen drift check"; then
   # Link the C build's static library instead of building the core a second time for this feature set.
   if [[ -f $build/libkissm.a ]]; then
     export KISSM_LIB_DIR=$build KISSM_STATIC=1
   fi
   cargo test --release --locked -p kissm-sys --features bindgen --test bindings_drift
   unset KISSM_LIB_DIR KISSM_STATIC
-else
-  echo "SKIP bindgen drift check: libclang not found and not installable here (apt-get install libclang-dev)"
 fi
 
 echo "rust: all Rust steps passed in $((SECONDS - t0)) s"
