@@ -11,9 +11,9 @@
 
 #include <kissm.h>
 
-#include "batch_pairs.hpp"
-#include "batch_progress.hpp"
-#include "batch_run.hpp"
+#include "batch/batch_pairs.hpp"
+#include "batch/batch_progress.hpp"
+#include "batch/batch_run.hpp"
 #include "cli_args.hpp"
 #include "commands.hpp"
 #include "pair_command.hpp"
@@ -37,7 +37,7 @@ bool parse_batch_options(const std::vector<std::string> &args, BatchOptions *out
         const std::string name = cur.current();
         if (!cur.is_option()) {
             opt.pair.files.push_back(name);
-        } else if (name == "-h" || name == "--help") {
+        } else if (cur.is_help()) {
             print_batch_help(stdout);
             return false;
         } else if (name == "--out") {

@@ -29,6 +29,8 @@ public:
     // Advances to the next argument; false at the end.
     bool next();
     bool is_option() const { return is_option_; }
+    // -h or --help: every command prints its help and stops there.
+    bool is_help() const { return is_option_ && (name_ == "-h" || name_ == "--help"); }
     // The option's name ("--voxel", without any "=value") or the positional argument.
     const std::string &current() const { return name_; }
     // The current option's value: its "=value" part or the next argument.

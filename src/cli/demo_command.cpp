@@ -14,18 +14,19 @@
 
 #include <kissm.h>
 
-#include "alignment_figure.hpp"
 #include "cli_args.hpp"
 #include "commands.hpp"
 #include "demo_scene.hpp"
 #include "json_writer.hpp"
+#include "picture/alignment_figure.hpp"
+#include "picture/png_writer.hpp"
+#include "picture/top_view.hpp"
 #include "ply_writer.hpp"
-#include "png_writer.hpp"
 #include "pose_math.hpp"
 #include "report.hpp"
-#include "top_view.hpp"
 
 namespace kissm_cli {
+using namespace kissm_pose; // src/common/pose_math.hpp
 namespace {
 
 constexpr double kMaxRotationErrorDeg = 5.0;
@@ -112,7 +113,7 @@ int run_demo(const std::vector<std::string> &args) {
         if (!cur.is_option()) {
             throw UsageError("demo takes no positional arguments, got '" + one_line(name) +
                              "' (see 'kissm demo --help')");
-        } else if (name == "-h" || name == "--help") {
+        } else if (cur.is_help()) {
             print_demo_help(stdout);
             return kExitOk;
         } else if (name == "--out") {
@@ -131,10 +132,10 @@ int run_demo(const std::vector<std::string> &args) {
     }
 
     // 1. The scans.
-    DemoOptions scene_options;
+    kissm_sim::DemoOptions scene_options;
     scene_options.seed = opt.seed;
     const auto generate_start = std::chrono::steady_clock::now();
-    const DemoData demo = generate_demo(scene_options);
+    const kissm_sim::DemoData demo = kissm_sim::generate_demo(scene_options);
     const double generate_ms = elapsed_ms(generate_start);
     const double *gt = demo.gt_target_from_source;
 
@@ -269,7 +270,7 @@ int run_demo(const std::vector<std::string> &args) {
         json.end_object();
         std::fputs(json.str().c_str(), stdout);
     } else {
-        const DemoSceneStats &s = demo.stats;
+        const kissm_sim::DemoSceneStats &s = demo.stats;
         double yaw = 0, pitch = 0, roll = 0;
         yaw_pitch_roll_deg(gt, &yaw, &pitch, &roll);
         std::printf("kissm %s demo: synthetic street scene, seed %llu\n", kissm_version_string(),

@@ -45,7 +45,7 @@ bool parse_ground_options(const std::vector<std::string> &args, GroundOptions *o
         const std::string name = cur.current();
         if (!cur.is_option()) {
             if (positional++ == 0) opt.input = name;
-        } else if (name == "-h" || name == "--help") {
+        } else if (cur.is_help()) {
             print_ground_help(stdout);
             return false;
         } else if (name == "--voxel") {

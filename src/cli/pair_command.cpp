@@ -8,18 +8,19 @@
 #include <string>
 #include <vector>
 
-#include "alignment_figure.hpp"
 #include "cli_args.hpp"
 #include "commands.hpp"
 #include "json_writer.hpp"
+#include "picture/alignment_figure.hpp"
+#include "picture/png_writer.hpp"
+#include "picture/top_view.hpp"
 #include "ply_writer.hpp"
-#include "png_writer.hpp"
 #include "pose_math.hpp"
 #include "report.hpp"
-#include "top_view.hpp"
 #include "transform_file.hpp"
 
 namespace kissm_cli {
+using namespace kissm_pose; // src/common/pose_math.hpp
 namespace {
 
 const char *command_name(PairCommand command) { return command == PairCommand::Register ? "register" : "refine"; }
@@ -329,7 +330,7 @@ bool parse_pair_options(PairCommand command, const std::vector<std::string> &arg
         const std::string name = cur.current();
         if (!cur.is_option()) {
             opt.files.push_back(name);
-        } else if (name == "-h" || name == "--help") {
+        } else if (cur.is_help()) {
             if (is_register) {
                 print_register_help(stdout);
             } else {
@@ -442,6 +443,8 @@ int run_pair(PairCommand command, const PairOptions &given) {
     return result.valid ? kExitOk : kExitInvalid;
 }
 
+namespace {
+
 void print_pair_input_help(std::FILE *out) {
     std::fprintf(out,
                  "Input files (the format is picked by extension, then by content):\n"
@@ -509,6 +512,19 @@ void print_pair_output_help(std::FILE *out) {
                  "  -v, --verbose           print the library's log messages on stderr\n"
                  "  -h, --help              this text\n"
                  "\n");
+}
+
+} // namespace
+
+void print_pair_help(std::FILE *out, PairCommand command, const char *intro,
+                     void (*settings)(std::FILE *out, const kissm_config &defaults), const char *exit_status) {
+    const kissm_config defaults = config_defaults();
+    std::fputs(intro, out);
+    print_pair_input_help(out);
+    settings(out, defaults);
+    print_refinement_help(out, command, defaults);
+    print_pair_output_help(out);
+    std::fputs(exit_status, out);
 }
 
 } // namespace kissm_cli

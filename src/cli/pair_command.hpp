@@ -115,9 +115,10 @@ kissm_points points_of(const kissm_cloud *cloud, const char *role);
 // Both: parse_pair_options, then run_pair (or 0 after the help).
 int run_pair_command(PairCommand command, const std::vector<std::string> &args);
 
-// The help's blocks shared by both commands: input files, settings, refinement and output options.
-void print_pair_input_help(std::FILE *out);
-void print_refinement_help(std::FILE *out, PairCommand command, const kissm_config &defaults);
-void print_pair_output_help(std::FILE *out);
+// Both commands' help, in one shape: `intro` (usage and what the command does), the input files, the
+// command's own settings (printed by `settings` with kissm_config_init's defaults), refinement, outputs, then
+// `exit_status`.
+void print_pair_help(std::FILE *out, PairCommand command, const char *intro,
+                     void (*settings)(std::FILE *out, const kissm_config &defaults), const char *exit_status);
 
 } // namespace kissm_cli

@@ -12,15 +12,9 @@
 
 namespace kissm_cli {
 
-void print_refine_help(std::FILE *out) {
-    const kissm_config defaults = config_defaults();
-    std::fprintf(out, "usage: kissm refine SOURCE TARGET --initial T.txt --voxel V [options]\n"
-                      "\n"
-                      "Refines a known pose (tracking, re-localisation, or `kissm register --out-transform`'s\n"
-                      "result) by fine registration of the voxelised clouds, without the global search, and\n"
-                      "prints the refined transform that maps SOURCE points into TARGET's frame.\n"
-                      "\n");
-    print_pair_input_help(out);
+namespace {
+
+void print_refine_settings(std::FILE *out, const kissm_config &) {
     std::fprintf(out, "Registration:\n"
                       "  --initial FILE          the starting transform (required): 4 lines of 4 numbers, a 4x4\n"
                       "                          row-major rigid transform mapping SOURCE into TARGET (lines\n"
@@ -31,12 +25,23 @@ void print_refine_help(std::FILE *out) {
                       "  --viewpoint MODE        fixed (default), center, sign-free or local, as for 'kissm register'\n"
                       "  --viewpoint-center      the same as --viewpoint center\n"
                       "\n");
-    print_refinement_help(out, PairCommand::Refine, defaults);
-    print_pair_output_help(out);
-    std::fprintf(out, "Exit status: 0 valid refined pose, 1 refinement ran but the pose is not valid (see the\n"
-                      "reason: too little overlap, a direction the clouds leave free, or a refinement still moving\n"
-                      "at its iteration cap), 2 usage or input error, including a malformed, non-finite or\n"
-                      "non-rigid --initial file (one \"kissm: ...\" line on stderr).\n");
+}
+
+} // namespace
+
+void print_refine_help(std::FILE *out) {
+    print_pair_help(out, PairCommand::Refine,
+                    "usage: kissm refine SOURCE TARGET --initial T.txt --voxel V [options]\n"
+                    "\n"
+                    "Refines a known pose (tracking, re-localisation, or `kissm register --out-transform`'s\n"
+                    "result) by fine registration of the voxelised clouds, without the global search, and\n"
+                    "prints the refined transform that maps SOURCE points into TARGET's frame.\n"
+                    "\n",
+                    print_refine_settings,
+                    "Exit status: 0 valid refined pose, 1 refinement ran but the pose is not valid (see the\n"
+                    "reason: too little overlap, a direction the clouds leave free, or a refinement still moving\n"
+                    "at its iteration cap), 2 usage or input error, including a malformed, non-finite or\n"
+                    "non-rigid --initial file (one \"kissm: ...\" line on stderr).\n");
 }
 
 int run_refine(const std::vector<std::string> &args) { return run_pair_command(PairCommand::Refine, args); }

@@ -12,6 +12,7 @@
 #include "pose_math.hpp"
 
 namespace kissm_cli {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 void log_to_stderr(void *, int32_t level, const char *message) {
     const char *name = level == KISSM_LOG_ERROR  ? "error"
@@ -21,15 +22,9 @@ void log_to_stderr(void *, int32_t level, const char *message) {
     std::fprintf(stderr, "kissm: [%s] %s\n", name, message ? message : "");
 }
 
-void print_register_help(std::FILE *out) {
-    const kissm_config defaults = config_defaults();
-    std::fprintf(out, "usage: kissm register SOURCE TARGET --voxel V [options]\n"
-                      "       kissm register SOURCE TARGET --preset NAME [options]\n"
-                      "\n"
-                      "Globally registers SOURCE against TARGET (no initial guess needed) and prints the rigid\n"
-                      "transform that maps SOURCE points into TARGET's frame: p_target = R p_source + t.\n"
-                      "\n");
-    print_pair_input_help(out);
+namespace {
+
+void print_register_settings(std::FILE *out, const kissm_config &d) {
     std::fprintf(out,
                  "Registration:\n"
                  "  --preset NAME           the settings of a common kind of data, applied first: every option\n"
@@ -64,14 +59,24 @@ void print_register_help(std::FILE *out) {
                  "  --sensor-height H       the sensor's height above the ground along up (default %g), in\n"
                  "                          [0, 1000]; 0 = estimate it from the cloud\n"
                  "\n",
-                 defaults.min_inliers, defaults.max_correspondences, defaults.max_rotation_uncertainty,
-                 rad_to_deg(defaults.max_rotation_uncertainty),
-                 defaults.suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none", defaults.rotation_dof,
-                 defaults.up[0], defaults.up[1], defaults.up[2], defaults.sensor_height);
-    print_refinement_help(out, PairCommand::Register, defaults);
-    print_pair_output_help(out);
-    std::fprintf(out, "Exit status: 0 valid pose, 1 registration ran but the pose is not valid (see the reason),\n"
-                      "2 usage or input error (one \"kissm: ...\" line on stderr).\n");
+                 d.min_inliers, d.max_correspondences, d.max_rotation_uncertainty,
+                 rad_to_deg(d.max_rotation_uncertainty), d.suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none",
+                 d.rotation_dof, d.up[0], d.up[1], d.up[2], d.sensor_height);
+}
+
+} // namespace
+
+void print_register_help(std::FILE *out) {
+    print_pair_help(out, PairCommand::Register,
+                    "usage: kissm register SOURCE TARGET --voxel V [options]\n"
+                    "       kissm register SOURCE TARGET --preset NAME [options]\n"
+                    "\n"
+                    "Globally registers SOURCE against TARGET (no initial guess needed) and prints the rigid\n"
+                    "transform that maps SOURCE points into TARGET's frame: p_target = R p_source + t.\n"
+                    "\n",
+                    print_register_settings,
+                    "Exit status: 0 valid pose, 1 registration ran but the pose is not valid (see the reason),\n"
+                    "2 usage or input error (one \"kissm: ...\" line on stderr).\n");
 }
 
 int run_register(const std::vector<std::string> &args) { return run_pair_command(PairCommand::Register, args); }

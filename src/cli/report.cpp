@@ -12,6 +12,7 @@
 #include "pose_math.hpp"
 
 namespace kissm_cli {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 void print_matrix(std::FILE *out, const double T[16], const char *indent) {
     for (int r = 0; r < 4; ++r) {

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* splitmix64 (Steele, Lea and Flood, "Fast splittable pseudorandom number generators", 2014) and the
  * derived functions that its users share: the one definition behind the demo scene of the CLI
- * (src/cli/rng.hpp seeds xoshiro256** with it), the C API test scenes (tests/capi/scenes.c), the stage
+ * (src/sim/rng.hpp seeds xoshiro256** with it), the C API test scenes (tests/capi/scenes.c), the stage
  * tests (tests/core/test_rng.hpp) and the real-data test. tools/make_roundtrip_data.py is a Python copy of
  * this file; the test splitmix64_python checks that both give the same numbers.
  *

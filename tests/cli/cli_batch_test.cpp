@@ -168,6 +168,7 @@ bool make_scene(Scene *s) {
     const double *xyz = kissm_cloud_data(cloud);
     const size_t n = static_cast<size_t>(kissm_cloud_count(cloud));
     using namespace kissm_cli;
+    using namespace kissm_pose;
     pose_to_matrix(pose_from_ypr(deg_to_rad(70.0), deg_to_rad(5.0), deg_to_rad(-3.0), 4.0, -2.0, 0.5), s->T2);
     pose_to_matrix(pose_from_ypr(deg_to_rad(-120.0), 0.0, deg_to_rad(8.0), -3.0, 6.0, 1.0), s->T3);
     CHECK(write_ply_xyz(work("c2.ply"), xyz, n, s->T2, {"cli_batch_test"}, &error));
@@ -331,8 +332,8 @@ void test_batch_run() {
         std::string gt_error;
         REQUIRE(kissm_cli::read_transform_file(work(e.gt), gt, &gt_error));
         REQUIRE(T.size() == 16);
-        CHECK_NEAR(deg, kissm_cli::rotation_error_deg(T.data(), gt), 1e-9);
-        CHECK_NEAR(m, kissm_cli::translation_error(T.data(), gt), 1e-12);
+        CHECK_NEAR(deg, kissm_pose::rotation_error_deg(T.data(), gt), 1e-9);
+        CHECK_NEAR(m, kissm_pose::translation_error(T.data(), gt), 1e-12);
     }
     for (size_t k = 1; k <= rows.size(); ++k) CHECK_MSG(seen[k] == 1, "pair %zu has %d lines", k, seen[k]);
 

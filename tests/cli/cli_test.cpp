@@ -182,7 +182,7 @@ struct PoseError {
 
 PoseError error_of(const std::vector<double> &T, const double truth[16]) {
     if (T.size() != 16) return {std::nan(""), std::nan("")};
-    return {kissm_cli::rotation_error_deg(T.data(), truth), kissm_cli::translation_error(T.data(), truth)};
+    return {kissm_pose::rotation_error_deg(T.data(), truth), kissm_pose::translation_error(T.data(), truth)};
 }
 
 // A run's stdout as JSON, checked against the contract.
@@ -257,7 +257,7 @@ void test_usage() {
     // The validity rules' options, register only, with the library's defaults.
     char validity[3][64];
     std::snprintf(validity[0], sizeof validity[0], "(default %g, i.e. %.3g deg)", defaults.max_rotation_uncertainty,
-                  kissm_cli::rad_to_deg(defaults.max_rotation_uncertainty));
+                  kissm_pose::rad_to_deg(defaults.max_rotation_uncertainty));
     std::snprintf(validity[1], sizeof validity[1], "(default %d)", defaults.refine_min_inliers);
     std::snprintf(validity[2], sizeof validity[2], "(default %g)", defaults.min_inlier_coverage);
     const char *validity_options[3] = {"--max-rotation-uncertainty", "--refine-min-inliers", "--min-inlier-coverage"};
@@ -882,7 +882,7 @@ void test_validity_options() {
     const size_t at = human.out.find("\nrotation uncertainty: ");
     REQUIRE(at != std::string::npos);
     const double deg = std::atof(human.out.c_str() + at + 23);
-    CHECK_MSG(std::fabs(deg - kissm_cli::rad_to_deg(u)) <= 5e-4 * kissm_cli::rad_to_deg(u),
+    CHECK_MSG(std::fabs(deg - kissm_pose::rad_to_deg(u)) <= 5e-4 * kissm_pose::rad_to_deg(u),
               "summary says %g deg, the JSON %.17g rad", deg, u);
 
     // With refinement: at least refine_min_inliers final inliers, covering at least min_inlier_coverage.
@@ -905,7 +905,7 @@ void test_validity_options() {
 // The ground truth moved by 2 degrees about a skew axis and by (0.15, -0.1, 0.08) m: exactly rigid.
 void perturbed(const double truth[16], double out[16]) {
     const double axis[3] = {1.0 / std::sqrt(14.0), 2.0 / std::sqrt(14.0), 3.0 / std::sqrt(14.0)};
-    const double a = kissm_cli::deg_to_rad(2.0), c = std::cos(a), s = std::sin(a);
+    const double a = kissm_pose::deg_to_rad(2.0), c = std::cos(a), s = std::sin(a);
     double D[9];
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) D[3 * i + j] = (i == j ? c : 0.0) + (1.0 - c) * axis[i] * axis[j];
@@ -1081,11 +1081,11 @@ void test_refine_roundtrip() {
     const Json a = contract_json(again, true, "refine again");
     const std::vector<double> first = f.at("transform").flat(), second = a.at("transform").flat();
     REQUIRE(first.size() == 16 && second.size() == 16);
-    CHECK_MSG(kissm_cli::rotation_error_deg(first.data(), second.data()) < 0.01 &&
-                  kissm_cli::translation_error(first.data(), second.data()) < 1e-3,
+    CHECK_MSG(kissm_pose::rotation_error_deg(first.data(), second.data()) < 0.01 &&
+                  kissm_pose::translation_error(first.data(), second.data()) < 1e-3,
               "refining the refined pose moved it by %g deg, %g m",
-              kissm_cli::rotation_error_deg(first.data(), second.data()),
-              kissm_cli::translation_error(first.data(), second.data()));
+              kissm_pose::rotation_error_deg(first.data(), second.data()),
+              kissm_pose::translation_error(first.data(), second.data()));
 }
 
 // --min-refine-condition and --refine-normal-radius, which kissm_refine reads too: the tool's and the library's

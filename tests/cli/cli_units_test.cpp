@@ -15,26 +15,28 @@
 
 #include <kissm.h>
 
-#include "alignment_figure.hpp"
-#include "batch_pairs.hpp"
-#include "batch_progress.hpp"
-#include "batch_run.hpp"
+#include "batch/batch_pairs.hpp"
+#include "batch/batch_progress.hpp"
+#include "batch/batch_run.hpp"
 #include "cli_args.hpp"
 #include "cli_result_check.hpp"
 #include "cli_test_util.hpp"
 #include "demo_scene.hpp"
 #include "harness.h"
 #include "json_writer.hpp"
+#include "picture/alignment_figure.hpp"
+#include "picture/png_writer.hpp"
+#include "picture/raster.hpp"
+#include "picture/top_view.hpp"
 #include "ply_writer.hpp"
-#include "png_writer.hpp"
 #include "pose_math.hpp"
-#include "raster.hpp"
 #include "report.hpp"
 #include "rng.hpp"
-#include "top_view.hpp"
 #include "transform_file.hpp"
 
 using namespace kissm_cli;
+using namespace kissm_pose;
+using namespace kissm_sim;
 
 namespace {
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace kissm_cli {
+namespace kissm_sim {
 namespace {
 
 // Each returns the distance along the ray to the first hit in front of the origin, or +inf.
@@ -132,4 +132,4 @@ double hit_prim(const Scene &s, const PrimRef &p, const Ray &r, Rng &rng) {
     return kInf;
 }
 
-} // namespace kissm_cli
+} // namespace kissm_sim

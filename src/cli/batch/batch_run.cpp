@@ -24,6 +24,7 @@
 #include "transform_file.hpp"
 
 namespace kissm_cli {
+using namespace kissm_pose; // src/common/pose_math.hpp
 namespace {
 
 // The features of every distinct cloud (path and format) the pending pairs name: computed once, on first use,

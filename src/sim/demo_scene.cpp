@@ -10,7 +10,8 @@
 #include "rng.hpp"
 #include "street_layout.hpp"
 
-namespace kissm_cli {
+namespace kissm_sim {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 DemoData generate_demo(const DemoOptions &options) {
     DemoData out{};
@@ -34,4 +35,4 @@ DemoData generate_demo(const DemoOptions &options) {
     return out;
 }
 
-} // namespace kissm_cli
+} // namespace kissm_sim

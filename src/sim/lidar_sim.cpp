@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace kissm_cli {
+namespace kissm_sim {
 
 SensorPoses draw_sensor_poses(Rng &rng, const Ground &ground, double lane_lo, double lane_hi,
                               const DemoOptions &options) {
@@ -109,4 +109,4 @@ DemoScan cast_scan(const Scene &scene, const Pose &sensor, const DemoOptions &op
     return scan;
 }
 
-} // namespace kissm_cli
+} // namespace kissm_sim

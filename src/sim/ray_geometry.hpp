@@ -13,7 +13,8 @@
 #include "pose_math.hpp"
 #include "rng.hpp"
 
-namespace kissm_cli {
+namespace kissm_sim {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -120,4 +121,4 @@ double hit_prim(const Scene &s, const PrimRef &p, const Ray &r, Rng &rng);
 // The same for the ground, up to max_t.
 double hit_ground(const Ground &g, const Ray &r, double max_t);
 
-} // namespace kissm_cli
+} // namespace kissm_sim

@@ -10,7 +10,8 @@
 #include "ray_geometry.hpp"
 #include "rng.hpp"
 
-namespace kissm_cli {
+namespace kissm_sim {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 struct SensorPoses {
     Pose source;
@@ -27,4 +28,4 @@ SensorPoses draw_sensor_poses(Rng &rng, const Ground &ground, double lane_lo, do
 // the points are in the sensor frame.
 DemoScan cast_scan(const Scene &scene, const Pose &sensor, const DemoOptions &opt, Rng &rng);
 
-} // namespace kissm_cli
+} // namespace kissm_sim

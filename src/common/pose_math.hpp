@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Small rigid-transform helpers for the command-line tool (header-only, no dependency).
+// Small rigid-transform helpers shared by the command-line tool and the simulator (header-only, no dependency).
 // Conventions match kissm.h: 4x4 transforms are row-major doubles and map source points into the target
 // frame, p_target = R p_source + t.
 #pragma once
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstddef>
 
-namespace kissm_cli {
+namespace kissm_pose {
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -123,4 +123,4 @@ inline void yaw_pitch_roll_deg(const double T[16], double *yaw, double *pitch, d
     *roll = rad_to_deg(std::atan2(T[9], T[10]));
 }
 
-} // namespace kissm_cli
+} // namespace kissm_pose

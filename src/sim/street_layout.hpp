@@ -19,7 +19,8 @@
 #include "ray_geometry.hpp"
 #include "rng.hpp"
 
-namespace kissm_cli {
+namespace kissm_sim {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 // One side of the main street. Real streets are not symmetric, and neither is this one: each side has its
 // own sidewalk width, kerb position and furniture, so that a scan turned by 180 degrees does not fit itself.
@@ -56,4 +57,4 @@ void add_stopped_vehicles(Scene &s, Rng &rng, const Layout &lay, const Pose &a, 
 // Vehicles and pedestrians seen in one scan only (they moved between the two scans).
 void add_movers(Scene &s, Rng &rng, const Layout &lay, const Pose &a, const Pose &b, DemoSceneStats &stats);
 
-} // namespace kissm_cli
+} // namespace kissm_sim

@@ -11,7 +11,8 @@
 
 #include "pose_math.hpp"
 
-namespace kissm_cli {
+namespace kissm_sim {
+using namespace kissm_pose; // src/common/pose_math.hpp
 
 struct DemoOptions {
     uint64_t seed = 1;
@@ -62,4 +63,4 @@ struct DemoData {
 
 DemoData generate_demo(const DemoOptions &options);
 
-} // namespace kissm_cli
+} // namespace kissm_sim

@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <vector>
 
-namespace kissm_cli {
+namespace kissm_sim {
 namespace {
 
 constexpr double kSceneExtent = 200.0; // metres from the world origin that the ground bounds cover
@@ -391,4 +391,4 @@ void add_movers(Scene &s, Rng &rng, const Layout &lay, const Pose &a, const Pose
     }
 }
 
-} // namespace kissm_cli
+} // namespace kissm_sim

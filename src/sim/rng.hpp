@@ -10,7 +10,7 @@
 
 #include "splitmix64.h"
 
-namespace kissm_cli {
+namespace kissm_sim {
 
 class Rng {
 public:
@@ -69,4 +69,4 @@ private:
     bool has_spare_ = false;
 };
 
-} // namespace kissm_cli
+} // namespace kissm_sim
