@@ -16,8 +16,8 @@ import pytest
 
 import kissm
 import kissm.batch
-from kissm._batch_jobs import pair_job
-from kissm._batch_work import MAX_PAIRS_PER_TASK, group_pairs
+from kissm.batch._jobs import pair_job
+from kissm.batch._work import MAX_PAIRS_PER_TASK, group_pairs
 
 import batchcases
 from batchcases import ComputeCounter, Events

@@ -86,9 +86,9 @@ def test_long_batch_in_groups_on_dask(client, synthetic, synthetic_serial) -> No
 
 def test_few_tasks_in_flight_on_dask(client, synthetic, synthetic_serial, monkeypatch) -> None:
     """With at most 2 pair tasks in flight the rest go in as those finish: the same results, every pair once."""
-    import kissm._batch_dask
+    import kissm.batch._dask
 
-    monkeypatch.setattr(kissm._batch_dask, "_IN_FLIGHT", 2)
+    monkeypatch.setattr(kissm.batch._dask, "_IN_FLIGHT", 2)
     batch = batchcases.repeated(synthetic, 4)
     events = Events()
     got = kissm.batch.register_many(batch.pairs, batch.clouds, client, voxel_size=batch.voxel_size, progress=events)

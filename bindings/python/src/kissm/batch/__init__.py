@@ -22,13 +22,13 @@ from __future__ import annotations
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from typing import Any
 
-from ._batch_args import batch_config, check_cloud, check_clouds, check_pairs, engine_name
-from ._batch_progress import Reporter, check_progress
-from ._batch_values import CloudFile, PairResult, Progress
-from ._batch_work import Sink, Work
-from ._config import Config, RefineMode
-from ._errors import Error, InternalError
-from ._matcher import Features
+from .._config import Config, RefineMode
+from .._errors import Error, InternalError
+from .._matcher import Features
+from ._args import batch_config, check_cloud, check_clouds, check_pairs, engine_name
+from ._progress import Reporter, check_progress
+from ._values import CloudFile, PairResult, Progress
+from ._work import Sink, Work
 
 ProgressLike = bool | None | Callable[[Progress], object]
 """What ``progress`` accepts: True (a bar on stderr: tqdm's if installed), False, None (a bar only when stderr is a
@@ -39,26 +39,26 @@ def _run(executor: Any, work: Work, progress: ProgressLike) -> Sink:
     engine = engine_name(executor)  # checks it (Ray running, Dask client open) before any work
     check_progress(progress)
     if engine == "ray":
-        from ._batch_ray import check_cpus
+        from ._ray import check_cpus
 
         check_cpus(work.config.num_threads)
     reporter = Reporter(progress, sum(not isinstance(c, Features) for c in work.inputs), len(work.pairs))
     sink = Sink(work, reporter)
     try:
         if engine == "here":
-            from ._batch_futures import run_here
+            from ._futures import run_here
 
             run_here(work, sink)
         elif engine == "futures":
-            from ._batch_futures import run_futures
+            from ._futures import run_futures
 
             run_futures(executor, work, sink)
         elif engine == "dask":
-            from ._batch_dask import run_dask
+            from ._dask import run_dask
 
             run_dask(executor, work, sink)
         else:
-            from ._batch_ray import run_ray
+            from ._ray import run_ray
 
             run_ray(work, sink)
     finally:

@@ -11,12 +11,12 @@ from collections.abc import Hashable, Mapping, Sequence
 from concurrent.futures import Executor
 from typing import Any
 
-from ._batch_values import CloudFile
-from ._config import PRESETS, Config
-from ._errors import Error, InvalidArgumentError
-from ._matcher import Features
-from ._points import as_point_array
-from ._read import FORMATS
+from .._config import PRESETS, Config
+from .._errors import Error, InvalidArgumentError
+from .._matcher import Features
+from .._points import as_point_array
+from .._read import FORMATS
+from ._values import CloudFile
 
 #: What a cloud becomes once checked: points (an (N, 3) array), a file to read on the worker, or features
 #: described before.

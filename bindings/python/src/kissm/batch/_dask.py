@@ -3,7 +3,7 @@
 
 Points held in memory are scattered once, straight to the workers, not shipped with each task. Features are the
 describe tasks' results and stay on the workers, where Dask hands them to the pair tasks that need them. A pair
-task registers a group of pairs (kissm._batch_work.group_pairs): Dask's cost per task, on its scheduler and its
+task registers a group of pairs (kissm.batch._work.group_pairs): Dask's cost per task, on its scheduler and its
 workers, is about a tenth of matching two LiDAR keyframes.
 
 When a worker dies, Dask reruns the tasks that ran there and recomputes the lost results from their inputs, but
@@ -18,10 +18,10 @@ from __future__ import annotations
 import uuid
 from typing import Any
 
-from ._batch_jobs import describe_job, pairs_job
-from ._batch_values import CloudFile
-from ._batch_work import Sink, Work, group_pairs, task_clouds
-from ._matcher import Features
+from .._matcher import Features
+from ._jobs import describe_job, pairs_job
+from ._values import CloudFile
+from ._work import Sink, Work, group_pairs, task_clouds
 
 #: Reruns of a task that raised something other than a kissm.Error (a worker lost to a memory limit shows up
 #: as such). Dask reruns the tasks of a worker that died on its own (its ``allowed-failures`` setting).

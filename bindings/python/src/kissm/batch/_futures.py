@@ -14,9 +14,9 @@ import concurrent.futures as cf
 from collections.abc import Callable
 from typing import Any
 
-from ._batch_jobs import describe_job, pair_job
-from ._batch_work import Sink, Work
-from ._matcher import Features
+from .._matcher import Features
+from ._jobs import describe_job, pair_job
+from ._work import Sink, Work
 
 #: Pair jobs in flight per batch: enough to keep any pool busy, few enough that queued jobs (each holding its
 #: pickled features in a process pool) do not pile up.

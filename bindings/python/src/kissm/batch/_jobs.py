@@ -13,12 +13,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._batch_values import CloudFile
-from ._config import Config
-from ._errors import Error
-from ._matcher import Features, Matcher
-from ._read import read_points
-from ._result import Result
+from .._config import Config
+from .._errors import Error
+from .._matcher import Features, Matcher
+from .._read import read_points
+from .._result import Result
+from ._values import CloudFile
 
 #: What a describe job reads: points already in memory, or a file to read where the job runs.
 CloudInput = np.ndarray | CloudFile

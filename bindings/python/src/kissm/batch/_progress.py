@@ -9,7 +9,7 @@ import time
 from collections.abc import Callable, Hashable
 from typing import Any
 
-from ._batch_values import PairResult, Progress
+from ._values import PairResult, Progress
 
 #: Seconds between two redraws of the plain stderr line (a million pairs must not mean a million writes).
 _REDRAW_SECONDS = 0.5
@@ -59,7 +59,7 @@ def _bar(total: int) -> _Line | _Tqdm:
 
 def check_progress(progress: object) -> None:
     """Raise before any work when ``progress`` is none of the accepted values."""
-    from ._errors import InvalidArgumentError
+    from .._errors import InvalidArgumentError
 
     if not (progress is None or isinstance(progress, bool) or callable(progress)):
         raise InvalidArgumentError(

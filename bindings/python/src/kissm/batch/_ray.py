@@ -11,7 +11,7 @@ features (checking its bytes, rebuilding its search indexes) costs a tenth of ma
 task gets its features' references in a list, which Ray hands over as they are, and each worker process keeps
 the last few features it loaded, by object id: a cloud in many pairs is loaded about once per worker. The cache
 holds the loaded features, not their references, so the object store still frees them when the batch drops them.
-A pair task registers a group of pairs (kissm._batch_work.group_pairs), which Ray's cost per task asks for too.
+A pair task registers a group of pairs (kissm.batch._work.group_pairs), which Ray's cost per task asks for too.
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ import collections
 import threading
 from typing import Any
 
-from ._batch_jobs import describe_job, pairs_job
-from ._batch_values import CloudFile
-from ._batch_work import Sink, Work, group_pairs, task_clouds
-from ._errors import InvalidArgumentError
-from ._matcher import Features
+from .._errors import InvalidArgumentError
+from .._matcher import Features
+from ._jobs import describe_job, pairs_job
+from ._values import CloudFile
+from ._work import Sink, Work, group_pairs, task_clouds
 
 #: Reruns of a task whose worker process died (Ray's default too), and of one that raised something other
 #: than a kissm.Error (Ray's default is none: a job that raised because it ran out of memory may pass alone).

@@ -7,8 +7,8 @@ import dataclasses
 from collections.abc import Hashable
 from typing import Literal, NamedTuple
 
-from ._errors import Error
-from ._result import Result
+from .._errors import Error
+from .._result import Result
 
 
 class CloudFile(NamedTuple):

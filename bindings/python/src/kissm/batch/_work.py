@@ -7,13 +7,13 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Hashable
 
-from ._batch_args import Checked
-from ._batch_progress import Reporter
-from ._batch_values import PairResult
-from ._config import Config
-from ._errors import Error
-from ._matcher import Features
-from ._result import Result
+from .._config import Config
+from .._errors import Error
+from .._matcher import Features
+from .._result import Result
+from ._args import Checked
+from ._progress import Reporter
+from ._values import PairResult
 
 #: At most this many pairs in one task of a Dask or Ray batch.
 MAX_PAIRS_PER_TASK = 8
