@@ -174,27 +174,14 @@ std::size_t count_inliers(const std::vector<Eigen::Vector3d> &a, const std::vect
 
 std::size_t polish_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                         Eigen::Matrix3d &R, Eigen::Vector3d &t, std::vector<std::uint8_t> &inlier) {
-    std::size_t count = count_inliers(a, b, bound, R, t, inlier);
-    for (int round = 0; round < 5 && count >= 3; ++round) {
-        Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
-        for (std::size_t k = 0; k < a.size(); ++k)
-            if (inlier[k]) ca += a[k], cb += b[k];
-        ca /= static_cast<double>(count);
-        cb /= static_cast<double>(count);
+    const auto kabsch = [&](const std::vector<std::uint8_t> &in, const Eigen::Vector3d &ca, const Eigen::Vector3d &cb) {
         std::vector<Eigen::Vector3d> da, db;
         std::vector<double> ones;
         for (std::size_t k = 0; k < a.size(); ++k)
-            if (inlier[k]) da.push_back(a[k] - ca), db.push_back(b[k] - cb), ones.push_back(1.0);
-        const Eigen::Matrix3d R2 = weighted_rotation(da, db, ones);
-        const Eigen::Vector3d t2 = cb - R2 * ca;
-        std::vector<std::uint8_t> mask2;
-        const std::size_t count2 = count_inliers(a, b, bound, R2, t2, mask2);
-        if (count2 < count) break;
-        const bool same_set = mask2 == inlier;
-        R = R2, t = t2, inlier.swap(mask2), count = count2;
-        if (same_set) break;
-    }
-    return count;
+            if (in[k]) da.push_back(a[k] - ca), db.push_back(b[k] - cb), ones.push_back(1.0);
+        return weighted_rotation(da, db, ones);
+    };
+    return polish_pose_by(a, b, bound, kabsch, R, t, inlier);
 }
 
 std::vector<IndexPair> strided_pairs(std::size_t n, std::size_t max_pairs) {

@@ -110,8 +110,35 @@ double scalar_tls(std::vector<double> values, double bound);
 std::size_t count_inliers(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                           const Eigen::Matrix3d &R, const Eigen::Vector3d &t, std::vector<std::uint8_t> &mask);
 
-// Least-squares refinement (centred Kabsch) on the inliers, repeated while the inlier set grows or stays
-// and changes; a step that would lose inliers is not taken. Returns the inlier count; `inlier` the mask.
+// The polish both solvers end with: a least-squares fit on the inliers, repeated while the inlier set grows or
+// stays and changes; a step that would lose inliers is not taken. fit(inlier, ca, cb) is the rotation of the
+// inliers centred on their centroids ca (source) and cb (target); t = cb - R ca. Returns the inlier count;
+// `inlier` the mask.
+template <class FitRotation>
+std::size_t polish_pose_by(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
+                           FitRotation &&fit, Eigen::Matrix3d &R, Eigen::Vector3d &t,
+                           std::vector<std::uint8_t> &inlier) {
+    std::size_t count = count_inliers(a, b, bound, R, t, inlier);
+    // Two inliers fix a yaw and a translation; a third makes any least squares an average.
+    for (int round = 0; round < 5 && count >= 3; ++round) {
+        Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+        for (std::size_t k = 0; k < a.size(); ++k)
+            if (inlier[k]) ca += a[k], cb += b[k];
+        ca /= static_cast<double>(count);
+        cb /= static_cast<double>(count);
+        const Eigen::Matrix3d R2 = fit(inlier, ca, cb);
+        const Eigen::Vector3d t2 = cb - R2 * ca;
+        std::vector<std::uint8_t> mask2;
+        const std::size_t count2 = count_inliers(a, b, bound, R2, t2, mask2);
+        if (count2 < count) break;
+        const bool same_set = mask2 == inlier;
+        R = R2, t = t2, inlier.swap(mask2), count = count2;
+        if (same_set) break;
+    }
+    return count;
+}
+
+// polish_pose_by with the centred Kabsch fit: the full rotation.
 std::size_t polish_pose(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                         Eigen::Matrix3d &R, Eigen::Vector3d &t, std::vector<std::uint8_t> &inlier);
 

@@ -124,35 +124,22 @@ Eigen::Matrix3d rotation_about(const Eigen::Vector3d &axis, double angle) {
 std::size_t polish_pose_yaw(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                             const Eigen::Vector3d &up, Eigen::Matrix3d &R, Eigen::Vector3d &t,
                             std::vector<std::uint8_t> &inlier) {
-    std::size_t count = count_inliers(a, b, bound, R, t, inlier);
     const UpFrame f(up);
-    // Two inliers fix the angle and the translation; a third makes the least squares an average.
-    for (int round = 0; round < 5 && count >= 3; ++round) {
-        Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
-        for (std::size_t k = 0; k < a.size(); ++k)
-            if (inlier[k]) ca += a[k], cb += b[k];
-        ca /= static_cast<double>(count);
-        cb /= static_cast<double>(count);
-        // min sum |b - R a - t|^2: t = cb - R ca for any R, then the angle of the centred horizontal parts (the
-        // vertical parts do not depend on it).
+    // min sum |b - R a - t|^2: t = cb - R ca for any R, then the angle of the centred horizontal parts (the
+    // vertical parts do not depend on it).
+    const auto yaw_fit = [&](const std::vector<std::uint8_t> &in, const Eigen::Vector3d &ca,
+                             const Eigen::Vector3d &cb) {
         double cross = 0.0, dot = 0.0;
         for (std::size_t k = 0; k < a.size(); ++k) {
-            if (!inlier[k]) continue;
+            if (!in[k]) continue;
             const Eigen::Vector3d da = a[k] - ca, db = b[k] - cb;
             const double ax = da.dot(f.e1), ay = da.dot(f.e2), bx = db.dot(f.e1), by = db.dot(f.e2);
             cross += ax * by - ay * bx;
             dot += ax * bx + ay * by;
         }
-        const Eigen::Matrix3d R2 = rotation_about(f.up, std::atan2(cross, dot));
-        const Eigen::Vector3d t2 = cb - R2 * ca;
-        std::vector<std::uint8_t> mask2;
-        const std::size_t count2 = count_inliers(a, b, bound, R2, t2, mask2);
-        if (count2 < count) break;
-        const bool same_set = mask2 == inlier;
-        R = R2, t = t2, inlier.swap(mask2), count = count2;
-        if (same_set) break;
-    }
-    return count;
+        return rotation_about(f.up, std::atan2(cross, dot));
+    };
+    return polish_pose_by(a, b, bound, yaw_fit, R, t, inlier);
 }
 
 SolverOutput solve_pose_yaw(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
