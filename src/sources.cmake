@@ -17,8 +17,10 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/matching.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/compat_graph.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/kcore.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pruning.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/gnc_solver.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/yaw_solver.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pose_solver.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/validity.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/point_index.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/refine.cpp

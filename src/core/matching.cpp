@@ -89,4 +89,16 @@ std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, 
     return out;
 }
 
+MatchedPoints matched_points(const IndexedDescriptors &source, const IndexedDescriptors &target,
+                             const std::vector<Correspondence> &matches) {
+    MatchedPoints out;
+    out.source.resize(matches.size());
+    out.target.resize(matches.size());
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+        out.source[k] = (*source.points)[source.descriptors->keypoint[matches[k].source]];
+        out.target[k] = (*target.points)[target.descriptors->keypoint[matches[k].target]];
+    }
+    return out;
+}
+
 KISSM_DETAIL_END

@@ -29,4 +29,11 @@ struct MatchParams {
 std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, const IndexedDescriptors &target,
                                               const MatchParams &params, RunContext &ctx);
 
+// The matches as points: source[k] and target[k] are the voxel positions of match k's keypoints.
+struct MatchedPoints {
+    std::vector<Vec3f> source, target;
+};
+MatchedPoints matched_points(const IndexedDescriptors &source, const IndexedDescriptors &target,
+                             const std::vector<Correspondence> &matches);
+
 KISSM_DETAIL_END

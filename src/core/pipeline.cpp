@@ -5,18 +5,16 @@
 #include <chrono>
 #include <sstream>
 
-#include "compat_graph.hpp"
 #include "failure.hpp"
 #include "fpfh.hpp"
-#include "gnc_solver.hpp"
 #include "ground.hpp"
 #include "input.hpp"
-#include "kcore.hpp"
 #include "matching.hpp"
 #include "neighbors.hpp"
 #include "normals.hpp"
+#include "pose_solver.hpp"
+#include "pruning.hpp"
 #include "voxelize.hpp"
-#include "yaw_solver.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -296,8 +294,10 @@ std::pair<CloudFeatures, CloudFeatures> describe_pair(const PointsView &source, 
     return describe_both(source, target, params, true, ctx);
 }
 
-Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
-                                RunContext &ctx) {
+namespace {
+
+// The counts of what describing found, and the solver's noise bound: reported whatever happens next.
+Registration described_counts(const CloudFeatures &source, const CloudFeatures &target, const Params &params) {
     Registration r;
     r.num_source_points = source.num_points, r.num_target_points = target.num_points;
     r.num_source_nonfinite = source.num_nonfinite, r.num_target_nonfinite = target.num_nonfinite;
@@ -306,132 +306,130 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     r.num_target_keypoints = target.descriptors.keypoint.size();
     r.num_source_suppressed = source.num_suppressed, r.num_target_suppressed = target.num_suppressed;
     r.noise_bound = params.solver_noise_bound();
-    const std::uint64_t min_count = static_cast<std::uint64_t>(params.min_normal_neighbors) + 1;
-    if (r.num_source_voxels < min_count || r.num_target_voxels < min_count) {
-        r.reason = Reason::TooFewVoxels;
-        return r;
-    }
-    if (r.num_source_keypoints < 3 || r.num_target_keypoints < 3) {
-        r.reason = Reason::TooFewFeatures;
-        return r;
-    }
+    return r;
+}
 
-    Stopwatch clock;
-    ctx.checkpoint(Stage::Matching, 0.0);
-    MatchParams mp{params.ratio_test, params.max_correspondences};
-    const std::vector<Correspondence> matches = match_descriptors(
-        IndexedDescriptors{&source.descriptors, &source.descriptor_index, &source.voxels.points, &source.keypoint_grid},
-        IndexedDescriptors{&target.descriptors, &target.descriptor_index, &target.voxels.points, &target.keypoint_grid},
-        mp, ctx);
-    r.num_initial_correspondences = matches.size();
-    r.time_matching_ms = clock.lap();
-    if (matches.size() < 3) {
-        r.reason = Reason::TooFewCorrespondences;
-        return r;
-    }
+IndexedDescriptors indexed(const CloudFeatures &f) {
+    return IndexedDescriptors{&f.descriptors, &f.descriptor_index, &f.voxels.points, &f.keypoint_grid};
+}
 
-    ctx.checkpoint(Stage::Pruning, 0.0);
-    std::vector<Vec3f> a(matches.size()), b(matches.size());
-    for (std::size_t k = 0; k < matches.size(); ++k) {
-        a[k] = source.voxels.points[source.descriptors.keypoint[matches[k].source]];
-        b[k] = target.voxels.points[target.descriptors.keypoint[matches[k].target]];
-    }
-    SolverParams sp;
-    sp.noise_bound = r.noise_bound;
-    std::vector<std::uint32_t> core;
-    std::vector<IndexPair> tim_pairs;
-    {
-        const CsrGraph graph = build_compat_graph(a, b, static_cast<float>(params.prune_noise_bound()), ctx);
-        std::uint32_t k = 0;
-        core = max_kcore(graph, k);
-        r.max_core_number = k;
-        tim_pairs = sample_induced_edges(graph, core, sp.max_tims);
-    }
-    r.num_pruned_correspondences = core.size();
-    r.time_pruning_ms = clock.lap();
-    if (core.size() < 3) {
-        r.reason = Reason::TooFewCorrespondences;
-        return r;
-    }
+std::vector<Eigen::Vector3d> as_double(const std::vector<Vec3f> &points) {
+    std::vector<Eigen::Vector3d> out(points.size());
+    for (std::size_t k = 0; k < points.size(); ++k) out[k] = points[k].cast<double>();
+    return out;
+}
 
-    ctx.checkpoint(Stage::Solver, 0.0);
-    std::vector<Eigen::Vector3d> pa(core.size()), pb(core.size());
-    for (std::size_t k = 0; k < core.size(); ++k) {
-        pa[k] = a[core[k]].cast<double>();
-        pb[k] = b[core[k]].cast<double>();
-    }
-    // rotation_dof = 1: yaw about `up` only (yaw_solver.hpp); its tilt check keeps a tilted pair from a wrong pose.
-    const bool yaw_only = params.rotation_dof == 1;
-    const Eigen::Vector3d up(params.up[0], params.up[1], params.up[2]);
-    SolverOutput sol;
-    if (yaw_only) {
-        sol = solve_pose_yaw(pa, pb, tim_pairs, up, sp, ctx);
-        if (sol.solved) r.tilt = residual_tilt(pa, pb, tim_pairs, sol, up, sp, ctx);
-    } else {
-        sol = solve_pose(pa, pb, std::move(tim_pairs), sp, ctx);
-    }
-    r.num_rotation_inliers = sol.num_rotation_inliers;
-    if (!sol.solved) {
-        r.reason = Reason::SolverFailed;
-        r.time_solver_ms = clock.lap();
-        return r;
-    }
-    // Final inliers are counted over all initial correspondences: pruning is conservative, and matches it
-    // dropped but that agree with the pose both confirm it and sharpen the least-squares polish.
-    std::vector<Eigen::Vector3d> all_a(a.size()), all_b(b.size());
-    for (std::size_t k = 0; k < a.size(); ++k) all_a[k] = a[k].cast<double>(), all_b[k] = b[k].cast<double>();
+std::vector<Eigen::Vector3d> as_double(const std::vector<Vec3f> &points, const std::vector<std::uint32_t> &subset) {
+    std::vector<Eigen::Vector3d> out(subset.size());
+    for (std::size_t k = 0; k < subset.size(); ++k) out[k] = points[subset[k]].cast<double>();
+    return out;
+}
+
+// The solver's pose, polished over all initial correspondences (pruning is conservative: matches it dropped
+// but that agree with the pose both confirm it and sharpen the least squares), in the callers' frames, with the
+// final inliers' residual and evidence.
+InlierEvidence final_inliers(const MatchedPoints &matched, const PoseSolver &solver, SolverOutput &sol,
+                             const CloudFeatures &source, const CloudFeatures &target, Registration &r) {
+    const std::vector<Eigen::Vector3d> a = as_double(matched.source), b = as_double(matched.target);
     std::vector<std::uint8_t> inlier;
-    r.num_final_inliers = yaw_only
-                              ? polish_pose_yaw(all_a, all_b, sp.noise_bound, up, sol.rotation, sol.translation, inlier)
-                              : polish_pose(all_a, all_b, sp.noise_bound, sol.rotation, sol.translation, inlier);
+    r.num_final_inliers = solver.polish(a, b, sol.rotation, sol.translation, inlier);
     r.inlier_ratio = static_cast<double>(r.num_final_inliers) / static_cast<double>(r.num_initial_correspondences);
     // Back to the callers' frames: p_t = R (p_s - o_s) + t_local + o_t.
     r.rotation = sol.rotation;
     r.translation = sol.translation + target.voxels.origin - sol.rotation * source.voxels.origin;
     r.solved = true;
-
     std::vector<Eigen::Vector3d> inlier_points;
     double sq = 0.0;
-    for (std::size_t k = 0; k < all_a.size(); ++k) {
+    for (std::size_t k = 0; k < a.size(); ++k) {
         if (!inlier[k]) continue;
-        inlier_points.push_back(all_a[k]);
-        sq += (sol.rotation * all_a[k] + sol.translation - all_b[k]).squaredNorm();
+        inlier_points.push_back(a[k]);
+        sq += (sol.rotation * a[k] + sol.translation - b[k]).squaredNorm();
     }
     if (!inlier_points.empty()) r.residual_rms = std::sqrt(sq / static_cast<double>(inlier_points.size()));
     const InlierEvidence inliers = inlier_evidence(inlier_points, r.noise_bound);
     r.inlier_extent = inliers.extent;
     r.rotation_uncertainty = inliers.rotation_uncertainty;
+    return inliers;
+}
+
+void log_counts(const Registration &r, RunContext &ctx) {
+    if (!ctx.logs(LogLevel::Info)) return;
+    std::ostringstream msg;
+    msg << "matches " << r.num_initial_correspondences << ", max core " << r.num_pruned_correspondences
+        << " (k=" << r.max_core_number << "), rotation inliers " << r.num_rotation_inliers << ", final inliers "
+        << r.num_final_inliers;
+    ctx.log(LogLevel::Info, msg.str());
+}
+
+} // namespace
+
+Registration register_described(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
+                                RunContext &ctx) {
+    Registration r = described_counts(source, target, params);
+    r.reason = describable(r.num_source_voxels, r.num_target_voxels, r.num_source_keypoints, r.num_target_keypoints,
+                           static_cast<std::uint64_t>(params.min_normal_neighbors) + 1);
+    if (r.reason != Reason::None) return r;
+    Stopwatch clock;
+
+    // 3. Matching.
+    ctx.checkpoint(Stage::Matching, 0.0);
+    const MatchParams mp{params.ratio_test, params.max_correspondences};
+    const MatchedPoints matched =
+        matched_points(indexed(source), indexed(target), match_descriptors(indexed(source), indexed(target), mp, ctx));
+    r.num_initial_correspondences = matched.source.size();
+    r.time_matching_ms = clock.lap();
+    if (matched.source.size() < 3) {
+        r.reason = Reason::TooFewCorrespondences;
+        return r;
+    }
+
+    // 4. Pruning.
+    ctx.checkpoint(Stage::Pruning, 0.0);
+    const PoseSolver solver(params);
+    PrunedMatches pruned =
+        prune_matches(matched.source, matched.target, params.prune_noise_bound(), solver.max_measurements(), ctx);
+    r.max_core_number = pruned.max_core_number;
+    r.num_pruned_correspondences = pruned.core.size();
+    r.time_pruning_ms = clock.lap();
+    if (pruned.core.size() < 3) {
+        r.reason = Reason::TooFewCorrespondences;
+        return r;
+    }
+
+    // 5. Solver, on the max core; then the final inliers over every match.
+    ctx.checkpoint(Stage::Solver, 0.0);
+    PoseSolution pose = solver.solve(as_double(matched.source, pruned.core), as_double(matched.target, pruned.core),
+                                     std::move(pruned.measurements), ctx);
+    r.tilt = pose.tilt;
+    r.num_rotation_inliers = pose.solver.num_rotation_inliers;
+    if (!pose.solver.solved) {
+        r.reason = Reason::SolverFailed;
+        r.time_solver_ms = clock.lap();
+        return r;
+    }
+    const InlierEvidence inliers = final_inliers(matched, solver, pose.solver, source, target, r);
+
+    // 5b. Validity without refinement.
     r.reason = r.rotation.allFinite() && r.translation.allFinite()
                    ? coarse_validity(
                          r.num_final_inliers, inliers,
                          CoarseRule{static_cast<std::uint64_t>(params.min_inliers), params.max_rotation_uncertainty})
                    : Reason::SolverFailed;
-    // The tilt is a rotation error the yaw-only pose cannot remove, so it gets the bound of the rotation's
-    // uncertainty (docs/ground.md, "4-DoF"). NaN (nothing measurable) counts as tilted: a yaw pose is only
-    // trusted when the data confirm a small tilt.
-    // The max core is the largest set of mutually consistent matches whatever the rotation: a yaw pose whose
-    // rotation explains under a quarter of it contradicts the clouds' own rigid motion. That is how a tilted
-    // pair looks when the yaw solver settles on a few look-alike matches whose tilt reads small (KITTI 07
-    // keyframes 3-4 turned 10 degrees: 0 of 81; right yaw poses keep 42-95%, docs/ground.md).
-    const bool refuted = yaw_only && 4 * r.num_rotation_inliers < r.num_pruned_correspondences;
-    const bool tilted = yaw_only && (refuted || !(r.tilt <= params.max_rotation_uncertainty));
+    const bool tilted =
+        solver.yaw_only() && yaw_pose_refuted(YawEvidence{r.num_rotation_inliers, r.num_pruned_correspondences, r.tilt},
+                                              params.max_rotation_uncertainty);
     if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
     r.coarse_rotation = r.rotation;
     r.coarse_translation = r.translation;
     r.time_solver_ms = clock.lap();
-    if (ctx.logs(LogLevel::Info)) {
-        std::ostringstream msg;
-        msg << "matches " << r.num_initial_correspondences << ", max core " << r.num_pruned_correspondences
-            << " (k=" << r.max_core_number << "), rotation inliers " << r.num_rotation_inliers << ", final inliers "
-            << r.num_final_inliers;
-        ctx.log(LogLevel::Info, msg.str());
-    }
+    log_counts(r, ctx);
     ctx.checkpoint(Stage::Solver, 1.0);
+
+    // 6. Refinement, and its validity (a yaw pose the data call tilted stays refused: the caller asked for zero
+    // roll and pitch and the clouds disagree).
     if (params.refine_mode != RefineMode::None && r.reason != Reason::SolverFailed) {
         refine_registration(source, target, r.coarse_rotation, r.coarse_translation, params, r, ctx);
         r.reason = refined_validity(r.num_final_inliers, inliers, refined_evidence(r), refined_rule(params));
-        // Refinement estimates all six degrees of freedom, but a yaw-only start that the data call tilted stays
-        // refused: the user asked for zero roll and pitch and the clouds disagree.
         if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
     }
     return r;

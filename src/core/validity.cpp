@@ -31,6 +31,18 @@ InlierEvidence inlier_evidence(const std::vector<Eigen::Vector3d> &inlier_points
     return v;
 }
 
+Reason describable(std::uint64_t source_voxels, std::uint64_t target_voxels, std::uint64_t source_keypoints,
+                   std::uint64_t target_keypoints, std::uint64_t min_voxels) {
+    if (source_voxels < min_voxels || target_voxels < min_voxels) return Reason::TooFewVoxels;
+    if (source_keypoints < 3 || target_keypoints < 3) return Reason::TooFewFeatures;
+    return Reason::None;
+}
+
+bool yaw_pose_refuted(const YawEvidence &yaw, double max_tilt) {
+    const bool contradicts_core = 4 * yaw.rotation_inliers < yaw.max_core_size;
+    return contradicts_core || !(yaw.tilt <= max_tilt);
+}
+
 Reason coarse_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const CoarseRule &rule) {
     if (num_inliers < rule.min_inliers) return Reason::TooFewInliers;
     if (inliers.shape != Reason::None) return inliers.shape;

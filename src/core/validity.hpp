@@ -30,6 +30,11 @@ enum class Reason {
     Tilted,
 };
 
+// Before matching: both clouds need more voxels than a normal needs neighbours (min_voxels) and at least three
+// keypoints; otherwise TooFewVoxels or TooFewFeatures.
+Reason describable(std::uint64_t source_voxels, std::uint64_t target_voxels, std::uint64_t source_keypoints,
+                   std::uint64_t target_keypoints, std::uint64_t min_voxels);
+
 // What the solver's inliers say about its pose.
 struct InlierEvidence {
     Reason shape = Reason::None;                      // Degenerate when collinear or planar, else None
@@ -53,6 +58,18 @@ struct CoarseRule {
     double max_rotation_uncertainty;
 };
 Reason coarse_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const CoarseRule &rule);
+
+// rotation_dof = 1: a yaw-only pose is refused (Tilted, with or without refinement) when the data contradict zero
+// roll and pitch: the best free rotation on its inliers tilts `up` by more than max_tilt (the rotation
+// uncertainty's bound; NaN, nothing measurable, counts as tilted), or the yaw rotation explains under a quarter of
+// the max core (the largest set of mutually consistent matches whatever the rotation). docs/accuracy.md, "The
+// validity rules", has the evidence.
+struct YawEvidence {
+    std::uint64_t rotation_inliers;
+    std::uint64_t max_core_size;
+    double tilt; // radians
+};
+bool yaw_pose_refuted(const YawEvidence &yaw, double max_tilt);
 
 // What refinement (stage 6) found, as the refined rule reads it.
 struct RefinedEvidence {

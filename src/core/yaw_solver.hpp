@@ -26,8 +26,8 @@ Eigen::Matrix3d rotation_about(const Eigen::Vector3d &axis, double angle);
 // polish_pose restricted to rotations about `up`: the least-squares angle and translation on the inliers
 // (centred, closed form), repeated while the inlier set grows or stays and changes; a step that would lose
 // inliers is not taken. R is rebuilt by rotation_about, so it stays exactly about `up` (the caller's R is used
-// only to find the first inliers). Returns the inlier count; `inlier` the mask. The pipeline's final polish over
-// all matches must use this, not polish_pose, in yaw mode.
+// only to find the first inliers). Returns the inlier count; `inlier` the mask. PoseSolver::polish (pose_solver.hpp)
+// picks it in yaw mode.
 std::size_t polish_pose_yaw(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b, double bound,
                             const Eigen::Vector3d &up, Eigen::Matrix3d &R, Eigen::Vector3d &t,
                             std::vector<std::uint8_t> &inlier);
