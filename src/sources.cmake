@@ -5,12 +5,12 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/radix_sort.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/voxelize.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/core/neighbors.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/radius_search.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/normals.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/ground.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pair_features.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/fpfh.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/core/kdtree.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/descriptor_tree.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/descriptor_index.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/keypoint_grid.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/place_gate.cpp
@@ -22,7 +22,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/yaw_solver.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_solver.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/validity.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/core/point_index.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/refine_index.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/refine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/features_codec.cpp

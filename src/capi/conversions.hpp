@@ -4,11 +4,11 @@
 #pragma once
 
 #include "capi/boundary.hpp"
-#include "core/cloud.hpp"
 #include "core/detail_namespace.hpp"
 #include "core/params.hpp"
 #include "core/pipeline.hpp"
 #include "core/run_context.hpp"
+#include "core/stage_types.hpp"
 #include "kissm.h"
 
 KISSM_DETAIL_BEGIN

@@ -8,9 +8,9 @@
 
 #include <utility>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -10,13 +10,15 @@
 
 #include <Eigen/Core>
 
-#include "cloud.hpp"
+#include "descriptor_tree.hpp"
 #include "detail_namespace.hpp"
-#include "kdtree.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 #include "uninitialized.hpp"
 
 KISSM_DETAIL_BEGIN
+
+class KeypointGrid; // keypoint_grid.hpp
 
 // A kd-tree in 33-D backtracks into near brute force; in a few dimensions it does not. The index keeps the
 // descriptors projected on the kDim leading principal components of this cloud's own descriptors (so it is
@@ -79,6 +81,16 @@ private:
     DescriptorProjection projection_;
     std::unique_ptr<const ProjectedKdTree> tree_;
     UninitVector<float> by_slot_;
+};
+
+// A cloud's descriptors with their index (DescriptorIndex::build of those descriptors), its voxels (which
+// descriptors->keypoint indexes) and the grid of its keypoints, all borrowed. Without points (and, on the
+// larger side, the grid), no place is ever singled out.
+struct IndexedDescriptors {
+    const Descriptors *descriptors;
+    const DescriptorIndex *index;
+    const std::vector<Vec3f> *points = nullptr;
+    const KeypointGrid *grid = nullptr;
 };
 
 KISSM_DETAIL_END

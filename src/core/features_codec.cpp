@@ -455,7 +455,7 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
     // The indexes, exactly as describe_cloud() builds them: a function of the descriptors and points alone.
     f.descriptor_index = std::move(DescriptorIndex::build({&f.descriptors}, ctx)[0]);
     f.keypoint_grid = keypoint_grid_of(f);
-    if (f.params.refine_mode != RefineMode::None) f.index = PointIndex(f.voxels.points, f.params.voxel_size);
+    if (f.params.refine_mode != RefineMode::None) f.index = RefineIndex(f.voxels.points, f.params.voxel_size);
     return f;
 }
 

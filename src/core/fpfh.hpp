@@ -5,10 +5,10 @@
 // Eq. (A5) (\label{eqn:fpfh}). Deviations are noted at compute_spfh and compute_fpfh.
 #pragma once
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "pair_features.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -16,9 +16,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -4,10 +4,10 @@
 
 #include <string>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "params.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -7,11 +7,11 @@
 // 5000 (the paper's Sec. IV-B: 3000; docs/parameters.md).
 #pragma once
 
-#include "cloud.hpp"
 #include "descriptor_index.hpp"
 #include "detail_namespace.hpp"
 #include "place_gate.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

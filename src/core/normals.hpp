@@ -10,9 +10,9 @@
 // them as in the paper's I. The paper numbers no equation for either.
 #pragma once
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -17,8 +17,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -10,10 +10,10 @@
 #include "ground.hpp"
 #include "input.hpp"
 #include "matching.hpp"
-#include "neighbors.hpp"
 #include "normals.hpp"
 #include "pose_solver.hpp"
 #include "pruning.hpp"
+#include "radius_search.hpp"
 #include "voxelize.hpp"
 
 KISSM_DETAIL_BEGIN
@@ -150,7 +150,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
         f.plane_normals = f.normals;
     }
     // The index refinement searches, kept with the features so that a map is indexed once.
-    if (params.refine_mode != RefineMode::None) f.index = PointIndex(pts, params.voxel_size);
+    if (params.refine_mode != RefineMode::None) f.index = RefineIndex(pts, params.voxel_size);
     f.time_features_ms = clock.lap();
     if (ctx.logs(LogLevel::Info)) {
         std::ostringstream msg;
@@ -261,10 +261,10 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
     const Vec3d &os = source.voxels.origin, &ot = target.voxels.origin;
     // p_t - o_t = R (p_s - o_s) + (t + R o_s - o_t): the same pose between the local frames.
     const Eigen::Vector3d t_local = t + R * os - ot;
-    PointIndex built;
-    const PointIndex *index = &target.index;
+    RefineIndex built;
+    const RefineIndex *index = &target.index;
     if (index->empty()) {
-        built = PointIndex(target.voxels.points, params.voxel_size);
+        built = RefineIndex(target.voxels.points, params.voxel_size);
         index = &built;
     }
     const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.plane_normals},

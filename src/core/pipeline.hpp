@@ -8,14 +8,14 @@
 #include <utility>
 #include <vector>
 
-#include "cloud.hpp"
 #include "descriptor_index.hpp"
 #include "detail_namespace.hpp"
 #include "keypoint_grid.hpp"
 #include "params.hpp"
-#include "point_index.hpp"
 #include "refine.hpp"
+#include "refine_index.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 #include "validity.hpp"
 
 KISSM_DETAIL_BEGIN
@@ -33,7 +33,7 @@ struct CloudFeatures {
     Descriptors descriptors;
     DescriptorIndex descriptor_index; // empty when there are no descriptors
     KeypointGrid keypoint_grid;       // the keypoints by position (columns of kKeypointColumnVoxels voxels)
-    PointIndex index;                 // empty unless params.refine_mode != None
+    RefineIndex index;                // empty unless params.refine_mode != None
     std::uint64_t num_suppressed = 0; // voxels suppression kept from becoming keypoints
     double time_voxelize_ms = 0.0;
     double time_features_ms = 0.0;

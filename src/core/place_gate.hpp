@@ -11,24 +11,14 @@
 #include <memory>
 #include <vector>
 
-#include "cloud.hpp"
 #include "descriptor_index.hpp"
+#include "descriptor_tree.hpp"
 #include "detail_namespace.hpp"
-#include "kdtree.hpp"
 #include "keypoint_grid.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
-
-// A cloud's descriptors with their index (DescriptorIndex::build of those descriptors), its voxels (which
-// descriptors->keypoint indexes) and the grid of its keypoints, all borrowed. Without points (and, on the
-// larger side, the grid), no place is ever singled out.
-struct IndexedDescriptors {
-    const Descriptors *descriptors;
-    const DescriptorIndex *index;
-    const std::vector<Vec3f> *points = nullptr;
-    const KeypointGrid *grid = nullptr;
-};
 
 // The keypoints of a map in the place a scan's votes single out, with a search tree of their own in the map's
 // projection (so a search in the region finds what the map's index would, were the rest of the map absent).

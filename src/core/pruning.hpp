@@ -8,10 +8,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "gnc_solver.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

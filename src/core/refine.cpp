@@ -78,7 +78,7 @@ void add(Sums &acc, const Sums &p) {
 
 class Refiner {
 public:
-    Refiner(const RefineCloud &source, const RefineCloud &target, const PointIndex &index, const RefineParams &params,
+    Refiner(const RefineCloud &source, const RefineCloud &target, const RefineIndex &index, const RefineParams &params,
             RunContext &ctx)
         : src_(*source.points), src_n_(*source.normals), tgt_(*target.points), tgt_n_(*target.normals), index_(index),
           params_(params), ctx_(ctx) {
@@ -89,7 +89,7 @@ public:
             all_.push_back(static_cast<std::uint32_t>(i));
             if (src_n_.valid[i]) candidates_.push_back(static_cast<std::uint32_t>(i));
         }
-        hint_.assign(src_.size(), PointIndex::kNone);
+        hint_.assign(src_.size(), RefineIndex::kNone);
     }
 
     struct Matches {
@@ -112,7 +112,7 @@ public:
                 float d2;
                 const std::uint32_t j = index_.nearest(q, max_d2, &d2, hint_[i]);
                 hint_[i] = j;
-                if (j == PointIndex::kNone) continue;
+                if (j == RefineIndex::kNone) continue;
                 ++out.hits;
                 if (src_n_.valid[i] && tgt_n_.valid[j]) out.pairs.push_back(Pair{i, j});
             }
@@ -307,7 +307,7 @@ private:
     const Normals &src_n_;
     const std::vector<Vec3f> &tgt_;
     const Normals &tgt_n_;
-    const PointIndex &index_;
+    const RefineIndex &index_;
     const RefineParams &params_;
     RunContext &ctx_;
     std::vector<std::uint32_t> all_;        // every source voxel (the overlap counts them all)
@@ -323,7 +323,7 @@ private:
 
 } // namespace
 
-RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, const PointIndex &target_index,
+RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, const RefineIndex &target_index,
                          const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0, const RefineParams &params,
                          RunContext &ctx) {
     Refiner refiner(source, target, target_index, params, ctx);

@@ -3,7 +3,7 @@
 // paper's "Proposed + G-ICP" row (Sec. IV, Table of KITTI results) done in the same call.
 //
 // Correspondences: each source voxel, moved by the current pose, to its nearest target voxel within
-// max_distance (PointIndex), both with a normal. Cost (Segal et al., "Generalized-ICP", RSS 2009):
+// max_distance (RefineIndex), both with a normal. Cost (Segal et al., "Generalized-ICP", RSS 2009):
 //   GICP:            r^2 = e^T (C_b + R C_a R^T)^-1 e,   e = b - (R a + t),
 //   point-to-plane:  r^2 = (n_b . e)^2,
 // where C = (n n^T + (I - n n^T) / eps) / 2 is the plane-regularised covariance of a voxel with normal n
@@ -23,11 +23,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "params.hpp"
-#include "point_index.hpp"
+#include "refine_index.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -75,7 +75,7 @@ struct RefineOutput {
 
 // Refines (R0, t0) (local frames). `target_index` indexes target.points. Needs nothing but the clouds: a
 // source with no normal anywhere simply finds no correspondence.
-RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, const PointIndex &target_index,
+RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, const RefineIndex &target_index,
                          const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0, const RefineParams &params,
                          RunContext &ctx);
 

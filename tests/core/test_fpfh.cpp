@@ -4,8 +4,8 @@
 #include <cstring>
 
 #include "core/fpfh.hpp"
-#include "core/neighbors.hpp"
 #include "core/normals.hpp"
+#include "core/radius_search.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 

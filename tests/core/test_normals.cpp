@@ -4,8 +4,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/neighbors.hpp"
 #include "core/normals.hpp"
+#include "core/radius_search.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 
@@ -101,7 +101,7 @@ static void test_lines_and_sparse_points_get_no_normal() {
     CHECK(select_keypoints(nb, normals, 3).empty());
 }
 
-static void test_neighbors_match_brute_force() {
+static void test_radius_search_match_brute_force() {
     TestRng rng(6);
     std::vector<Vec3f> pts;
     for (int i = 0; i < 2000; ++i)
@@ -137,7 +137,7 @@ int main() {
     RUN_TEST(test_sphere_normals_radial);
     RUN_TEST(test_normals_away_from_neighbours);
     RUN_TEST(test_lines_and_sparse_points_get_no_normal);
-    RUN_TEST(test_neighbors_match_brute_force);
+    RUN_TEST(test_radius_search_match_brute_force);
     RUN_TEST(test_eigen3_closed_form);
     return TEST_SUMMARY();
 }

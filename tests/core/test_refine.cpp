@@ -13,8 +13,8 @@
 #include <limits>
 #include <vector>
 
-#include "core/point_index.hpp"
 #include "core/refine.hpp"
+#include "core/refine_index.hpp"
 #include "core/validity.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
@@ -120,7 +120,7 @@ RefineParams params_for(RefineMode mode) {
 // The index as the pipeline builds it: cells of about the sampling step.
 RefineOutput run(const Scene &source, const Scene &target, const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0,
                  const RefineParams &p, int threads, double cell = 0.2) {
-    const PointIndex index(target.points, cell);
+    const RefineIndex index(target.points, cell);
     RunContext ctx(threads, nullptr, Hooks());
     return refine_pose(source.cloud(), target.cloud(), index, R0, t0, p, ctx);
 }

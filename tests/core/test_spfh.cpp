@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "core/fpfh.hpp"
-#include "core/neighbors.hpp"
+#include "core/radius_search.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 

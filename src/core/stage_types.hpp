@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
-// Data passed between pipeline stages.
+// The data the pipeline stages pass to each other: the caller's points, the input, the voxels, the
+// neighbourhoods, normals, descriptors and correspondences.
 #pragma once
 
 #include <Eigen/Core>

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -18,13 +18,13 @@ KISSM_DETAIL_BEGIN
 // data alone: the nearest point, ties broken by the lower index, whatever the search path; so results never
 // depend on threads or on the hint. Leaves hold up to kLeafPoints points contiguously (x, y, z as separate
 // rows); nodes are a flat array in depth-first order.
-class PointIndex {
+class RefineIndex {
 public:
     static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
-    PointIndex() = default;
+    RefineIndex() = default;
     // `cell` is the side of the hash's cells (the voxel size: a cell then holds a few points); <= 0: no hash.
-    PointIndex(const std::vector<Vec3f> &points, double cell);
+    RefineIndex(const std::vector<Vec3f> &points, double cell);
 
     bool empty() const { return index_.empty(); }
     std::size_t size() const { return index_.size(); }

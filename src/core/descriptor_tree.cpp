@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "kdtree.hpp"
+#include "descriptor_tree.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "neighbors.hpp"
+#include "radius_search.hpp"
 
 #include <algorithm>
 #include <cmath>

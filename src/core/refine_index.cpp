@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-#include "point_index.hpp"
+#include "refine_index.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -24,7 +24,7 @@ std::uint64_t cell_key(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
 std::size_t cell_hash(std::uint64_t key) { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20); }
 } // namespace
 
-PointIndex::PointIndex(const std::vector<Vec3f> &points, double cell) {
+RefineIndex::RefineIndex(const std::vector<Vec3f> &points, double cell) {
     if (points.size() >= static_cast<std::size_t>(kLeafBit))
         fail(ErrorKind::InvalidArgument, "too many points for the refinement index");
     std::vector<std::uint32_t> order(points.size());
@@ -38,7 +38,7 @@ PointIndex::PointIndex(const std::vector<Vec3f> &points, double cell) {
     build_cells(cell);
 }
 
-std::uint32_t PointIndex::build(std::uint32_t *begin, std::uint32_t *end, const std::vector<Vec3f> &points) {
+std::uint32_t RefineIndex::build(std::uint32_t *begin, std::uint32_t *end, const std::vector<Vec3f> &points) {
     const auto here = static_cast<std::uint32_t>(nodes_.size());
     nodes_.push_back(Node{0.0f, 0, 0});
     const std::size_t n = static_cast<std::size_t>(end - begin);
@@ -72,7 +72,7 @@ std::uint32_t PointIndex::build(std::uint32_t *begin, std::uint32_t *end, const 
     return here;
 }
 
-void PointIndex::build_cells(double cell) {
+void RefineIndex::build_cells(double cell) {
     if (!(cell > 0.0) || index_.empty()) return;
     for (int d = 0; d < 3; ++d) cell_origin_[d] = std::numeric_limits<double>::infinity();
     for (std::size_t s = 0; s < index_.size(); ++s) {
@@ -109,7 +109,7 @@ void PointIndex::build_cells(double cell) {
     cell_ = cell;
 }
 
-const PointIndex::Cell *PointIndex::find_cell(std::uint64_t key) const {
+const RefineIndex::Cell *RefineIndex::find_cell(std::uint64_t key) const {
     const std::size_t mask = cells_.size() - 1;
     for (std::size_t h = cell_hash(key) & mask;; h = (h + 1) & mask) {
         if (cells_[h].key == key) return &cells_[h];
@@ -119,14 +119,14 @@ const PointIndex::Cell *PointIndex::find_cell(std::uint64_t key) const {
 
 // One point against the best so far: the one distance expression of the index, so hints, cells and leaves give
 // the same bits for the same point.
-inline void PointIndex::scan(std::size_t slot, float qx, float qy, float qz, float &best_d2,
-                             std::uint32_t &best) const {
+inline void RefineIndex::scan(std::size_t slot, float qx, float qy, float qz, float &best_d2,
+                              std::uint32_t &best) const {
     const float dx = xs_[slot] - qx, dy = ys_[slot] - qy, dz = zs_[slot] - qz;
     const float d2 = dx * dx + dy * dy + dz * dz;
     if (d2 < best_d2 || (d2 == best_d2 && index_[slot] < best)) best_d2 = d2, best = index_[slot];
 }
 
-bool PointIndex::search_cells(float qx, float qy, float qz, float &best_d2, std::uint32_t &best) const {
+bool RefineIndex::search_cells(float qx, float qy, float qz, float &best_d2, std::uint32_t &best) const {
     const double r = std::sqrt(static_cast<double>(best_d2));
     if (cells_.empty() || !(r <= cell_)) return false;
     const double q[3] = {qx, qy, qz};
@@ -149,7 +149,7 @@ bool PointIndex::search_cells(float qx, float qy, float qz, float &best_d2, std:
     return true;
 }
 
-std::uint32_t PointIndex::search_tree(float qx, float qy, float qz, float &best_d2, std::uint32_t best) const {
+std::uint32_t RefineIndex::search_tree(float qx, float qy, float qz, float &best_d2, std::uint32_t best) const {
     // A far child waits on the stack with the lower bound (q[dim] - split)^2 of its points' squared distance.
     // Rounding is monotone, so no point's computed distance can fall below that bound: pruning on "bound >
     // best" loses no point at the best distance, and ties go to the lower index wherever they are found.
@@ -187,7 +187,7 @@ std::uint32_t PointIndex::search_tree(float qx, float qy, float qz, float &best_
     return best;
 }
 
-std::uint32_t PointIndex::nearest(const Vec3f &q, float max_dist2, float *dist2, std::uint32_t hint) const {
+std::uint32_t RefineIndex::nearest(const Vec3f &q, float max_dist2, float *dist2, std::uint32_t hint) const {
     std::uint32_t best = kNone;
     float best_d2 = max_dist2;
     if (!nodes_.empty() && max_dist2 >= 0.0f) {
@@ -199,7 +199,7 @@ std::uint32_t PointIndex::nearest(const Vec3f &q, float max_dist2, float *dist2,
     return best;
 }
 
-std::size_t PointIndex::bytes() const {
+std::size_t RefineIndex::bytes() const {
     return nodes_.capacity() * sizeof(Node) + (xs_.capacity() + ys_.capacity() + zs_.capacity()) * sizeof(float) +
            (index_.capacity() + slot_.capacity() + cell_slots_.capacity()) * sizeof(std::uint32_t) +
            cells_.capacity() * sizeof(Cell);

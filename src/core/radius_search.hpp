@@ -6,9 +6,9 @@
 // a uniform grid here finds the same set.
 #pragma once
 
-#include "cloud.hpp"
 #include "detail_namespace.hpp"
 #include "run_context.hpp"
+#include "stage_types.hpp"
 
 KISSM_DETAIL_BEGIN
 

@@ -2,7 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/neighbors.hpp"
+#include "core/radius_search.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 

@@ -9,7 +9,7 @@
 #include <limits>
 #include <vector>
 
-#include "core/point_index.hpp"
+#include "core/refine_index.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 
@@ -18,7 +18,7 @@ using namespace kissm::detail;
 namespace {
 
 struct Hit {
-    std::uint32_t index = PointIndex::kNone;
+    std::uint32_t index = RefineIndex::kNone;
     float dist2 = std::numeric_limits<float>::infinity();
 };
 
@@ -30,7 +30,7 @@ Hit brute_force(const std::vector<Vec3f> &points, const Vec3f &q, float max_dist
     for (std::size_t i = 0; i < points.size(); ++i) {
         const float dx = points[i].x() - q.x(), dy = points[i].y() - q.y(), dz = points[i].z() - q.z();
         const float d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 <= max_dist2 && (best.index == PointIndex::kNone || d2 < best.dist2))
+        if (d2 <= max_dist2 && (best.index == RefineIndex::kNone || d2 < best.dist2))
             best.index = static_cast<std::uint32_t>(i), best.dist2 = d2;
     }
     return best;
@@ -51,18 +51,18 @@ std::size_t mismatches(const std::vector<Vec3f> &points, const std::vector<Vec3f
     for (const Vec3f &q : queries) want.push_back(brute_force(points, q, max_dist2));
     const auto n = static_cast<std::uint32_t>(points.size());
     for (const double cell : cells) {
-        const PointIndex index(points, cell);
+        const RefineIndex index(points, cell);
         for (std::size_t k = 0; k < queries.size(); ++k) {
             const Vec3f &q = queries[k];
             const std::uint32_t w = want[k].index;
-            const std::uint32_t hints[] = {PointIndex::kNone,
+            const std::uint32_t hints[] = {RefineIndex::kNone,
                                            w,
-                                           n > 0 && w != PointIndex::kNone ? (w + 1) % n : 0,
+                                           n > 0 && w != RefineIndex::kNone ? (w + 1) % n : 0,
                                            0,
                                            n > 0 ? n - 1 : 0,
                                            n,
                                            n + 7,
-                                           PointIndex::kNone - 1};
+                                           RefineIndex::kNone - 1};
             for (const std::uint32_t hint : hints) {
                 float d2 = -1.0f;
                 const std::uint32_t got = index.nearest(q, max_dist2, &d2, hint);
@@ -141,7 +141,7 @@ static void test_duplicates() {
     for (int i = 0; i < 40; ++i) queries.push_back(points[static_cast<std::size_t>(i * 13)]);
     for (const float r2 : kRadii2) CHECK_MSG(mismatches(points, queries, r2) == 0, "duplicates, max_dist2 %g", r2);
     // The lowest index of the duplicated point wins.
-    const PointIndex index(points, 0.3);
+    const RefineIndex index(points, 0.3);
     float d2 = -1.0f;
     CHECK_EQ_INT(index.nearest(dup, 1.0f, &d2), 0);
     CHECK_EQ_INT(index.nearest(dup, 1.0f, &d2, 7 * 299), 0); // a later copy as the hint
@@ -149,7 +149,7 @@ static void test_duplicates() {
     // Nothing but duplicates: one leaf's worth and many leaves' worth.
     for (const std::size_t n : {std::size_t{5}, std::size_t{16}, std::size_t{17}, std::size_t{5000}}) {
         const std::vector<Vec3f> same(n, dup);
-        const PointIndex all_same(same, 0.25);
+        const RefineIndex all_same(same, 0.25);
         CHECK_EQ_INT(all_same.size(), n);
         CHECK_EQ_INT(all_same.nearest(Vec3f(3.0f, 3.0f, 3.0f), 100.0f, &d2), 0);
         CHECK_EQ_INT(mismatches(same, queries, 4.0f), 0);
@@ -160,38 +160,38 @@ static void test_duplicates() {
 // exceeds the bound; NaN and negative bounds find nothing.
 static void test_radius_is_inclusive_and_respected() {
     const std::vector<Vec3f> points = {Vec3f(3.0f, 0.0f, 0.0f), Vec3f(0.0f, 5.0f, 0.0f), Vec3f(0.0f, 0.0f, -7.0f)};
-    const PointIndex index(points, 1.0);
+    const RefineIndex index(points, 1.0);
     float d2 = -1.0f;
     CHECK_EQ_INT(index.nearest(Vec3f::Zero(), 9.0f, &d2), 0);
     CHECK(d2 == 9.0f);
-    CHECK_EQ_INT(index.nearest(Vec3f::Zero(), std::nextafter(9.0f, 0.0f), &d2), PointIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f::Zero(), std::nextafter(9.0f, 0.0f), &d2), RefineIndex::kNone);
     CHECK(std::isinf(d2) && d2 > 0.0f);
-    CHECK_EQ_INT(index.nearest(Vec3f::Zero(), -1.0f, &d2), PointIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f::Zero(), -1.0f, &d2), RefineIndex::kNone);
     CHECK(std::isinf(d2));
-    CHECK_EQ_INT(index.nearest(Vec3f::Zero(), std::numeric_limits<float>::quiet_NaN(), &d2), PointIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f::Zero(), std::numeric_limits<float>::quiet_NaN(), &d2), RefineIndex::kNone);
     CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 5.0f, 0.0f), 0.0f, &d2), 1); // radius 0: the point itself only
     CHECK(d2 == 0.0f);
-    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 5.0f, 1e-3f), 0.0f, nullptr), PointIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 5.0f, 1e-3f), 0.0f, nullptr), RefineIndex::kNone);
     CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 0.0f, -6.0f), 1.0f, nullptr), 2); // dist2 may be NULL
     // A hint beyond the radius finds nothing more than the radius allows.
-    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 0.0f, -6.0f), 0.5f, &d2, 2), PointIndex::kNone);
-    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 0.0f, -6.0f), 0.5f, &d2, 0), PointIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 0.0f, -6.0f), 0.5f, &d2, 2), RefineIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, 0.0f, -6.0f), 0.5f, &d2, 0), RefineIndex::kNone);
     // A query that is not a number finds nothing, with or without a hint.
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    CHECK_EQ_INT(index.nearest(Vec3f(nan, 0.0f, 0.0f), 100.0f, &d2), PointIndex::kNone);
-    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, nan, 0.0f), 100.0f, &d2, 1), PointIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f(nan, 0.0f, 0.0f), 100.0f, &d2), RefineIndex::kNone);
+    CHECK_EQ_INT(index.nearest(Vec3f(0.0f, nan, 0.0f), 100.0f, &d2, 1), RefineIndex::kNone);
 
     // Many random bounds over a random cloud: every hit within its bound.
     TestRng rng(71);
     const std::vector<Vec3f> cloud = gaussian(rng, 3000, 5.0, 5.0, 5.0);
-    const PointIndex big(cloud, 0.5);
+    const RefineIndex big(cloud, 0.5);
     std::size_t outside = 0, hits = 0, misses = 0;
     for (int k = 0; k < 2000; ++k) {
         const Vec3f q(static_cast<float>(rng.uniform(-8, 8)), static_cast<float>(rng.uniform(-8, 8)),
                       static_cast<float>(rng.uniform(-8, 8)));
         const float r2 = static_cast<float>(rng.uniform(0.0, 2.0));
         const std::uint32_t j = big.nearest(q, r2, &d2, static_cast<std::uint32_t>(k) % 3000);
-        if (j == PointIndex::kNone) {
+        if (j == RefineIndex::kNone) {
             ++misses;
             continue;
         }
@@ -205,22 +205,22 @@ static void test_radius_is_inclusive_and_respected() {
 
 static void test_empty_and_tiny() {
     float d2 = -1.0f;
-    const PointIndex none;
+    const RefineIndex none;
     CHECK(none.empty());
     CHECK_EQ_INT(none.size(), 0);
-    CHECK_EQ_INT(none.nearest(Vec3f::Zero(), std::numeric_limits<float>::infinity(), &d2), PointIndex::kNone);
+    CHECK_EQ_INT(none.nearest(Vec3f::Zero(), std::numeric_limits<float>::infinity(), &d2), RefineIndex::kNone);
     CHECK(std::isinf(d2));
     for (const double cell : kCells) {
-        const PointIndex from_empty(std::vector<Vec3f>(), cell);
+        const RefineIndex from_empty(std::vector<Vec3f>(), cell);
         CHECK(from_empty.empty());
-        CHECK_EQ_INT(from_empty.nearest(Vec3f(1.0f, 2.0f, 3.0f), 1e30f, &d2), PointIndex::kNone);
-        CHECK_EQ_INT(from_empty.nearest(Vec3f(1.0f, 2.0f, 3.0f), 1e30f, &d2, 0), PointIndex::kNone);
+        CHECK_EQ_INT(from_empty.nearest(Vec3f(1.0f, 2.0f, 3.0f), 1e30f, &d2), RefineIndex::kNone);
+        CHECK_EQ_INT(from_empty.nearest(Vec3f(1.0f, 2.0f, 3.0f), 1e30f, &d2, 0), RefineIndex::kNone);
     }
     // 1 point, exactly a leaf (16), one more than a leaf (17).
     TestRng rng(73);
     for (const std::size_t n : {std::size_t{1}, std::size_t{2}, std::size_t{16}, std::size_t{17}, std::size_t{33}}) {
         const std::vector<Vec3f> pts = gaussian(rng, n, 1.0, 1.0, 1.0);
-        const PointIndex index(pts, 0.3);
+        const RefineIndex index(pts, 0.3);
         CHECK(!index.empty());
         CHECK_EQ_INT(index.size(), n);
         CHECK(index.bytes() >= n * (3 * sizeof(float) + sizeof(std::uint32_t)));
@@ -261,11 +261,11 @@ static void test_moving_queries_with_hints() {
                                  static_cast<float>(offset + 0.3 * std::sin(u) + 0.01 * rng.normal()));
         }
         for (const double cell : {0.1, 0.25, 1e-7}) {
-            const PointIndex index(surface, cell);
+            const RefineIndex index(surface, cell);
             std::size_t bad = 0;
             for (int walk = 0; walk < 20; ++walk) {
                 Vec3f q = surface[static_cast<std::size_t>(walk) * 997];
-                std::uint32_t hint = PointIndex::kNone;
+                std::uint32_t hint = RefineIndex::kNone;
                 for (int step = 0; step < 30; ++step) {
                     q += Vec3f(static_cast<float>(0.02 * rng.normal()), static_cast<float>(0.02 * rng.normal()),
                                static_cast<float>(0.02 * rng.normal()));

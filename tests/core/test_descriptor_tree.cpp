@@ -9,7 +9,7 @@
 
 #include <nanoflann.hpp>
 
-#include "core/kdtree.hpp"
+#include "core/descriptor_tree.hpp"
 #include "harness.h"
 #include "test_rng.hpp"
 
