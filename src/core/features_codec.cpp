@@ -12,6 +12,7 @@
 #include <string>
 
 #include "failure.hpp"
+#include "little_endian.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -71,26 +72,25 @@ public:
         p_ += n;
     }
     void u8(std::uint8_t v) { *p_++ = v; }
-    void u32(std::uint32_t v) {
-        for (int i = 0; i < 4; ++i) *p_++ = static_cast<std::uint8_t>(v >> (8 * i));
-    }
-    void u64(std::uint64_t v) {
-        for (int i = 0; i < 8; ++i) *p_++ = static_cast<std::uint8_t>(v >> (8 * i));
-    }
+    void u32(std::uint32_t v) { store(v); }
+    void u64(std::uint64_t v) { store(v); }
     void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
     void f32(float v) {
-        std::uint32_t b;
-        std::memcpy(&b, &v, 4);
-        u32(b);
+        store_le_f32(v, p_);
+        p_ += 4;
     }
     void f64(double v) {
-        std::uint64_t b;
-        std::memcpy(&b, &v, 8);
-        u64(b);
+        store_le_f64(v, p_);
+        p_ += 8;
     }
     void vec3(const Vec3f &v) { f32(v.x()), f32(v.y()), f32(v.z()); }
 
 private:
+    template <class U>
+    void store(U v) {
+        store_le(v, p_);
+        p_ += sizeof(U);
+    }
     std::uint8_t *p_;
 };
 
@@ -109,29 +109,6 @@ void write_normals(Writer &w, const Normals &n) {
 }
 
 // ---- reading ----------------------------------------------------------------------------------------------
-
-std::uint32_t load_u32(const std::uint8_t *p) {
-    std::uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(p[i]) << (8 * i);
-    return v;
-}
-std::uint64_t load_u64(const std::uint8_t *p) {
-    std::uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(p[i]) << (8 * i);
-    return v;
-}
-float load_f32(const std::uint8_t *p) {
-    const std::uint32_t b = load_u32(p);
-    float v;
-    std::memcpy(&v, &b, 4);
-    return v;
-}
-double load_f64(const std::uint8_t *p) {
-    const std::uint64_t b = load_u64(p);
-    double v;
-    std::memcpy(&v, &b, 8);
-    return v;
-}
 
 [[noreturn]] void malformed(const std::string &what, std::size_t offset) {
     fail(ErrorKind::Parse, "features bytes: " + what + " (byte offset " + std::to_string(offset) + ")");
@@ -160,15 +137,10 @@ public:
         return p;
     }
     std::uint8_t u8(const char *what) { return *take(1, what); }
-    std::uint32_t u32(const char *what) { return load_u32(take(4, what)); }
-    std::uint64_t u64(const char *what) { return load_u64(take(8, what)); }
-    double f64(const char *what) { return load_f64(take(8, what)); }
-    std::int32_t i32(const char *what) {
-        const std::uint32_t u = u32(what);
-        std::int32_t v;
-        std::memcpy(&v, &u, 4);
-        return v;
-    }
+    std::uint32_t u32(const char *what) { return load_le<std::uint32_t>(take(4, what)); }
+    std::uint64_t u64(const char *what) { return load_le<std::uint64_t>(take(8, what)); }
+    double f64(const char *what) { return load_le_f64(take(8, what)); }
+    std::int32_t i32(const char *what) { return load_le_i32(take(4, what)); }
 
     // A count of elements of `element_bytes` each that follow: refused, before anything is allocated for it,
     // when the remaining bytes cannot hold them (a lying count never becomes a huge allocation).
@@ -255,7 +227,7 @@ void read_normals(Reader &r, std::size_t num_voxels, const char *flags_name, con
     for (std::size_t i = 0, k = 0; i < num_voxels; ++i) {
         if (!flags[i]) continue;
         const std::uint8_t *q = p + k * kPointBytes;
-        const Vec3f v(load_f32(q), load_f32(q + 4), load_f32(q + 8));
+        const Vec3f v(load_le_f32(q), load_le_f32(q + 4), load_le_f32(q + 8));
         // Unit vectors from the eigen solver, rounded to float: anything else is not a normal the pipeline made.
         if (!(v.allFinite() && std::fabs(v.squaredNorm() - 1.0f) <= 1e-3f))
             malformed(std::string(vectors_name) + " of voxel " + std::to_string(i) + " is not a finite unit vector",
@@ -339,16 +311,16 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
     // interpreted; then the fields, each checked as if the checksum had been forged.
     if (size >= sizeof kMagic && std::memcmp(data, kMagic, sizeof kMagic) != 0)
         malformed("not kissm features (wrong magic)", 0);
-    if (size >= 12 && load_u32(data + 8) != kFeaturesFormatVersion)
-        malformed("format version " + std::to_string(load_u32(data + 8)) + " is not known (this kissm reads " +
-                      std::to_string(kFeaturesFormatVersion) + ")",
+    if (size >= 12 && load_le<std::uint32_t>(data + 8) != kFeaturesFormatVersion)
+        malformed("format version " + std::to_string(load_le<std::uint32_t>(data + 8)) +
+                      " is not known (this kissm reads " + std::to_string(kFeaturesFormatVersion) + ")",
                   8);
     if (size < kMinBytes)
         malformed("truncated: " + std::to_string(size) + " bytes given, features take at least " +
                       std::to_string(kMinBytes),
                   size);
-    const std::uint64_t declared = load_u64(data + 16);
-    const std::uint64_t stored = load_u64(data + size - kChecksumBytes);
+    const std::uint64_t declared = load_le<std::uint64_t>(data + 16);
+    const std::uint64_t stored = load_le<std::uint64_t>(data + size - kChecksumBytes);
     const std::uint64_t computed = features_checksum(data, size - kChecksumBytes);
     if (stored != computed)
         malformed("checksum mismatch: the bytes are corrupted or truncated (" + std::to_string(size) +
@@ -384,7 +356,7 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
     const std::size_t origin_at = r.offset();
     const std::uint8_t *o = r.take(kOriginBytes, "origin");
     for (int i = 0; i < 3; ++i) {
-        f.voxels.origin[i] = load_f64(o + 8 * i);
+        f.voxels.origin[i] = load_le_f64(o + 8 * i);
         if (!std::isfinite(f.voxels.origin[i])) malformed("origin[" + std::to_string(i) + "] is not finite", origin_at);
     }
 
@@ -394,7 +366,7 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
     f.voxels.points.resize(num_voxels);
     for (std::size_t i = 0; i < num_voxels; ++i) {
         const std::uint8_t *q = pts + i * kPointBytes;
-        const Vec3f v(load_f32(q), load_f32(q + 4), load_f32(q + 8));
+        const Vec3f v(load_le_f32(q), load_le_f32(q + 4), load_le_f32(q + 8));
         if (!(v.allFinite() && v.cwiseAbs().maxCoeff() <= reach))
             malformed("voxel point " + std::to_string(i) + " is not finite or lies beyond 2^21 voxels of the origin",
                       points_at + i * kPointBytes);
@@ -408,7 +380,7 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
     const std::uint8_t *keys = r.take(num_keypoints * 4, "keypoints");
     f.descriptors.keypoint.resize(num_keypoints);
     for (std::size_t i = 0; i < num_keypoints; ++i) {
-        const std::uint32_t k = load_u32(keys + 4 * i);
+        const std::uint32_t k = load_le<std::uint32_t>(keys + 4 * i);
         if (k >= num_voxels)
             malformed("keypoint " + std::to_string(i) + " is voxel " + std::to_string(k) + ", out of range (" +
                           std::to_string(num_voxels) + " voxels)",
@@ -426,7 +398,7 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
     const std::uint8_t *vals = r.take(num_keypoints * kDescriptorBytes, "descriptors");
     f.descriptors.values.resize(num_keypoints * kDescriptorDim);
     for (std::size_t i = 0; i < f.descriptors.values.size(); ++i) {
-        const float v = load_f32(vals + 4 * i);
+        const float v = load_le_f32(vals + 4 * i);
         if (!(v >= 0.0f && v <= kMaxDescriptorValue))
             malformed("descriptor value " + std::to_string(i % kDescriptorDim) + " of keypoint " +
                           std::to_string(i / kDescriptorDim) + " is not in [0, 101]",

@@ -2,6 +2,7 @@
 // NumPy .npy (format versions 1.0, 2.0, 3.0): a 2-D array of shape (N, k >= 3), C or Fortran order; the
 // first three columns are x, y, z.
 #include "core/detail_namespace.hpp"
+#include "core/little_endian.hpp"
 #include "io/binary_scalar.hpp"
 #include "io/file_bytes.hpp"
 #include "io/format_readers.hpp"
@@ -158,11 +159,7 @@ void parse_descr(const std::string &path, const std::string &descr, Scalar &type
     swap = little != host_is_little_endian();
 }
 
-std::uint32_t le_uint(const char *p, std::size_t n) {
-    std::uint32_t v = 0;
-    for (std::size_t i = n; i-- > 0;) v = (v << 8) | static_cast<unsigned char>(p[i]);
-    return v;
-}
+const std::uint8_t *as_bytes(const char *p) { return reinterpret_cast<const std::uint8_t *>(p); }
 
 } // namespace
 
@@ -177,11 +174,11 @@ std::vector<double> parse_npy(const std::string &path, std::string_view bytes) {
     std::size_t header_len = 0;
     if (major == 1) {
         header_begin = 10;
-        header_len = le_uint(bytes.data() + 8, 2);
+        header_len = load_le<std::uint16_t>(as_bytes(bytes.data() + 8));
     } else if (major == 2 || major == 3) {
         if (bytes.size() < 12) fail_parse(path, "truncated: the .npy preamble is incomplete");
         header_begin = 12;
-        header_len = le_uint(bytes.data() + 8, 4);
+        header_len = load_le<std::uint32_t>(as_bytes(bytes.data() + 8));
     } else {
         fail_parse(path, "unsupported .npy format version " + std::to_string(major) + "." + std::to_string(minor));
     }

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <vector>
 
+#include "core/little_endian.hpp"
 #include "kissm.h"
 
 namespace {
@@ -21,17 +22,10 @@ void require(bool ok) {
     if (!ok) std::abort();
 }
 
-std::uint64_t load_u64(const std::uint8_t *p) {
-    std::uint64_t v = 0;
-    for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
-    return v;
-}
-double load_f64(const std::uint8_t *p) {
-    const std::uint64_t b = load_u64(p);
-    double v;
-    std::memcpy(&v, &b, 8);
-    return v;
-}
+using kissm::detail::load_le;
+using kissm::detail::load_le_f64;
+using kissm::detail::load_le_i32;
+using kissm::detail::store_le;
 
 // The format's checksum (over everything before the last 8 bytes: FNV-1a steps on 64-bit little-endian words,
 // then on the remaining bytes), written from the format document.
@@ -39,9 +33,9 @@ void reseal(std::vector<std::uint8_t> &b) {
     const std::size_t n = b.size() - 8;
     std::uint64_t h = 14695981039346656037ull;
     std::size_t i = 0;
-    for (; i + 8 <= n; i += 8) h = (h ^ load_u64(b.data() + i)) * 1099511628211ull;
+    for (; i + 8 <= n; i += 8) h = (h ^ load_le<std::uint64_t>(b.data() + i)) * 1099511628211ull;
     for (; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-    for (int k = 0; k < 8; ++k) b[n + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(h >> (8 * k));
+    store_le(h, b.data() + n);
 }
 
 // A config with the settings of the header (offsets of docs/features-format.md), for a matcher that accepts
@@ -50,16 +44,14 @@ kissm_config config_of(const std::uint8_t *b) {
     kissm_config c;
     require(kissm_config_init(&c, sizeof c) == KISSM_OK);
     c.num_threads = 1;
-    c.voxel_size = load_f64(b + 24);
-    c.fpfh_radius_gain = load_f64(b + 32);
-    c.normal_radius_gain = load_f64(b + 40);
-    c.max_linearity = load_f64(b + 48);
-    c.refine_normal_radius_gain = load_f64(b + 56);
-    c.sensor_height = load_f64(b + 64);
-    for (int i = 0; i < 3; ++i) c.viewpoint[i] = load_f64(b + 72 + 8 * i), c.up[i] = load_f64(b + 96 + 8 * i);
-    std::int32_t tau;
-    std::memcpy(&tau, b + 120, 4); // little-endian hosts only, as every target kissm is fuzzed on
-    c.min_normal_neighbors = tau;
+    c.voxel_size = load_le_f64(b + 24);
+    c.fpfh_radius_gain = load_le_f64(b + 32);
+    c.normal_radius_gain = load_le_f64(b + 40);
+    c.max_linearity = load_le_f64(b + 48);
+    c.refine_normal_radius_gain = load_le_f64(b + 56);
+    c.sensor_height = load_le_f64(b + 64);
+    for (int i = 0; i < 3; ++i) c.viewpoint[i] = load_le_f64(b + 72 + 8 * i), c.up[i] = load_le_f64(b + 96 + 8 * i);
+    c.min_normal_neighbors = load_le_i32(b + 120);
     c.nonfinite_policy = b[124];
     c.viewpoint_mode = b[125];
     c.refine_mode = b[126];
