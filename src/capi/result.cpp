@@ -10,6 +10,36 @@
 KISSM_DETAIL_BEGIN
 namespace capi {
 
+// The fields that kissm_result and the core's Registration share by name: copied as they are (-Wconversion
+// refuses a narrowing copy).
+#define KISSM_RESULT_SAME_FIELDS(X)                                                                                    \
+  X(num_source_points)                                                                                                 \
+  X(num_target_points)                                                                                                 \
+  X(num_source_nonfinite)                                                                                              \
+  X(num_target_nonfinite)                                                                                              \
+  X(num_source_voxels)                                                                                                 \
+  X(num_target_voxels)                                                                                                 \
+  X(num_source_keypoints)                                                                                              \
+  X(num_target_keypoints)                                                                                              \
+  X(num_initial_correspondences)                                                                                       \
+  X(num_pruned_correspondences)                                                                                        \
+  X(num_rotation_inliers)                                                                                              \
+  X(num_final_inliers)                                                                                                 \
+  X(max_core_number)                                                                                                   \
+  X(inlier_ratio)                                                                                                      \
+  X(residual_rms)                                                                                                      \
+  X(noise_bound)                                                                                                       \
+  X(time_voxelize_ms)                                                                                                  \
+  X(time_features_ms)                                                                                                  \
+  X(time_matching_ms)                                                                                                  \
+  X(time_pruning_ms)                                                                                                   \
+  X(time_solver_ms)                                                                                                    \
+  X(time_refine_ms)                                                                                                    \
+  X(num_source_suppressed)                                                                                             \
+  X(num_target_suppressed)                                                                                             \
+  X(time_suppression_ms)                                                                                               \
+  X(tilt)
+
 namespace {
 
 // The reason codes of kissm.h for the core's reasons; no default, so a new Reason without a code fails the
@@ -108,37 +138,16 @@ void fill_result(const Registration &g, kissm_result *caller) {
         r->refine_iterations = g.refine_iterations;
         r->refine_converged = g.refine_converged ? 1 : 0;
     }
-    r->num_source_points = g.num_source_points;
-    r->num_target_points = g.num_target_points;
-    r->num_source_nonfinite = g.num_source_nonfinite;
-    r->num_target_nonfinite = g.num_target_nonfinite;
-    r->num_source_voxels = g.num_source_voxels;
-    r->num_target_voxels = g.num_target_voxels;
-    r->num_source_keypoints = g.num_source_keypoints;
-    r->num_target_keypoints = g.num_target_keypoints;
-    r->num_initial_correspondences = g.num_initial_correspondences;
-    r->num_pruned_correspondences = g.num_pruned_correspondences;
-    r->num_rotation_inliers = g.num_rotation_inliers;
-    r->num_final_inliers = g.num_final_inliers;
-    r->max_core_number = g.max_core_number;
-    r->inlier_ratio = g.inlier_ratio;
-    r->residual_rms = g.residual_rms;
-    r->noise_bound = g.noise_bound;
+#define KISSM_COPY_FIELD(name) r->name = g.name;
+    KISSM_RESULT_SAME_FIELDS(KISSM_COPY_FIELD)
+#undef KISSM_COPY_FIELD
     for (int i = 0; i < 3; ++i) r->inlier_extent[i] = g.inlier_extent[i];
-    r->time_voxelize_ms = g.time_voxelize_ms;
-    r->time_features_ms = g.time_features_ms;
-    r->time_matching_ms = g.time_matching_ms;
-    r->time_pruning_ms = g.time_pruning_ms;
-    r->time_solver_ms = g.time_solver_ms;
-    r->time_refine_ms = g.time_refine_ms;
-    r->num_source_suppressed = g.num_source_suppressed;
-    r->num_target_suppressed = g.num_target_suppressed;
-    r->time_suppression_ms = g.time_suppression_ms;
-    r->tilt = g.tilt;
     r->time_total_ms = g.time_voxelize_ms + g.time_features_ms + g.time_matching_ms + g.time_pruning_ms +
                        g.time_solver_ms + g.time_refine_ms;
     store_struct(caller, caller->struct_size, &full, sizeof full);
 }
+
+#undef KISSM_RESULT_SAME_FIELDS
 
 } // namespace capi
 KISSM_DETAIL_END

@@ -238,6 +238,61 @@ fn raw_defaults() -> (sys::kissm_config, i32) {
     (raw, status)
 }
 
+/// `Config`'s read accessors that return one field of the raw struct: `f64` and `vec3` as stored, `count` (an `i32`
+/// in C) as a `usize`, negative as 0.
+macro_rules! config_getters {
+    ($($(#[$doc:meta])* $name:ident: $kind:ident,)*) => { $(config_getter!($(#[$doc])* $name $kind);)* };
+}
+macro_rules! config_getter {
+    ($(#[$doc:meta])* $name:ident f64) => {
+        $(#[$doc])*
+        pub fn $name(&self) -> f64 {
+            self.raw.$name
+        }
+    };
+    ($(#[$doc:meta])* $name:ident vec3) => {
+        $(#[$doc])*
+        pub fn $name(&self) -> [f64; 3] {
+            self.raw.$name
+        }
+    };
+    ($(#[$doc:meta])* $name:ident count) => {
+        $(#[$doc])*
+        pub fn $name(&self) -> usize {
+            usize::try_from(self.raw.$name).unwrap_or(0)
+        }
+    };
+}
+
+/// `ConfigBuilder`'s setters that store their argument in one field of the raw struct: `f64` and `vec3` as given,
+/// `count` as an `i32` (saturated; `build` then names the field out of range).
+macro_rules! builder_setters {
+    ($($(#[$doc:meta])* $name:ident: $kind:ident,)*) => { $(builder_setter!($(#[$doc])* $name $kind);)* };
+}
+macro_rules! builder_setter {
+    ($(#[$doc:meta])* $name:ident f64) => {
+        $(#[$doc])*
+        pub fn $name(mut self, value: f64) -> Self {
+            self.raw.$name = value;
+            self
+        }
+    };
+    ($(#[$doc:meta])* $name:ident vec3) => {
+        $(#[$doc])*
+        pub fn $name(mut self, value: [f64; 3]) -> Self {
+            self.raw.$name = value;
+            self
+        }
+    };
+    ($(#[$doc:meta])* $name:ident count) => {
+        $(#[$doc])*
+        pub fn $name(mut self, value: usize) -> Self {
+            self.raw.$name = to_i32(value);
+            self
+        }
+    };
+}
+
 fn to_i32(value: usize) -> i32 {
     // Out-of-range values become i32::MAX, which the library's validation rejects with a message naming
     // the field.
@@ -290,41 +345,25 @@ impl Config {
         &self.raw
     }
 
-    /// Worker threads per call; 0 = all hardware threads. Results do not depend on it.
-    pub fn num_threads(&self) -> usize {
-        usize::try_from(self.raw.num_threads).unwrap_or(0)
-    }
-    /// Voxel size in the clouds' unit (metres for LiDAR); every radius and bound scales with it.
-    pub fn voxel_size(&self) -> f64 {
-        self.raw.voxel_size
-    }
-    /// Normal estimation radius, in voxel sizes.
-    pub fn normal_radius_gain(&self) -> f64 {
-        self.raw.normal_radius_gain
-    }
-    /// FPFH descriptor radius, in voxel sizes.
-    pub fn fpfh_radius_gain(&self) -> f64 {
-        self.raw.fpfh_radius_gain
-    }
-    /// Linearity `(l1 - l2) / l1` above which a point gets no normal.
-    pub fn max_linearity(&self) -> f64 {
-        self.raw.max_linearity
-    }
-    /// Lowe ratio on squared descriptor distances; 1 = off.
-    pub fn ratio_test(&self) -> f64 {
-        self.raw.ratio_test
-    }
-    /// Correspondence-graph edge tolerance, in voxel sizes.
-    pub fn prune_noise_bound_gain(&self) -> f64 {
-        self.raw.prune_noise_bound_gain
-    }
-    /// Solver inlier bound, in voxel sizes.
-    pub fn solver_noise_bound_gain(&self) -> f64 {
-        self.raw.solver_noise_bound_gain
-    }
-    /// Cap on both noise bounds in the clouds' unit; 0 = no cap.
-    pub fn noise_bound_max(&self) -> f64 {
-        self.raw.noise_bound_max
+    config_getters! {
+        /// Worker threads per call; 0 = all hardware threads. Results do not depend on it.
+        num_threads: count,
+        /// Voxel size in the clouds' unit (metres for LiDAR); every radius and bound scales with it.
+        voxel_size: f64,
+        /// Normal estimation radius, in voxel sizes.
+        normal_radius_gain: f64,
+        /// FPFH descriptor radius, in voxel sizes.
+        fpfh_radius_gain: f64,
+        /// Linearity `(l1 - l2) / l1` above which a point gets no normal.
+        max_linearity: f64,
+        /// Lowe ratio on squared descriptor distances; 1 = off.
+        ratio_test: f64,
+        /// Correspondence-graph edge tolerance, in voxel sizes.
+        prune_noise_bound_gain: f64,
+        /// Solver inlier bound, in voxel sizes.
+        solver_noise_bound_gain: f64,
+        /// Cap on both noise bounds in the clouds' unit; 0 = no cap.
+        noise_bound_max: f64,
     }
     /// Where normals are oriented toward.
     pub fn viewpoint(&self) -> Viewpoint {
@@ -335,18 +374,14 @@ impl Config {
             _ => Viewpoint::Fixed(self.raw.viewpoint),
         }
     }
-    /// Neighbours needed for a normal and a descriptor.
-    pub fn min_normal_neighbors(&self) -> usize {
-        usize::try_from(self.raw.min_normal_neighbors).unwrap_or(0)
-    }
-    /// Cap on the mutual matches kept, best ratio first.
-    pub fn max_correspondences(&self) -> usize {
-        usize::try_from(self.raw.max_correspondences).unwrap_or(0)
-    }
-    /// Final inliers needed for a valid pose without refinement
-    /// ([`refine_min_inliers`](Config::refine_min_inliers) with it).
-    pub fn min_inliers(&self) -> usize {
-        usize::try_from(self.raw.min_inliers).unwrap_or(0)
+    config_getters! {
+        /// Neighbours needed for a normal and a descriptor.
+        min_normal_neighbors: count,
+        /// Cap on the mutual matches kept, best ratio first.
+        max_correspondences: count,
+        /// Final inliers needed for a valid pose without refinement
+        /// ([`refine_min_inliers`](Config::refine_min_inliers) with it).
+        min_inliers: count,
     }
     /// What happens to NaN and infinite coordinates.
     pub fn nonfinite_policy(&self) -> NonFinitePolicy {
@@ -362,57 +397,37 @@ impl Config {
     pub fn refine_mode(&self) -> RefineMode {
         RefineMode::from_code(self.raw.refine_mode).unwrap_or_default()
     }
-    /// Refinement iteration cap.
-    pub fn refine_max_iterations(&self) -> usize {
-        usize::try_from(self.raw.refine_max_iterations).unwrap_or(0)
-    }
-    /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap)),
-    /// in voxel sizes.
-    pub fn refine_max_distance_gain(&self) -> f64 {
-        self.raw.refine_max_distance_gain
-    }
-    /// Scale of refinement's Cauchy kernel, in voxel sizes.
-    pub fn refine_kernel_gain(&self) -> f64 {
-        self.raw.refine_kernel_gain
-    }
-    /// Refinement has converged when a step turns the pose by less than this (radians) and moves it by less
-    /// than [`refine_translation_epsilon_gain`](Config::refine_translation_epsilon_gain) voxel sizes.
-    pub fn refine_rotation_epsilon(&self) -> f64 {
-        self.raw.refine_rotation_epsilon
-    }
-    /// Refinement's convergence threshold on translation steps, in voxel sizes.
-    pub fn refine_translation_epsilon_gain(&self) -> f64 {
-        self.raw.refine_translation_epsilon_gain
-    }
-    /// Without refinement, a valid pose needs
-    /// [`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this
-    /// (radians).
-    pub fn max_rotation_uncertainty(&self) -> f64 {
-        self.raw.max_rotation_uncertainty
-    }
-    /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this.
-    pub fn min_overlap(&self) -> f64 {
-        self.raw.min_overlap
-    }
-    /// With refinement, a valid registration needs
-    /// [`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage) at least this.
-    pub fn min_inlier_coverage(&self) -> f64 {
-        self.raw.min_inlier_coverage
-    }
-    /// With refinement, final inliers a valid registration needs ([`min_inliers`](Config::min_inliers)
-    /// applies without refinement).
-    pub fn refine_min_inliers(&self) -> usize {
-        usize::try_from(self.raw.refine_min_inliers).unwrap_or(0)
-    }
-    /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
-    /// [`Refinement::condition`](crate::Refinement::condition) at least this.
-    pub fn min_refine_condition(&self) -> f64 {
-        self.raw.min_refine_condition
-    }
-    /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at most
-    /// [`normal_radius_gain`](Config::normal_radius_gain)); computed with the features.
-    pub fn refine_normal_radius_gain(&self) -> f64 {
-        self.raw.refine_normal_radius_gain
+    config_getters! {
+        /// Refinement iteration cap.
+        refine_max_iterations: count,
+        /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap)),
+        /// in voxel sizes.
+        refine_max_distance_gain: f64,
+        /// Scale of refinement's Cauchy kernel, in voxel sizes.
+        refine_kernel_gain: f64,
+        /// Refinement has converged when a step turns the pose by less than this (radians) and moves it by less
+        /// than [`refine_translation_epsilon_gain`](Config::refine_translation_epsilon_gain) voxel sizes.
+        refine_rotation_epsilon: f64,
+        /// Refinement's convergence threshold on translation steps, in voxel sizes.
+        refine_translation_epsilon_gain: f64,
+        /// Without refinement, a valid pose needs
+        /// [`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this
+        /// (radians).
+        max_rotation_uncertainty: f64,
+        /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this.
+        min_overlap: f64,
+        /// With refinement, a valid registration needs
+        /// [`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage) at least this.
+        min_inlier_coverage: f64,
+        /// With refinement, final inliers a valid registration needs ([`min_inliers`](Config::min_inliers)
+        /// applies without refinement).
+        refine_min_inliers: count,
+        /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
+        /// [`Refinement::condition`](crate::Refinement::condition) at least this.
+        min_refine_condition: f64,
+        /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at most
+        /// [`normal_radius_gain`](Config::normal_radius_gain)); computed with the features.
+        refine_normal_radius_gain: f64,
     }
     /// Geometric suppression before keypoints; computed with the features. A raw config (see
     /// [`Config::from_raw`]) holding no `KISSM_SUPPRESS_*` code reads as [`Suppression::None`] here;
@@ -420,19 +435,15 @@ impl Config {
     pub fn suppression(&self) -> Suppression {
         Suppression::from_code(self.raw.suppression).unwrap_or_default()
     }
-    /// Rotational degrees of freedom the solver estimates: 3, or 1 (yaw about [`up`](Config::up) only).
-    pub fn rotation_dof(&self) -> usize {
-        usize::try_from(self.raw.rotation_dof).unwrap_or(0)
-    }
-    /// The up direction in each cloud's own frame, as given (the library normalises it), for
-    /// [`Suppression::Ground`] and [`rotation_dof`](Config::rotation_dof) 1.
-    pub fn up(&self) -> [f64; 3] {
-        self.raw.up
-    }
-    /// Height of the sensor above the ground along [`up`](Config::up), metres, for
-    /// [`Suppression::Ground`]; 0 = estimate it from the cloud.
-    pub fn sensor_height(&self) -> f64 {
-        self.raw.sensor_height
+    config_getters! {
+        /// Rotational degrees of freedom the solver estimates: 3, or 1 (yaw about [`up`](Config::up) only).
+        rotation_dof: count,
+        /// The up direction in each cloud's own frame, as given (the library normalises it), for
+        /// [`Suppression::Ground`] and [`rotation_dof`](Config::rotation_dof) 1.
+        up: vec3,
+        /// Height of the sensor above the ground along [`up`](Config::up), metres, for
+        /// [`Suppression::Ground`]; 0 = estimate it from the cloud.
+        sensor_height: f64,
     }
 }
 
@@ -540,51 +551,26 @@ impl ConfigBuilder {
         self
     }
 
-    /// Worker threads, 0..=1024; 0 (the default) = all hardware threads. Results do not depend on it.
-    pub fn num_threads(mut self, threads: usize) -> Self {
-        self.raw.num_threads = to_i32(threads);
-        self
-    }
-    /// Voxel size in the clouds' unit, > 0 (default 0.3). Try 0.3-0.5 for outdoor LiDAR in metres, 0.05
-    /// for indoor RGB-D fragments.
-    pub fn voxel_size(mut self, voxel_size: f64) -> Self {
-        self.raw.voxel_size = voxel_size;
-        self
-    }
-    /// Normal radius in voxel sizes, in (0, fpfh_radius_gain] (default 3.5).
-    pub fn normal_radius_gain(mut self, gain: f64) -> Self {
-        self.raw.normal_radius_gain = gain;
-        self
-    }
-    /// FPFH radius in voxel sizes, in [1.5, 50] and at least the normal gain (default 5.0).
-    pub fn fpfh_radius_gain(mut self, gain: f64) -> Self {
-        self.raw.fpfh_radius_gain = gain;
-        self
-    }
-    /// Linearity above which a point gets no normal, in (0, 1] (default 0.99).
-    pub fn max_linearity(mut self, value: f64) -> Self {
-        self.raw.max_linearity = value;
-        self
-    }
-    /// Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off (default 0.9).
-    pub fn ratio_test(mut self, ratio: f64) -> Self {
-        self.raw.ratio_test = ratio;
-        self
-    }
-    /// Correspondence-graph edge tolerance in voxel sizes, in (0, 1e6] (default 1.0).
-    pub fn prune_noise_bound_gain(mut self, gain: f64) -> Self {
-        self.raw.prune_noise_bound_gain = gain;
-        self
-    }
-    /// Solver inlier bound in voxel sizes, in (0, 1e6] (default 0.75).
-    pub fn solver_noise_bound_gain(mut self, gain: f64) -> Self {
-        self.raw.solver_noise_bound_gain = gain;
-        self
-    }
-    /// Cap on both noise bounds in the clouds' unit, finite; 0 = no cap (the default).
-    pub fn noise_bound_max(mut self, bound: f64) -> Self {
-        self.raw.noise_bound_max = bound;
-        self
+    builder_setters! {
+        /// Worker threads, 0..=1024; 0 (the default) = all hardware threads. Results do not depend on it.
+        num_threads: count,
+        /// Voxel size in the clouds' unit, > 0 (default 0.3). Try 0.3-0.5 for outdoor LiDAR in metres, 0.05
+        /// for indoor RGB-D fragments.
+        voxel_size: f64,
+        /// Normal radius in voxel sizes, in (0, fpfh_radius_gain] (default 3.5).
+        normal_radius_gain: f64,
+        /// FPFH radius in voxel sizes, in [1.5, 50] and at least the normal gain (default 5.0).
+        fpfh_radius_gain: f64,
+        /// Linearity above which a point gets no normal, in (0, 1] (default 0.99).
+        max_linearity: f64,
+        /// Lowe ratio on squared descriptor distances, in (0, 1]; 1 = off (default 0.9).
+        ratio_test: f64,
+        /// Correspondence-graph edge tolerance in voxel sizes, in (0, 1e6] (default 1.0).
+        prune_noise_bound_gain: f64,
+        /// Solver inlier bound in voxel sizes, in (0, 1e6] (default 0.75).
+        solver_noise_bound_gain: f64,
+        /// Cap on both noise bounds in the clouds' unit, finite; 0 = no cap (the default).
+        noise_bound_max: f64,
     }
     /// Where normals are oriented toward (default: [`Viewpoint::Local`], no viewpoint).
     pub fn viewpoint(mut self, viewpoint: Viewpoint) -> Self {
@@ -599,21 +585,14 @@ impl ConfigBuilder {
         }
         self
     }
-    /// Neighbours needed for a normal and a descriptor, 3..=100000 (default 3).
-    pub fn min_normal_neighbors(mut self, count: usize) -> Self {
-        self.raw.min_normal_neighbors = to_i32(count);
-        self
-    }
-    /// Cap on the mutual matches kept (best ratio first), 3..=100000 (default 5000).
-    pub fn max_correspondences(mut self, count: usize) -> Self {
-        self.raw.max_correspondences = to_i32(count);
-        self
-    }
-    /// Final inliers a valid pose needs without refinement, 3..=100000 (default 15); with refinement
-    /// [`refine_min_inliers`](ConfigBuilder::refine_min_inliers) applies instead.
-    pub fn min_inliers(mut self, count: usize) -> Self {
-        self.raw.min_inliers = to_i32(count);
-        self
+    builder_setters! {
+        /// Neighbours needed for a normal and a descriptor, 3..=100000 (default 3).
+        min_normal_neighbors: count,
+        /// Cap on the mutual matches kept (best ratio first), 3..=100000 (default 5000).
+        max_correspondences: count,
+        /// Final inliers a valid pose needs without refinement, 3..=100000 (default 15); with refinement
+        /// [`refine_min_inliers`](ConfigBuilder::refine_min_inliers) applies instead.
+        min_inliers: count,
     }
     /// What happens to NaN and infinite coordinates (default [`NonFinitePolicy::Reject`]).
     pub fn nonfinite_policy(mut self, policy: NonFinitePolicy) -> Self {
@@ -629,76 +608,45 @@ impl ConfigBuilder {
         self.raw.refine_mode = mode.code();
         self
     }
-    /// Refinement iteration cap, 1..=1000 (default: the library's, see `kissm.h`).
-    pub fn refine_max_iterations(mut self, count: usize) -> Self {
-        self.raw.refine_max_iterations = to_i32(count);
-        self
-    }
-    /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap))
-    /// in voxel sizes, in (0, 100] (default: the library's).
-    pub fn refine_max_distance_gain(mut self, gain: f64) -> Self {
-        self.raw.refine_max_distance_gain = gain;
-        self
-    }
-    /// Scale of refinement's Cauchy kernel in voxel sizes, in (0, 100] (default: the library's).
-    pub fn refine_kernel_gain(mut self, gain: f64) -> Self {
-        self.raw.refine_kernel_gain = gain;
-        self
-    }
-    /// Convergence threshold on a step's rotation, radians, in [0, 1] (default: the library's).
-    pub fn refine_rotation_epsilon(mut self, epsilon: f64) -> Self {
-        self.raw.refine_rotation_epsilon = epsilon;
-        self
-    }
-    /// Convergence threshold on a step's translation in voxel sizes, in [0, 1] (default: the library's).
-    pub fn refine_translation_epsilon_gain(mut self, gain: f64) -> Self {
-        self.raw.refine_translation_epsilon_gain = gain;
-        self
-    }
-    /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this
-    /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default: the library's).
-    pub fn min_overlap(mut self, overlap: f64) -> Self {
-        self.raw.min_overlap = overlap;
-        self
-    }
-    /// Without refinement, a valid pose needs inliers that pin its rotation down to this many radians
-    /// ([`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this;
-    /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default:
-    /// the library's, 2 degrees).
-    pub fn max_rotation_uncertainty(mut self, radians: f64) -> Self {
-        self.raw.max_rotation_uncertainty = radians;
-        self
-    }
-    /// With refinement, a valid registration needs solver inliers spread over at least this much of the
-    /// aligned overlap ([`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage); below it:
-    /// [`Reason::ClusteredInliers`](crate::Reason::ClusteredInliers)); in [0, 1] (default: the library's).
-    pub fn min_inlier_coverage(mut self, coverage: f64) -> Self {
-        self.raw.min_inlier_coverage = coverage;
-        self
-    }
-    /// With refinement, final inliers a valid registration needs (fewer:
-    /// [`Reason::TooFewInliers`](crate::Reason::TooFewInliers)), 3..=100000 (default: the library's);
-    /// [`min_inliers`](ConfigBuilder::min_inliers) applies without refinement.
-    pub fn refine_min_inliers(mut self, count: usize) -> Self {
-        self.raw.refine_min_inliers = to_i32(count);
-        self
-    }
-    /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
-    /// [`Refinement::condition`](crate::Refinement::condition) at least this (below it:
-    /// [`Reason::Unconstrained`](crate::Reason::Unconstrained)): a direction carrying less than this share
-    /// of the strongest one's information slides, as along a corridor; in [0, 1] (default: the library's).
-    pub fn min_refine_condition(mut self, condition: f64) -> Self {
-        self.raw.min_refine_condition = condition;
-        self
-    }
-    /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at least 5 of them;
-    /// a value above [`normal_radius_gain`](ConfigBuilder::normal_radius_gain) acts as it); in (0, 50]
-    /// (default: the library's). They are computed with the features, so [`Features`](crate::Features) of
-    /// a matcher with another value do not match this one's
-    /// ([`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch)).
-    pub fn refine_normal_radius_gain(mut self, gain: f64) -> Self {
-        self.raw.refine_normal_radius_gain = gain;
-        self
+    builder_setters! {
+        /// Refinement iteration cap, 1..=1000 (default: the library's, see `kissm.h`).
+        refine_max_iterations: count,
+        /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap))
+        /// in voxel sizes, in (0, 100] (default: the library's).
+        refine_max_distance_gain: f64,
+        /// Scale of refinement's Cauchy kernel in voxel sizes, in (0, 100] (default: the library's).
+        refine_kernel_gain: f64,
+        /// Convergence threshold on a step's rotation, radians, in [0, 1] (default: the library's).
+        refine_rotation_epsilon: f64,
+        /// Convergence threshold on a step's translation in voxel sizes, in [0, 1] (default: the library's).
+        refine_translation_epsilon_gain: f64,
+        /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this
+        /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default: the library's).
+        min_overlap: f64,
+        /// Without refinement, a valid pose needs inliers that pin its rotation down to this many radians
+        /// ([`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this;
+        /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default:
+        /// the library's, 2 degrees).
+        max_rotation_uncertainty: f64,
+        /// With refinement, a valid registration needs solver inliers spread over at least this much of the
+        /// aligned overlap ([`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage); below it:
+        /// [`Reason::ClusteredInliers`](crate::Reason::ClusteredInliers)); in [0, 1] (default: the library's).
+        min_inlier_coverage: f64,
+        /// With refinement, final inliers a valid registration needs (fewer:
+        /// [`Reason::TooFewInliers`](crate::Reason::TooFewInliers)), 3..=100000 (default: the library's);
+        /// [`min_inliers`](ConfigBuilder::min_inliers) applies without refinement.
+        refine_min_inliers: count,
+        /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
+        /// [`Refinement::condition`](crate::Refinement::condition) at least this (below it:
+        /// [`Reason::Unconstrained`](crate::Reason::Unconstrained)): a direction carrying less than this share
+        /// of the strongest one's information slides, as along a corridor; in [0, 1] (default: the library's).
+        min_refine_condition: f64,
+        /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at least 5 of them;
+        /// a value above [`normal_radius_gain`](ConfigBuilder::normal_radius_gain) acts as it); in (0, 50]
+        /// (default: the library's). They are computed with the features, so [`Features`](crate::Features) of
+        /// a matcher with another value do not match this one's
+        /// ([`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch)).
+        refine_normal_radius_gain: f64,
     }
     /// Geometric suppression before keypoints (default [`Suppression::None`]). [`Suppression::Ground`] uses
     /// [`up`](ConfigBuilder::up), [`sensor_height`](ConfigBuilder::sensor_height) and the sensor at the
@@ -709,29 +657,22 @@ impl ConfigBuilder {
         self.raw.suppression = suppression.code();
         self
     }
-    /// Rotational degrees of freedom the solver estimates: 3 (the default), or 1 (yaw about
-    /// [`up`](ConfigBuilder::up) only, roll and pitch taken as zero: ground vehicles). With 1, a pair that is
-    /// clearly tilted is not valid ([`Reason::Tilted`](crate::Reason::Tilted), with
-    /// [`Registration::tilt`](crate::Registration::tilt) the evidence). Any other value fails
-    /// [`build`](ConfigBuilder::build).
-    pub fn rotation_dof(mut self, dof: usize) -> Self {
-        self.raw.rotation_dof = to_i32(dof);
-        self
-    }
-    /// The up direction in each cloud's own frame (the same vector for both clouds), for
-    /// [`Suppression::Ground`] and [`rotation_dof`](ConfigBuilder::rotation_dof) 1: finite, of length above
-    /// 1e-9, normalised by the library (default (0, 0, 1)). Computed with the features when suppression is
-    /// on.
-    pub fn up(mut self, up: [f64; 3]) -> Self {
-        self.raw.up = up;
-        self
-    }
-    /// Height of the sensor (the [`Viewpoint::Fixed`] position) above the ground along
-    /// [`up`](ConfigBuilder::up), metres, for [`Suppression::Ground`]; 0 (the default) = estimate it from the
-    /// cloud; in [0, 1000]. Helps on clouds whose nearby ground is hidden.
-    pub fn sensor_height(mut self, metres: f64) -> Self {
-        self.raw.sensor_height = metres;
-        self
+    builder_setters! {
+        /// Rotational degrees of freedom the solver estimates: 3 (the default), or 1 (yaw about
+        /// [`up`](ConfigBuilder::up) only, roll and pitch taken as zero: ground vehicles). With 1, a pair that is
+        /// clearly tilted is not valid ([`Reason::Tilted`](crate::Reason::Tilted), with
+        /// [`Registration::tilt`](crate::Registration::tilt) the evidence). Any other value fails
+        /// [`build`](ConfigBuilder::build).
+        rotation_dof: count,
+        /// The up direction in each cloud's own frame (the same vector for both clouds), for
+        /// [`Suppression::Ground`] and [`rotation_dof`](ConfigBuilder::rotation_dof) 1: finite, of length above
+        /// 1e-9, normalised by the library (default (0, 0, 1)). Computed with the features when suppression is
+        /// on.
+        up: vec3,
+        /// Height of the sensor (the [`Viewpoint::Fixed`] position) above the ground along
+        /// [`up`](ConfigBuilder::up), metres, for [`Suppression::Ground`]; 0 (the default) = estimate it from the
+        /// cloud; in [0, 1000]. Helps on clouds whose nearby ground is hidden.
+        sensor_height: f64,
     }
 
     /// Validates every field (`kissm_config_validate`) and returns the configuration, or an
