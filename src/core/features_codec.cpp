@@ -243,15 +243,11 @@ std::uint64_t features_checksum(const std::uint8_t *data, std::size_t size) {
     // FNV-1a's step over 64-bit little-endian words, then over the last size % 8 bytes one by one. Each step is
     // a bijection of the state for a given word (or byte), so any change of one word (every single-bit flip in
     // particular) changes the result. By words, not bytes: a step is a multiply that waits for the one
-    // before, and loading a keyframe's features spent 2-3 ms in the byte-wise loop.
+    // before (docs/performance.md, "Features checksum").
     constexpr std::uint64_t kPrime = 1099511628211ull;
     std::uint64_t h = 14695981039346656037ull;
     std::size_t i = 0;
-    for (; i + 8 <= size; i += 8) {
-        std::uint64_t w = 0;
-        for (int k = 0; k < 8; ++k) w |= static_cast<std::uint64_t>(data[i + k]) << (8 * k);
-        h = (h ^ w) * kPrime;
-    }
+    for (; i + 8 <= size; i += 8) h = (h ^ load_le<std::uint64_t>(data + i)) * kPrime;
     for (; i < size; ++i) h = (h ^ data[i]) * kPrime;
     return h;
 }
