@@ -8,6 +8,7 @@
 
 #include "capi/boundary.hpp"
 #include "capi/conversions.hpp"
+#include "core/setting_codes.hpp"
 
 KISSM_DETAIL_BEGIN
 namespace capi {
@@ -79,40 +80,26 @@ constexpr int32_t stage_code(Stage stage) {
 static_assert(stage_code(Stage::Voxelize) == 1 && stage_code(Stage::Solver) == 5 && stage_code(Stage::Refine) == 6,
               "stage codes are pinned");
 
-constexpr int32_t refine_code(RefineMode mode) {
-    switch (mode) {
-    case RefineMode::None: return KISSM_REFINE_NONE;
-    case RefineMode::Gicp: return KISSM_REFINE_GICP;
-    case RefineMode::PointToPlane: return KISSM_REFINE_POINT_TO_PLANE;
-    }
-    return KISSM_REFINE_NONE;
-}
-
-RefineMode refine_mode_of(int32_t code) {
-    switch (code) {
-    case KISSM_REFINE_GICP: return RefineMode::Gicp;
-    case KISSM_REFINE_POINT_TO_PLANE: return RefineMode::PointToPlane;
-    default: return RefineMode::None;
-    }
-}
-constexpr int32_t viewpoint_code(ViewpointMode mode) {
-    switch (mode) {
-    case ViewpointMode::Fixed: return KISSM_VIEWPOINT_FIXED;
-    case ViewpointMode::CloudCenter: return KISSM_VIEWPOINT_CLOUD_CENTER;
-    case ViewpointMode::SignFree: return KISSM_VIEWPOINT_SIGN_FREE;
-    case ViewpointMode::Local: return KISSM_VIEWPOINT_LOCAL;
-    }
-    return KISSM_VIEWPOINT_FIXED;
-}
-
-ViewpointMode viewpoint_mode_of(int32_t code) {
-    switch (code) {
-    case KISSM_VIEWPOINT_CLOUD_CENTER: return ViewpointMode::CloudCenter;
-    case KISSM_VIEWPOINT_SIGN_FREE: return ViewpointMode::SignFree;
-    case KISSM_VIEWPOINT_LOCAL: return ViewpointMode::Local;
-    default: return ViewpointMode::Fixed;
-    }
-}
+// The settings' codes are the core's tables (core/setting_codes.hpp); kissm.h's constants must be the same numbers.
+static_assert(setting_code(NonFinitePolicy::Reject) == KISSM_NONFINITE_REJECT &&
+                  setting_code(NonFinitePolicy::Drop) == KISSM_NONFINITE_DROP &&
+                  max_setting_code<NonFinitePolicy>() == KISSM_NONFINITE_DROP,
+              "nonfinite_policy codes");
+static_assert(setting_code(ViewpointMode::Fixed) == KISSM_VIEWPOINT_FIXED &&
+                  setting_code(ViewpointMode::CloudCenter) == KISSM_VIEWPOINT_CLOUD_CENTER &&
+                  setting_code(ViewpointMode::SignFree) == KISSM_VIEWPOINT_SIGN_FREE &&
+                  setting_code(ViewpointMode::Local) == KISSM_VIEWPOINT_LOCAL &&
+                  max_setting_code<ViewpointMode>() == KISSM_VIEWPOINT_LOCAL,
+              "viewpoint_mode codes");
+static_assert(setting_code(RefineMode::None) == KISSM_REFINE_NONE &&
+                  setting_code(RefineMode::Gicp) == KISSM_REFINE_GICP &&
+                  setting_code(RefineMode::PointToPlane) == KISSM_REFINE_POINT_TO_PLANE &&
+                  max_setting_code<RefineMode>() == KISSM_REFINE_POINT_TO_PLANE,
+              "refine_mode codes");
+static_assert(setting_code(Suppression::None) == KISSM_SUPPRESS_NONE &&
+                  setting_code(Suppression::Ground) == KISSM_SUPPRESS_GROUND &&
+                  max_setting_code<Suppression>() == KISSM_SUPPRESS_GROUND,
+              "suppression codes");
 static_assert(log_code(LogLevel::Error) == 1 && log_code(LogLevel::Debug) == 4, "log levels are pinned");
 
 constexpr int32_t kMaxThreads = 1024;
@@ -147,11 +134,11 @@ kissm_config default_config() {
     KISSM_SAME_FIELDS(KISSM_FROM_PARAMS)
 #undef KISSM_FROM_PARAMS
     for (int i = 0; i < 3; ++i) c.viewpoint[i] = p.viewpoint[static_cast<std::size_t>(i)];
-    c.nonfinite_policy = p.nonfinite == NonFinitePolicy::Drop ? KISSM_NONFINITE_DROP : KISSM_NONFINITE_REJECT;
-    c.viewpoint_mode = viewpoint_code(p.viewpoint_mode);
+    c.nonfinite_policy = setting_code(p.nonfinite);
+    c.viewpoint_mode = setting_code(p.viewpoint_mode);
     c.log_level = log_code(h.log_level);
-    c.refine_mode = refine_code(p.refine_mode);
-    c.suppression = p.suppression == Suppression::Ground ? KISSM_SUPPRESS_GROUND : KISSM_SUPPRESS_NONE;
+    c.refine_mode = setting_code(p.refine_mode);
+    c.suppression = setting_code(p.suppression);
     for (int i = 0; i < 3; ++i) c.up[i] = p.up[static_cast<std::size_t>(i)];
     return c;
 }
@@ -181,10 +168,10 @@ kissm_config validated_config(const kissm_config *given) {
     require_int(c.min_normal_neighbors, 3, 100000, "min_normal_neighbors");
     require_int(c.max_correspondences, 3, kMaxCorrespondences, "max_correspondences");
     require_int(c.min_inliers, 3, kMaxCorrespondences, "min_inliers");
-    require_int(c.nonfinite_policy, KISSM_NONFINITE_REJECT, KISSM_NONFINITE_DROP, "nonfinite_policy");
-    require_int(c.viewpoint_mode, KISSM_VIEWPOINT_FIXED, KISSM_VIEWPOINT_LOCAL, "viewpoint_mode");
+    require_int(c.nonfinite_policy, 0, max_setting_code<NonFinitePolicy>(), "nonfinite_policy");
+    require_int(c.viewpoint_mode, 0, max_setting_code<ViewpointMode>(), "viewpoint_mode");
     require_int(c.log_level, 0, KISSM_LOG_DEBUG, "log_level");
-    require_int(c.refine_mode, KISSM_REFINE_NONE, KISSM_REFINE_POINT_TO_PLANE, "refine_mode");
+    require_int(c.refine_mode, 0, max_setting_code<RefineMode>(), "refine_mode");
     require_int(c.refine_max_iterations, 1, 1000, "refine_max_iterations");
     require_range(c.refine_max_distance_gain, 0.0, 100.0, true, "refine_max_distance_gain");
     require_range(c.refine_kernel_gain, 0.0, 100.0, true, "refine_kernel_gain");
@@ -197,7 +184,7 @@ kissm_config validated_config(const kissm_config *given) {
     require_int(c.reserved1, 0, 0, "reserved1");
     require_range(c.min_refine_condition, 0.0, 1.0, false, "min_refine_condition");
     require_range(c.refine_normal_radius_gain, 0.0, 50.0, true, "refine_normal_radius_gain");
-    require_int(c.suppression, KISSM_SUPPRESS_NONE, KISSM_SUPPRESS_GROUND, "suppression");
+    require_int(c.suppression, 0, max_setting_code<Suppression>(), "suppression");
     if (c.rotation_dof != 1 && c.rotation_dof != 3)
         fail(ErrorKind::InvalidArgument,
              "config.rotation_dof is " + std::to_string(c.rotation_dof) + "; it must be 3 or 1 (yaw only)");
@@ -217,10 +204,10 @@ Params to_params(const kissm_config &c) {
     KISSM_SAME_FIELDS(KISSM_TO_PARAMS)
 #undef KISSM_TO_PARAMS
     p.viewpoint = {{c.viewpoint[0], c.viewpoint[1], c.viewpoint[2]}};
-    p.nonfinite = c.nonfinite_policy == KISSM_NONFINITE_DROP ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
-    p.viewpoint_mode = viewpoint_mode_of(c.viewpoint_mode);
-    p.refine_mode = refine_mode_of(c.refine_mode);
-    p.suppression = c.suppression == KISSM_SUPPRESS_GROUND ? Suppression::Ground : Suppression::None;
+    p.nonfinite = setting_of<NonFinitePolicy>(c.nonfinite_policy);
+    p.viewpoint_mode = setting_of<ViewpointMode>(c.viewpoint_mode);
+    p.refine_mode = setting_of<RefineMode>(c.refine_mode);
+    p.suppression = setting_of<Suppression>(c.suppression);
     const double up_norm = up_length(c.up);
     p.up = {{c.up[0] / up_norm, c.up[1] / up_norm, c.up[2] / up_norm}};
     return p;

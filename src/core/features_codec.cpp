@@ -13,6 +13,7 @@
 
 #include "failure.hpp"
 #include "little_endian.hpp"
+#include "setting_codes.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -41,25 +42,11 @@ constexpr float kMaxDescriptorValue = 101.0f;
 
 // ---- enums as the format's bytes (the same numbers as kissm.h's constants) ------------------------------
 
-std::uint8_t code_of(NonFinitePolicy p) { return p == NonFinitePolicy::Drop ? 1 : 0; }
-std::uint8_t code_of(ViewpointMode m) {
-    switch (m) {
-    case ViewpointMode::Fixed: return 0;
-    case ViewpointMode::CloudCenter: return 1;
-    case ViewpointMode::SignFree: return 2;
-    case ViewpointMode::Local: return 3;
-    }
-    return 0;
+// setting_codes.hpp: one byte each.
+template <class E>
+std::uint8_t code_of(E v) {
+    return static_cast<std::uint8_t>(setting_code(v));
 }
-std::uint8_t code_of(RefineMode m) {
-    switch (m) {
-    case RefineMode::None: return 0;
-    case RefineMode::Gicp: return 1;
-    case RefineMode::PointToPlane: return 2;
-    }
-    return 0;
-}
-std::uint8_t code_of(Suppression s) { return s == Suppression::Ground ? 1 : 0; }
 
 // ---- writing ----------------------------------------------------------------------------------------------
 
@@ -169,13 +156,16 @@ double finite_in(Reader &r, const char *field, double lo, double hi, bool lo_ope
     return v;
 }
 
-std::uint8_t code_in(Reader &r, const char *field, std::uint8_t max) {
+// The setting E stored as one byte, which must be one of its codes (setting_codes.hpp).
+template <class E>
+E setting_in(Reader &r, const char *field) {
     const std::size_t at = r.offset();
-    const std::uint8_t v = r.u8(field);
+    const std::int32_t v = r.u8(field);
+    constexpr std::int32_t max = max_setting_code<E>();
     if (v > max)
         malformed(std::string(field) + " is " + std::to_string(v) + "; it must be in [0, " + std::to_string(max) + "]",
                   at);
-    return v;
+    return setting_of<E>(v);
 }
 
 void read_settings(Reader &r, Params &p) {
@@ -200,13 +190,10 @@ void read_settings(Reader &r, Params &p) {
     if (tau < 3 || tau > 100000)
         malformed("min_normal_neighbors is " + std::to_string(tau) + "; it must be in [3, 100000]", tau_at);
     p.min_normal_neighbors = tau;
-    p.nonfinite = code_in(r, "nonfinite_policy", 1) == 1 ? NonFinitePolicy::Drop : NonFinitePolicy::Reject;
-    static constexpr ViewpointMode kViewpoints[] = {ViewpointMode::Fixed, ViewpointMode::CloudCenter,
-                                                    ViewpointMode::SignFree, ViewpointMode::Local};
-    p.viewpoint_mode = kViewpoints[code_in(r, "viewpoint_mode", 3)];
-    static constexpr RefineMode kRefine[] = {RefineMode::None, RefineMode::Gicp, RefineMode::PointToPlane};
-    p.refine_mode = kRefine[code_in(r, "refine_mode", 2)];
-    p.suppression = code_in(r, "suppression", 1) == 1 ? Suppression::Ground : Suppression::None;
+    p.nonfinite = setting_in<NonFinitePolicy>(r, "nonfinite_policy");
+    p.viewpoint_mode = setting_in<ViewpointMode>(r, "viewpoint_mode");
+    p.refine_mode = setting_in<RefineMode>(r, "refine_mode");
+    p.suppression = setting_in<Suppression>(r, "suppression");
 }
 
 void read_normals(Reader &r, std::size_t num_voxels, const char *flags_name, const char *vectors_name, Normals &n) {
