@@ -22,6 +22,7 @@ import pytest
 
 import kissm
 import kissm.batch
+import kissm.batch._dask
 
 import batchcases
 from batchcases import Batch, Events
@@ -167,6 +168,35 @@ def test_every_worker_killed_after_the_first_description(client, synthetic, synt
     # Keys are <batch>-describe-<cloud>-<attempt>: the first cloud's features were lost, so it ran again.
     runs = collections.Counter(str(t["key"]).rsplit("-", 2)[1] for t in stream.data if "-describe-" in str(t["key"]))
     assert runs[str(events.seen[0].index)] >= 2, runs
+
+
+def test_a_scatter_cut_off_is_tried_again(client, synthetic, synthetic_serial, monkeypatch) -> None:
+    """A scatter whose connection closes (a worker dying or restarting after a loss) is tried again; the batch
+    ends as the serial loop does. Closed every time, the error reaches the caller after the last try."""
+    real_scatter = client.scatter
+    calls: list[int] = []
+
+    def cut_off_first(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        if len(calls) == 1:
+            raise distributed.comm.CommClosedError("in <TCP (closed) ConnectionPool.scatter>: Stream is closed")
+        return real_scatter(*args, **kwargs)
+
+    monkeypatch.setattr(kissm.batch._dask, "_SCATTER_PAUSE_S", 0.0)
+    monkeypatch.setattr(client, "scatter", cut_off_first)
+    got = kissm.batch.register_many(synthetic.pairs, synthetic.clouds, client, voxel_size=synthetic.voxel_size)
+    batchcases.assert_same_as_serial(got, synthetic, synthetic_serial)
+    assert len(calls) == 2
+
+    def always_closed(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        raise distributed.comm.CommClosedError("in <TCP (closed) ConnectionPool.scatter>: Stream is closed")
+
+    calls.clear()
+    monkeypatch.setattr(client, "scatter", always_closed)
+    with pytest.raises(distributed.comm.CommClosedError):
+        kissm.batch.register_many(synthetic.pairs, synthetic.clouds, client, voxel_size=synthetic.voxel_size)
+    assert len(calls) == kissm.batch._dask._SCATTER_TRIES
 
 
 def documented_settings() -> dict[str, Any]:

@@ -15,6 +15,7 @@ clouds again, describes them again and resubmits the cancelled pairs.
 
 from __future__ import annotations
 
+import time
 import uuid
 from typing import Any
 
@@ -32,6 +33,11 @@ _IN_FLIGHT = 1024
 
 #: Times the driver resubmits one task whose inputs were lost with their workers, before giving up.
 _RESUBMITS = 3
+
+#: Tries of one scatter whose connection closed (a worker dying or restarting), and the pause before the next try
+#: (times the try's number), seconds.
+_SCATTER_TRIES = 5
+_SCATTER_PAUSE_S = 0.5
 
 
 class _Cluster:
@@ -56,9 +62,8 @@ class _Cluster:
         in_memory = [i for i in clouds if not isinstance(inputs[i], CloudFile)]
         holders: dict[Any, Any] = {}
         if in_memory:
-            scattered = self.client.scatter([inputs[i] for i in in_memory], hash=False)
+            scattered, holders = self._scatter([inputs[i] for i in in_memory])
             inputs.update(zip(in_memory, scattered, strict=True))
-            holders = self.client.who_has(scattered)
         workers = sorted(self.client.scheduler_info().get("workers", {}))
         new = []
         for n, i in enumerate(clouds):
@@ -86,6 +91,19 @@ class _Cluster:
             self.stage[key] = ("describe", i)
             new.append(self.described[i])
         return new
+
+    def _scatter(self, values: list[Any]) -> tuple[list[Any], dict[Any, Any]]:
+        """Scatter ``values``; their futures and who holds them. After a loss the scatter can meet a worker that is
+        dying or restarting (its connection closes mid-transfer): it is tried again, on the workers then alive."""
+        for attempt in range(_SCATTER_TRIES):
+            try:
+                scattered = self.client.scatter(values, hash=False)
+                return scattered, self.client.who_has(scattered)
+            except OSError:  # distributed's CommClosedError is one
+                if attempt + 1 == _SCATTER_TRIES:
+                    raise
+                time.sleep(_SCATTER_PAUSE_S * (attempt + 1))
+        raise AssertionError("not reached")
 
     def register(self, g: int) -> Any:
         """Submit the task of group ``g`` of pairs; its future."""
