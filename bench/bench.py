@@ -64,16 +64,28 @@ REFINE_METHODS = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl", "
 METHODS = COARSE_METHODS + REFINE_METHODS
 # The Python modules each method needs (checked before a run).
 METHOD_MODULES = {
-    "kissm": ("kissm",), "reference": ("kiss_matcher",), "o3d_ransac": ("open3d",), "o3d_fgr": ("open3d",),
-    "kissm_gicp": ("kissm",), "kissm_p2pl": ("kissm",), "sgicp": ("small_gicp",), "o3d_gicp": ("open3d",),
-    "o3d_p2pl": ("open3d",), "ref_sgicp": ("kiss_matcher", "small_gicp"),
+    "kissm": ("kissm",),
+    "reference": ("kiss_matcher",),
+    "o3d_ransac": ("open3d",),
+    "o3d_fgr": ("open3d",),
+    "kissm_gicp": ("kissm",),
+    "kissm_p2pl": ("kissm",),
+    "sgicp": ("small_gicp",),
+    "o3d_gicp": ("open3d",),
+    "o3d_p2pl": ("open3d",),
+    "ref_sgicp": ("kiss_matcher", "small_gicp"),
 }
 # Peers that refine from kissm's coarse pose (computed once per case by the parent, untimed).
 FROM_KISSM_START = ("sgicp", "o3d_gicp", "o3d_p2pl")
 KISSM_REFINE_MODE = {"kissm_gicp": "gicp", "kissm_p2pl": "point_to_plane"}
 # The upstream loop-closure chain (KISS-Matcher's ROS module): its fine step's settings and acceptance gates.
-UPSTREAM_CHAIN = {"corr_dist_gain": 5.0, "max_iterations": 10, "num_neighbors": 20, "min_inliers": 100,
-                  "min_overlap": 0.9}
+UPSTREAM_CHAIN = {
+    "corr_dist_gain": 5.0,
+    "max_iterations": 10,
+    "num_neighbors": 20,
+    "min_inliers": 100,
+    "min_overlap": 0.9,
+}
 
 # Voxel size and success thresholds per kind of data (SPEC §7; docs/accuracy.md).
 KIND_SETTINGS = {
@@ -90,6 +102,7 @@ REFERENCE_MIN_VOXEL = 0.005  # the reference refuses smaller voxels
 # ================================================================================================
 # Worker side: one process per (method, thread count, case); JSON lines on a private pipe.
 # ================================================================================================
+
 
 def _proc_status() -> dict[str, int]:
     out = {}
@@ -182,9 +195,11 @@ class _Runner:
         before = resource.getrusage(resource.RUSAGE_SELF)
         rec = getattr(self, "_run_" + self.method)()
         after = resource.getrusage(resource.RUSAGE_SELF)
-        rec["cpu"] = {"user_ms": (after.ru_utime - before.ru_utime) * 1e3,
-                      "sys_ms": (after.ru_stime - before.ru_stime) * 1e3,
-                      "minflt": after.ru_minflt - before.ru_minflt}
+        rec["cpu"] = {
+            "user_ms": (after.ru_utime - before.ru_utime) * 1e3,
+            "sys_ms": (after.ru_stime - before.ru_stime) * 1e3,
+            "minflt": after.ru_minflt - before.ru_minflt,
+        }
         return rec
 
     # ---- kissm: the Python binding, raw float64 arrays in, pose out --------------------------------------
@@ -197,24 +212,41 @@ class _Runner:
         transform = r.transform
         wall = (time.perf_counter() - t0) * 1e3
         stages = {
-            "voxelize": r.time_voxelize_ms, "features": r.time_features_ms, "matching": r.time_matching_ms,
-            "pruning": r.time_pruning_ms, "solver": r.time_solver_ms,
+            "voxelize": r.time_voxelize_ms,
+            "features": r.time_features_ms,
+            "matching": r.time_matching_ms,
+            "pruning": r.time_pruning_ms,
+            "solver": r.time_solver_ms,
         }
         stages["input"] = max(0.0, wall - r.time_total_ms)
         rec = {
-            "wall_ms": wall, "engine_ms": r.time_total_ms, "stages": stages, "transform": transform.tolist(),
-            "valid": bool(r.valid), "inliers": int(r.num_final_inliers),
-            "info": {"reason": r.reason, "src_voxels": r.num_source_voxels, "tgt_voxels": r.num_target_voxels,
-                     "src_keypoints": r.num_source_keypoints, "tgt_keypoints": r.num_target_keypoints,
-                     "initial_corr": r.num_initial_correspondences, "pruned_corr": r.num_pruned_correspondences},
+            "wall_ms": wall,
+            "engine_ms": r.time_total_ms,
+            "stages": stages,
+            "transform": transform.tolist(),
+            "valid": bool(r.valid),
+            "inliers": int(r.num_final_inliers),
+            "info": {
+                "reason": r.reason,
+                "src_voxels": r.num_source_voxels,
+                "tgt_voxels": r.num_target_voxels,
+                "src_keypoints": r.num_source_keypoints,
+                "tgt_keypoints": r.num_target_keypoints,
+                "initial_corr": r.num_initial_correspondences,
+                "pruned_corr": r.num_pruned_correspondences,
+            },
         }
         if refine_mode:
             stages["refine"] = r.time_refine_ms
             rec["coarse_transform"] = r.coarse_transform.tolist()
             rec["info"].update(
-                overlap=_finite(r.overlap), refine_rmse=_finite(r.refine_rmse),
-                refine_condition=_finite(r.refine_condition), refine_iterations=int(r.refine_iterations),
-                refine_converged=bool(r.refine_converged), refine_corr=int(r.num_refine_correspondences))
+                overlap=_finite(r.overlap),
+                refine_rmse=_finite(r.refine_rmse),
+                refine_condition=_finite(r.refine_condition),
+                refine_iterations=int(r.refine_iterations),
+                refine_converged=bool(r.refine_converged),
+                refine_corr=int(r.num_refine_correspondences),
+            )
         return rec
 
     def _run_kissm_gicp(self) -> dict:
@@ -241,14 +273,24 @@ class _Runner:
         rejection = matcher.get_rejection_time() * 1e3
         solver = matcher.get_solver_time() * 1e3
         engine = processing + extraction + matching + solver
-        stages = {"voxelize": processing, "features": extraction, "matching": max(0.0, matching - rejection),
-                  "pruning": rejection, "solver": solver, "input": max(0.0, wall - engine)}
+        stages = {
+            "voxelize": processing,
+            "features": extraction,
+            "matching": max(0.0, matching - rejection),
+            "pruning": rejection,
+            "solver": solver,
+            "input": max(0.0, wall - engine),
+        }
         transform = np.eye(4)
         transform[:3, :3] = rotation
         transform[:3, 3] = translation
         return {
-            "wall_ms": wall, "engine_ms": engine, "stages": stages, "transform": transform.tolist(),
-            "valid": bool(solution.valid) and inliers >= REFERENCE_MIN_INLIERS, "inliers": inliers,
+            "wall_ms": wall,
+            "engine_ms": engine,
+            "stages": stages,
+            "transform": transform.tolist(),
+            "valid": bool(solution.valid) and inliers >= REFERENCE_MIN_INLIERS,
+            "inliers": inliers,
             "info": {"solution_valid": bool(solution.valid)},
         }
 
@@ -263,7 +305,8 @@ class _Runner:
         t2 = time.perf_counter()
         down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=2 * v, max_nn=30))
         fpfh = o3d.pipelines.registration.compute_fpfh_feature(
-            down, o3d.geometry.KDTreeSearchParamHybrid(radius=5 * v, max_nn=100))
+            down, o3d.geometry.KDTreeSearchParamHybrid(radius=5 * v, max_nn=100)
+        )
         t3 = time.perf_counter()
         times["input"] += (t1 - t0) * 1e3
         times["voxelize"] += (t2 - t1) * 1e3
@@ -282,12 +325,21 @@ class _Runner:
         t1 = time.perf_counter()
         if use_fgr:
             result = reg.registration_fgr_based_on_feature_matching(
-                src, tgt, src_f, tgt_f, reg.FastGlobalRegistrationOption(maximum_correspondence_distance=0.5 * v))
+                src, tgt, src_f, tgt_f, reg.FastGlobalRegistrationOption(maximum_correspondence_distance=0.5 * v)
+            )
         else:
             result = reg.registration_ransac_based_on_feature_matching(
-                src, tgt, src_f, tgt_f, True, 1.5 * v, reg.TransformationEstimationPointToPoint(False), 3,
+                src,
+                tgt,
+                src_f,
+                tgt_f,
+                True,
+                1.5 * v,
+                reg.TransformationEstimationPointToPoint(False),
+                3,
                 [reg.CorrespondenceCheckerBasedOnEdgeLength(0.9), reg.CorrespondenceCheckerBasedOnDistance(1.5 * v)],
-                reg.RANSACConvergenceCriteria(100000, 0.999))
+                reg.RANSACConvergenceCriteria(100000, 0.999),
+            )
         transform = np.asarray(result.transformation, dtype=np.float64)
         t2 = time.perf_counter()
         wall = (t2 - t0) * 1e3
@@ -295,9 +347,13 @@ class _Runner:
         accounted = sum(stages.values())
         stages["input"] += max(0.0, wall - accounted)
         return {
-            "wall_ms": wall, "engine_ms": wall, "stages": stages, "transform": transform.tolist(),
+            "wall_ms": wall,
+            "engine_ms": wall,
+            "stages": stages,
+            "transform": transform.tolist(),
             # Open3D has no validity decision; a result with no correspondences (fitness 0) counts as invalid.
-            "valid": bool(result.fitness > 0), "inliers": len(result.correspondence_set),
+            "valid": bool(result.fitness > 0),
+            "inliers": len(result.correspondence_set),
             "info": {"fitness": float(result.fitness), "src_voxels": len(src.points), "tgt_voxels": len(tgt.points)},
         }
 
@@ -321,20 +377,35 @@ class _Runner:
         src, _ = sg.preprocess_points(self.src, self.voxel, num_threads=self.threads)
         tgt, tgt_tree = sg.preprocess_points(self.tgt, self.voxel, num_threads=self.threads)
         t1 = time.perf_counter()
-        result = sg.align(tgt, src, tgt_tree, init, registration_type="GICP",
-                          max_correspondence_distance=self.refine["max_distance"], num_threads=self.threads,
-                          max_iterations=self.refine["max_iterations"])
+        result = sg.align(
+            tgt,
+            src,
+            tgt_tree,
+            init,
+            registration_type="GICP",
+            max_correspondence_distance=self.refine["max_distance"],
+            num_threads=self.threads,
+            max_iterations=self.refine["max_iterations"],
+        )
         transform = self.np.asarray(result.T_target_source, dtype=self.np.float64)
         t2 = time.perf_counter()
         wall = (t2 - t0) * 1e3
         stages = {"preprocess": (t1 - t0) * 1e3, "align": (t2 - t1) * 1e3}
         return {
-            "wall_ms": wall, "engine_ms": wall, "stages": stages, "transform": transform.tolist(),
+            "wall_ms": wall,
+            "engine_ms": wall,
+            "stages": stages,
+            "transform": transform.tolist(),
             "coarse_transform": init.tolist(),
             # small_gicp has no validity decision: its pose is reported when kissm's coarse pose was.
-            "valid": self.coarse_valid, "inliers": int(result.num_inliers),
-            "info": {"converged": bool(result.converged), "iterations": int(result.iterations),
-                     "src_points": src.size(), "tgt_points": tgt.size()},
+            "valid": self.coarse_valid,
+            "inliers": int(result.num_inliers),
+            "info": {
+                "converged": bool(result.converged),
+                "iterations": int(result.iterations),
+                "src_points": src.size(),
+                "tgt_points": tgt.size(),
+            },
         }
 
     def _run_o3d_refine(self, gicp: bool) -> dict:
@@ -365,21 +436,41 @@ class _Runner:
         t1 = time.perf_counter()
         criteria = reg.ICPConvergenceCriteria(max_iteration=self.refine["max_iterations"])
         if gicp:
-            result = reg.registration_generalized_icp(clouds[0], clouds[1], self.refine["max_distance"], init,
-                                                      reg.TransformationEstimationForGeneralizedICP(), criteria)
+            result = reg.registration_generalized_icp(
+                clouds[0],
+                clouds[1],
+                self.refine["max_distance"],
+                init,
+                reg.TransformationEstimationForGeneralizedICP(),
+                criteria,
+            )
         else:
-            result = reg.registration_icp(clouds[0], clouds[1], self.refine["max_distance"], init,
-                                          reg.TransformationEstimationPointToPlane(), criteria)
+            result = reg.registration_icp(
+                clouds[0],
+                clouds[1],
+                self.refine["max_distance"],
+                init,
+                reg.TransformationEstimationPointToPlane(),
+                criteria,
+            )
         transform = np.asarray(result.transformation, dtype=np.float64)
         t2 = time.perf_counter()
         wall = (t2 - t0) * 1e3
         stages["align"] = (t2 - t1) * 1e3
         return {
-            "wall_ms": wall, "engine_ms": wall, "stages": stages, "transform": transform.tolist(),
-            "coarse_transform": init.tolist(), "valid": self.coarse_valid and result.fitness > 0,
+            "wall_ms": wall,
+            "engine_ms": wall,
+            "stages": stages,
+            "transform": transform.tolist(),
+            "coarse_transform": init.tolist(),
+            "valid": self.coarse_valid and result.fitness > 0,
             "inliers": len(result.correspondence_set),
-            "info": {"fitness": float(result.fitness), "inlier_rmse": float(result.inlier_rmse),
-                     "src_points": len(clouds[0].points), "tgt_points": len(clouds[1].points)},
+            "info": {
+                "fitness": float(result.fitness),
+                "inlier_rmse": float(result.inlier_rmse),
+                "src_points": len(clouds[0].points),
+                "tgt_points": len(clouds[1].points),
+            },
         }
 
     def _run_o3d_gicp(self) -> dict:
@@ -407,8 +498,12 @@ class _Runner:
         solution = matcher.estimate(src_xyz, tgt_xyz)
         coarse = reference_transform(solution)
         t2 = time.perf_counter()
-        ref_engine = (matcher.get_processing_time() + matcher.get_extraction_time() + matcher.get_matching_time()
-                      + matcher.get_solver_time()) * 1e3
+        ref_engine = (
+            matcher.get_processing_time()
+            + matcher.get_extraction_time()
+            + matcher.get_matching_time()
+            + matcher.get_solver_time()
+        ) * 1e3
         inliers = int(matcher.get_num_final_inliers())
         # 3. VGICP from the coarse pose: covariances of both clouds, the target's Gaussian voxel map. Upstream
         # skips this step when its gates reject the coarse pose; here it always runs, so its time is counted.
@@ -417,25 +512,47 @@ class _Runner:
         voxelmap = sg.GaussianVoxelMap(v)
         voxelmap.insert(tgt)
         t3 = time.perf_counter()
-        result = sg.align(voxelmap, src, coarse, max_correspondence_distance=chain["corr_dist_gain"] * v,
-                          num_threads=threads, max_iterations=chain["max_iterations"])
+        result = sg.align(
+            voxelmap,
+            src,
+            coarse,
+            max_correspondence_distance=chain["corr_dist_gain"] * v,
+            num_threads=threads,
+            max_iterations=chain["max_iterations"],
+        )
         transform = np.asarray(result.T_target_source, dtype=np.float64)
         t4 = time.perf_counter()
         wall = (t4 - t0) * 1e3
         overlap = result.num_inliers / max(1, src.size())
         coarse_valid = bool(solution.valid) and inliers >= REFERENCE_MIN_INLIERS
-        stages = {"voxelize": (t1 - t0) * 1e3, "reference": (t2 - t1) * 1e3, "preprocess": (t3 - t2) * 1e3,
-                  "align": (t4 - t3) * 1e3}
+        stages = {
+            "voxelize": (t1 - t0) * 1e3,
+            "reference": (t2 - t1) * 1e3,
+            "preprocess": (t3 - t2) * 1e3,
+            "align": (t4 - t3) * 1e3,
+        }
         return {
             # engine: the Python wall minus the reference binding's copy of the points (its wall minus its C++)
-            "wall_ms": wall, "engine_ms": wall - max(0.0, stages["reference"] - ref_engine), "stages": stages,
-            "transform": transform.tolist(), "coarse_transform": coarse.tolist(),
+            "wall_ms": wall,
+            "engine_ms": wall - max(0.0, stages["reference"] - ref_engine),
+            "stages": stages,
+            "transform": transform.tolist(),
+            "coarse_transform": coarse.tolist(),
             # valid: the reference's rule of the coarse comparison; gates_valid: upstream's own acceptance.
-            "valid": coarse_valid, "inliers": inliers,
-            "info": {"ref_engine_ms": ref_engine, "solution_valid": bool(solution.valid), "overlap": overlap,
-                     "converged": bool(result.converged), "iterations": int(result.iterations),
-                     "gates_valid": bool(solution.valid) and inliers > chain["min_inliers"]
-                     and overlap >= chain["min_overlap"], "src_points": src.size(), "tgt_points": tgt.size()},
+            "valid": coarse_valid,
+            "inliers": inliers,
+            "info": {
+                "ref_engine_ms": ref_engine,
+                "solution_valid": bool(solution.valid),
+                "overlap": overlap,
+                "converged": bool(result.converged),
+                "iterations": int(result.iterations),
+                "gates_valid": bool(solution.valid)
+                and inliers > chain["min_inliers"]
+                and overlap >= chain["min_overlap"],
+                "src_points": src.size(),
+                "tgt_points": tgt.size(),
+            },
         }
 
 
@@ -498,6 +615,7 @@ def worker_main(method: str, threads: int, cpus: list[int]) -> int:
 # Parent side
 # ================================================================================================
 
+
 class WorkerError(RuntimeError):
     pass
 
@@ -518,9 +636,21 @@ class Worker:
         log.write(f"\n===== worker {method} threads={threads} cpus={cpus}\n")
         log.flush()
         self.proc = subprocess.Popen(
-            [python, str(Path(__file__).resolve()), "--worker", method, "--threads", str(threads),
-             "--cpus", ",".join(map(str, cpus))],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=log, env=env)
+            [
+                python,
+                str(Path(__file__).resolve()),
+                "--worker",
+                method,
+                "--threads",
+                str(threads),
+                "--cpus",
+                ",".join(map(str, cpus)),
+            ],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=log,
+            env=env,
+        )
         self._buf = b""
         self.hello = self._reply(120.0)
         if not self.hello.get("ok"):
@@ -579,6 +709,7 @@ class Worker:
 
 # ---- geometry -------------------------------------------------------------------------------------------
 
+
 def rotation_about(axis, angle):
     import numpy as np
 
@@ -603,6 +734,7 @@ def pose_errors(estimate, truth) -> tuple[float | None, float | None]:
 
 # ---- real data ------------------------------------------------------------------------------------------
 
+
 def read_pair_txt(path: Path) -> dict[str, str]:
     out = {}
     for line in path.read_text().splitlines():
@@ -624,15 +756,22 @@ def list_pairs(data_dir: Path) -> list[dict]:
         if kind not in KIND_SETTINGS:
             raise SystemExit(f"bench: unknown kind {kind!r} in index.tsv; add it to KIND_SETTINGS")
         category, voxel = KIND_SETTINGS[kind]
-        rows.append({"dataset": row["dataset"], "pair": row["pair"], "pair_dir": row["pair_dir"], "kind": kind,
-                     "category": category, "voxel": voxel})
+        rows.append(
+            {
+                "dataset": row["dataset"],
+                "pair": row["pair"],
+                "pair_dir": row["pair_dir"],
+                "kind": kind,
+                "category": category,
+                "voxel": voxel,
+            }
+        )
     return rows
 
 
 def load_pair(data_dir: Path, row: dict):
-    import numpy as np
-
     import kissm
+    import numpy as np
 
     pair_dir = data_dir / row["pair_dir"]
     meta = read_pair_txt(pair_dir / "pair.txt")
@@ -677,6 +816,7 @@ def make_cases(data_dir: Path, rows: list[dict], rotations: int, tmp: Path) -> l
 
 # ---- synthetic scenes for the scaling runs ---------------------------------------------------------------
 
+
 def _terrain(params, xy):
     import numpy as np
 
@@ -707,15 +847,28 @@ def scene_layout(size: float, seed: int) -> dict:
         for j in range(tiles):
             t = np.random.default_rng([seed, i, j])
             nb, npole = t.poisson(SYN_TILE**2 / 500.0), t.poisson(SYN_TILE**2 / 250.0)
-            boxes.append(np.column_stack([
-                (i + t.uniform(0, 1, nb)) * SYN_TILE, (j + t.uniform(0, 1, nb)) * SYN_TILE,  # centre
-                t.uniform(3.0, 18.0, nb), t.uniform(3.0, 18.0, nb),  # width, depth
-                t.uniform(2.5, 14.0, nb), t.uniform(0, math.pi, nb),  # height, yaw
-            ]))
-            poles.append(np.column_stack([
-                (i + t.uniform(0, 1, npole)) * SYN_TILE, (j + t.uniform(0, 1, npole)) * SYN_TILE,
-                t.uniform(0.08, 0.35, npole), t.uniform(3.0, 9.0, npole),  # radius, height
-            ]))
+            boxes.append(
+                np.column_stack(
+                    [
+                        (i + t.uniform(0, 1, nb)) * SYN_TILE,
+                        (j + t.uniform(0, 1, nb)) * SYN_TILE,  # centre
+                        t.uniform(3.0, 18.0, nb),
+                        t.uniform(3.0, 18.0, nb),  # width, depth
+                        t.uniform(2.5, 14.0, nb),
+                        t.uniform(0, math.pi, nb),  # height, yaw
+                    ]
+                )
+            )
+            poles.append(
+                np.column_stack(
+                    [
+                        (i + t.uniform(0, 1, npole)) * SYN_TILE,
+                        (j + t.uniform(0, 1, npole)) * SYN_TILE,
+                        t.uniform(0.08, 0.35, npole),
+                        t.uniform(3.0, 9.0, npole),  # radius, height
+                    ]
+                )
+            )
     boxes, poles = np.concatenate(boxes), np.concatenate(poles)
     boxes = boxes[(boxes[:, 0] < size) & (boxes[:, 1] < size)]
     poles = poles[(poles[:, 0] < size) & (poles[:, 1] < size)]
@@ -757,8 +910,15 @@ def sample_scene(layout: dict, density: float, seed: int, x_range: tuple[float, 
     pole = np.repeat(np.arange(len(p)), counts)
     theta = rng.uniform(0, 2 * math.pi, len(pole))
     base = _terrain(waves, p[:, :2])[pole]
-    parts.append(np.column_stack([p[pole, 0] + p[pole, 2] * np.cos(theta), p[pole, 1] + p[pole, 2] * np.sin(theta),
-                                  base + rng.uniform(0, 1, len(pole)) * p[pole, 3]]))
+    parts.append(
+        np.column_stack(
+            [
+                p[pole, 0] + p[pole, 2] * np.cos(theta),
+                p[pole, 1] + p[pole, 2] * np.sin(theta),
+                base + rng.uniform(0, 1, len(pole)) * p[pole, 3],
+            ]
+        )
+    )
     pts = np.concatenate(parts)
     pts = pts[(pts[:, 0] >= x_range[0] * size) & (pts[:, 0] <= x_range[1] * size)]
     pts += rng.normal(0, noise, pts.shape)
@@ -809,11 +969,20 @@ def make_synthetic(target_voxels: int, voxel: float, seed: int, tmp: Path, tag: 
     src_path, tgt_path = tmp / f"syn_{tag}_src.npy", tmp / f"syn_{tag}_tgt.npy"
     np.save(src_path, src)
     np.save(tgt_path, tgt)
-    return {"target_voxels": target_voxels, "extent_m": size, "n_src": len(src), "n_tgt": len(tgt),
-            "voxels_numpy": n, "src_path": str(src_path), "tgt_path": str(tgt_path), "gt": gt.tolist()}
+    return {
+        "target_voxels": target_voxels,
+        "extent_m": size,
+        "n_src": len(src),
+        "n_tgt": len(tgt),
+        "voxels_numpy": n,
+        "src_path": str(src_path),
+        "tgt_path": str(tgt_path),
+        "gt": gt.tolist(),
+    }
 
 
 # ---- running ---------------------------------------------------------------------------------------------
+
 
 def median(values):
     values = [v for v in values if v is not None]
@@ -860,17 +1029,21 @@ def refine_settings() -> dict:
 def add_coarse_starts(cases: list[dict], threads: int) -> None:
     """kissm's coarse pose for each case (one untimed call in this process; kissm's result does not depend on
     the thread count): the start of the refinement peers, the same start kissm's own refinement has."""
-    import numpy as np
-
     import kissm
+    import numpy as np
 
     for case in cases:
         src, tgt = np.load(case["src_path"]), np.load(case["tgt_path"])
         with kissm.Matcher(voxel_size=case["voxel"], num_threads=threads) as matcher:
             r = matcher.register(src, tgt)
         rre, rte = pose_errors(r.transform, np.asarray(case["gt"]))
-        case["coarse"] = {"transform": r.transform.tolist(), "valid": bool(r.valid), "rre_deg": rre, "rte_m": rte,
-                          "within": within(rre, rte, case["category"])}
+        case["coarse"] = {
+            "transform": r.transform.tolist(),
+            "valid": bool(r.valid),
+            "rre_deg": rre,
+            "rte_m": rte,
+            "within": within(rre, rte, case["category"]),
+        }
 
 
 def slim(record: dict) -> dict:
@@ -902,12 +1075,19 @@ def run_real(args, cases, methods, threads_list, log, results) -> None:
                 try:
                     w = Worker(m, threads, cpus, log, args.python)
                     results["versions"].setdefault(m, w.hello.get("version"))
-                    msg = {"cmd": "load", "src": case["src_path"], "tgt": case["tgt_path"], "voxel": case["voxel"],
-                           "seed": case["seed"]}
+                    msg = {
+                        "cmd": "load",
+                        "src": case["src_path"],
+                        "tgt": case["tgt_path"],
+                        "voxel": case["voxel"],
+                        "seed": case["seed"],
+                    }
                     if m in REFINE_METHODS:
                         msg["init"] = case.get("coarse")
-                        msg["refine"] = {"max_distance": refine["max_distance_gain"] * case["voxel"],
-                                         "max_iterations": refine["max_iterations"]}
+                        msg["refine"] = {
+                            "max_distance": refine["max_distance_gain"] * case["voxel"],
+                            "max_iterations": refine["max_iterations"],
+                        }
                     load = w.call(msg, timeout=300)
                     w.baseline_kb = load["baseline_kb"]
                     workers[m] = w
@@ -936,27 +1116,42 @@ def run_real(args, cases, methods, threads_list, log, results) -> None:
                 mem = {"threads": threads, "case": case["index"], "method": m}
                 if m in workers and m not in failed:
                     st = workers[m].call({"cmd": "mem"}, timeout=30)
-                    mem.update(baseline_kb=workers[m].baseline_kb, hwm_kb=st["VmHWM"],
-                               peak_kb=max(0, st["VmHWM"] - workers[m].baseline_kb))
+                    mem.update(
+                        baseline_kb=workers[m].baseline_kb,
+                        hwm_kb=st["VmHWM"],
+                        peak_kb=max(0, st["VmHWM"] - workers[m].baseline_kb),
+                    )
                 else:
                     mem.update(error=failed.get(m, "not run"))
                     if m in failed and (failed[m] != "timeout" or args.smoke):
-                        results["errors"].append(f"{METHOD_LABEL[m]} on {case['name']} {case['variant']} "
-                                                 f"({threads}t): {failed[m]}")
+                        results["errors"].append(
+                            f"{METHOD_LABEL[m]} on {case['name']} {case['variant']} ({threads}t): {failed[m]}"
+                        )
                 results["memory"].append(mem)
                 if m in workers:
                     workers[m].close()
             line = []
             for m in methods:
-                runs = [r for r in results["runs"] if r["threads"] == threads and r["case"] == case["index"]
-                        and r["method"] == m and not r["warmup"] and r["status"] == "ok"]
+                runs = [
+                    r
+                    for r in results["runs"]
+                    if r["threads"] == threads
+                    and r["case"] == case["index"]
+                    and r["method"] == m
+                    and not r["warmup"]
+                    and r["status"] == "ok"
+                ]
                 if runs:
                     ok = sum(r["success"] for r in runs)
                     line.append(f"{m} {median([r['wall_ms'] for r in runs]):.0f}ms {ok}/{len(runs)}")
                 else:
                     line.append(f"{m} {failed.get(m, '-')[:40]}")
-            print(f"[{done}/{total}] {threads}t {case['name']} {case['variant']}: " + ", ".join(line)
-                  + f"  ({time.monotonic() - t_case:.0f} s, load {os.getloadavg()[0]:.1f})", flush=True)
+            print(
+                f"[{done}/{total}] {threads}t {case['name']} {case['variant']}: "
+                + ", ".join(line)
+                + f"  ({time.monotonic() - t_case:.0f} s, load {os.getloadavg()[0]:.1f})",
+                flush=True,
+            )
 
 
 def _mem_available_kb() -> int | None:
@@ -987,8 +1182,10 @@ def projected_too_big(runs: list, sizes: list, method: str, target: int, timeout
     avail = _mem_available_kb()
     mem_kb = (last["peak_kb"] + last["baseline_kb"]) * ratio * 1.25
     if avail and mem_kb > 0.7 * avail:
-        return (f"projected {mem_kb / 2**20:.1f} GB from the smaller sizes, over 70% of the "
-                f"{avail / 2**20:.1f} GB available")
+        return (
+            f"projected {mem_kb / 2**20:.1f} GB from the smaller sizes, over 70% of the "
+            f"{avail / 2**20:.1f} GB available"
+        )
     return None
 
 
@@ -998,8 +1195,14 @@ def run_scaling(args, methods, threads, tmp, log, results) -> None:
     cpus = cpus_for(threads)
     voxel = args.scaling_voxel
     warm = make_synthetic(1000, voxel, 99, tmp, "warm")
-    scaling = {"voxel": voxel, "threads": threads, "density": SYN_DENSITY, "timeout_s": args.scaling_timeout,
-               "sizes": [], "runs": []}
+    scaling = {
+        "voxel": voxel,
+        "threads": threads,
+        "density": SYN_DENSITY,
+        "timeout_s": args.scaling_timeout,
+        "sizes": [],
+        "runs": [],
+    }
     results["scaling"] = scaling
     stopped: dict[str, str] = {}
     for i, target in enumerate(args.scaling_sizes):
@@ -1026,11 +1229,15 @@ def run_scaling(args, methods, threads, tmp, log, results) -> None:
             try:
                 w = Worker(m, threads, cpus, log, args.python)
                 results["versions"].setdefault(m, w.hello.get("version"))
-                w.call({"cmd": "load", "src": warm["src_path"], "tgt": warm["tgt_path"], "voxel": voxel, "seed": 7},
-                       timeout=120)
+                w.call(
+                    {"cmd": "load", "src": warm["src_path"], "tgt": warm["tgt_path"], "voxel": voxel, "seed": 7},
+                    timeout=120,
+                )
                 w.call({"cmd": "run"}, timeout=args.scaling_timeout)  # warm-up on a small scene
-                load = w.call({"cmd": "load", "src": scene["src_path"], "tgt": scene["tgt_path"], "voxel": voxel,
-                               "seed": 7}, timeout=600)
+                load = w.call(
+                    {"cmd": "load", "src": scene["src_path"], "tgt": scene["tgt_path"], "voxel": voxel, "seed": 7},
+                    timeout=600,
+                )
                 # The first call at a size is untimed: it is the first to touch that much memory in this
                 # process, and on a VM whose balloon driver hands freed pages back to the host (this machine)
                 # a first touch costs about 2.5 s per GB, which only the largest sizes, measured once, would
@@ -1045,17 +1252,28 @@ def run_scaling(args, methods, threads, tmp, log, results) -> None:
                     if runs and (len(runs) >= args.scaling_repeats or time.monotonic() - t_start > 20.0):
                         break
                 st = w.call({"cmd": "mem"}, timeout=30)
-                rec.update(status="ok", n=len(runs), walls_ms=[r["wall_ms"] for r in runs],
-                           first_wall_ms=calls[0]["wall_ms"],
-                           cpu={k: median([r["cpu"][k] for r in runs]) for k in ("user_ms", "sys_ms", "minflt")},
-                           wall_ms=median([r["wall_ms"] for r in runs]),
-                           engine_ms=median([r["engine_ms"] for r in runs]),
-                           stages={s: median([r["stages"].get(s) for r in runs]) for s in STAGES
-                                   if any(s in r["stages"] for r in runs)},
-                           success=runs[0]["success"], valid=runs[0]["valid"], rre_deg=runs[0]["rre_deg"],
-                           rte_m=runs[0]["rte_m"], info=runs[0].get("info", {}),
-                           baseline_kb=load["baseline_kb"], hwm_kb=st["VmHWM"],
-                           peak_kb=max(0, st["VmHWM"] - load["baseline_kb"]))
+                rec.update(
+                    status="ok",
+                    n=len(runs),
+                    walls_ms=[r["wall_ms"] for r in runs],
+                    first_wall_ms=calls[0]["wall_ms"],
+                    cpu={k: median([r["cpu"][k] for r in runs]) for k in ("user_ms", "sys_ms", "minflt")},
+                    wall_ms=median([r["wall_ms"] for r in runs]),
+                    engine_ms=median([r["engine_ms"] for r in runs]),
+                    stages={
+                        s: median([r["stages"].get(s) for r in runs])
+                        for s in STAGES
+                        if any(s in r["stages"] for r in runs)
+                    },
+                    success=runs[0]["success"],
+                    valid=runs[0]["valid"],
+                    rre_deg=runs[0]["rre_deg"],
+                    rte_m=runs[0]["rte_m"],
+                    info=runs[0].get("info", {}),
+                    baseline_kb=load["baseline_kb"],
+                    hwm_kb=st["VmHWM"],
+                    peak_kb=max(0, st["VmHWM"] - load["baseline_kb"]),
+                )
             except WorkerTimeout as exc:
                 rec.update(status="timeout", error=str(exc))
                 stopped[m] = f"timed out at {target} voxels"
@@ -1067,16 +1285,23 @@ def run_scaling(args, methods, threads, tmp, log, results) -> None:
                 if w is not None:
                     w.close()
             scaling["runs"].append(rec)
-            extra = (f"{rec['wall_ms']:.0f} ms, +{rec['peak_kb'] / 1024:.0f} MB, "
-                     f"{'ok' if rec['success'] else 'FAIL'}") if rec["status"] == "ok" else rec["status"]
-            print(f"[scaling {threads}t] {target:>9} voxels ({scene['n_src']} points) {m}: {extra}  "
-                  f"(load {os.getloadavg()[0]:.1f})", flush=True)
+            extra = (
+                (f"{rec['wall_ms']:.0f} ms, +{rec['peak_kb'] / 1024:.0f} MB, {'ok' if rec['success'] else 'FAIL'}")
+                if rec["status"] == "ok"
+                else rec["status"]
+            )
+            print(
+                f"[scaling {threads}t] {target:>9} voxels ({scene['n_src']} points) {m}: {extra}  "
+                f"(load {os.getloadavg()[0]:.1f})",
+                flush=True,
+            )
         for path in (scene["src_path"], scene["tgt_path"]):
             with contextlib.suppress(OSError):
                 os.unlink(path)
 
 
 # ---- machine description --------------------------------------------------------------------------------
+
 
 def package_versions(dists) -> dict[str, str | None]:
     """The installed version of each distribution, None where it is not installed (every bench's report)."""
@@ -1107,10 +1332,15 @@ def machine_info(python: str) -> dict:
     versions = package_versions(("kissm", "kiss-matcher", "open3d-cpu", "open3d", "small-gicp", "numpy", "matplotlib"))
     info["packages"] = {dist: version for dist, version in versions.items() if version is not None}
     with contextlib.suppress(Exception):
-        head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(REPO), "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
+        head = subprocess.run(
+            ["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True, text=True, timeout=10
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(REPO), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+        ).stdout.strip()
         info["git"] = head + (" (with uncommitted changes)" if dirty else "")
     with contextlib.suppress(Exception):
         import kissm
@@ -1131,36 +1361,72 @@ def available_methods(methods: list[str]) -> tuple[list[str], dict[str, str]]:
 
 
 def parse_args(argv):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--threads", type=int, nargs="+", default=[1, 2], help="thread counts (default: 1 2)")
     p.add_argument("--rotations", type=int, default=2, help="rotated variants per pair besides the raw one (2)")
     p.add_argument("--repeats", type=int, default=3, help="timed calls per method and case after the warm-up (3)")
-    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS),
-                   help="coarse: " + " ".join(COARSE_METHODS) + "; refinement: " + " ".join(REFINE_METHODS))
-    p.add_argument("--refine-only", action="store_true", help="only the refinement comparison: kissm coarse and "
-                   "refined, small_gicp, Open3D GICP / point-to-plane, reference + small_gicp; no scaling")
+    p.add_argument(
+        "--methods",
+        nargs="+",
+        choices=METHODS,
+        default=list(METHODS),
+        help="coarse: " + " ".join(COARSE_METHODS) + "; refinement: " + " ".join(REFINE_METHODS),
+    )
+    p.add_argument(
+        "--refine-only",
+        action="store_true",
+        help="only the refinement comparison: kissm coarse and "
+        "refined, small_gicp, Open3D GICP / point-to-plane, reference + small_gicp; no scaling",
+    )
     p.add_argument("--pairs", nargs="*", default=None, help="only pairs whose dataset/pair contains one of these")
     p.add_argument("--data", type=Path, default=Path(os.environ.get("KISSM_DATA_DIR", REPO.parent / "shared" / "data")))
     p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/benchmarks.md and OUT/img/*.png")
-    p.add_argument("--raw", type=Path, default=None, help="raw results JSON (default bench/results/latest.json "
-                   "with the default --out, else OUT/raw.json)")
+    p.add_argument(
+        "--raw",
+        type=Path,
+        default=None,
+        help="raw results JSON (default bench/results/latest.json with the default --out, else OUT/raw.json)",
+    )
     p.add_argument("--timeout", type=float, default=600.0, help="seconds per call on real pairs (600)")
     p.add_argument("--no-real", action="store_true", help="skip the real pairs")
     p.add_argument("--no-scaling", action="store_true", help="skip the synthetic scaling runs")
-    p.add_argument("--scaling-sizes", type=int, nargs="+",
-                   default=[10_000, 30_000, 100_000, 300_000, 1_000_000, 3_000_000], help="target voxels per cloud")
-    p.add_argument("--scaling-methods", nargs="+", choices=COARSE_METHODS, default=None,
-                   help="default: the coarse ones of --methods")
+    p.add_argument(
+        "--scaling-sizes",
+        type=int,
+        nargs="+",
+        default=[10_000, 30_000, 100_000, 300_000, 1_000_000, 3_000_000],
+        help="target voxels per cloud",
+    )
+    p.add_argument(
+        "--scaling-methods",
+        nargs="+",
+        choices=COARSE_METHODS,
+        default=None,
+        help="default: the coarse ones of --methods",
+    )
     p.add_argument("--scaling-threads", type=int, default=None, help="default: the largest of --threads")
     p.add_argument("--scaling-voxel", type=float, default=0.5)
-    p.add_argument("--scaling-repeats", type=int, default=3,
-                   help="timed calls per size after one untimed call (fewer past 20 s) (3)")
-    p.add_argument("--scaling-timeout", type=float, default=300.0, help="seconds per call; larger sizes are "
-                   "skipped for a method after a timeout (300)")
+    p.add_argument(
+        "--scaling-repeats",
+        type=int,
+        default=3,
+        help="timed calls per size after one untimed call (fewer past 20 s) (3)",
+    )
+    p.add_argument(
+        "--scaling-timeout",
+        type=float,
+        default=300.0,
+        help="seconds per call; larger sizes are skipped for a method after a timeout (300)",
+    )
     p.add_argument("--quick", action="store_true", help="1 rotation, 1 repeat, scaling up to 100K voxels")
-    p.add_argument("--smoke", action="store_true", help="seconds-long check of the harness: kissm (+ the reference "
-                   "if installed), one small real pair (or a synthetic one), tiny scaling, results in --out")
+    p.add_argument(
+        "--smoke",
+        action="store_true",
+        help="seconds-long check of the harness: kissm (+ the reference "
+        "if installed), one small real pair (or a synthetic one), tiny scaling, results in --out",
+    )
     p.add_argument("--python", default=sys.executable, help=argparse.SUPPRESS)
     p.add_argument("--worker", default=None, help=argparse.SUPPRESS)
     p.add_argument("--cpus", default="", help=argparse.SUPPRESS)
@@ -1225,19 +1491,36 @@ def main(argv=None) -> int:
     if os.environ.get("KISSM_BENCH_COMMAND"):
         command = os.environ["KISSM_BENCH_COMMAND"]
     results = {
-        "meta": {"command": command, "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()
-                                             if k not in ("worker", "cpus", "python")},
-                 "started": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
-                 "load_start": os.getloadavg(), "machine": machine_info(args.python),
-                 "methods": methods, "missing_methods": missing},
-        "versions": {}, "cases": [], "runs": [], "memory": [], "scaling": None, "errors": [], "load_samples": [],
+        "meta": {
+            "command": command,
+            "args": {
+                k: (str(v) if isinstance(v, Path) else v)
+                for k, v in vars(args).items()
+                if k not in ("worker", "cpus", "python")
+            },
+            "started": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+            "load_start": os.getloadavg(),
+            "machine": machine_info(args.python),
+            "methods": methods,
+            "missing_methods": missing,
+        },
+        "versions": {},
+        "cases": [],
+        "runs": [],
+        "memory": [],
+        "scaling": None,
+        "errors": [],
+        "load_samples": [],
     }
     t0 = time.monotonic()
     args.out.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix="kissm-bench-"))
     log_path = args.out / "bench_workers.log" if args.smoke else tmp / "workers.log"
-    print(f"bench: methods {', '.join(methods)}; threads {args.threads}; data {args.data}; "
-          f"load {os.getloadavg()[0]:.1f}; worker log {log_path}", flush=True)
+    print(
+        f"bench: methods {', '.join(methods)}; threads {args.threads}; data {args.data}; "
+        f"load {os.getloadavg()[0]:.1f}; worker log {log_path}",
+        flush=True,
+    )
     try:
         with open(log_path, "w") as log:
             if not args.no_real:
@@ -1251,10 +1534,23 @@ def main(argv=None) -> int:
                 elif args.smoke:
                     print(f"bench: no data at {args.data}; the smoke run uses a synthetic pair instead")
                     scene = make_synthetic(5000, 0.5, 4321, tmp, "smoke")
-                    case = {"dataset": "synthetic", "pair": "smoke", "name": "synthetic/smoke", "kind": "synthetic",
-                            "category": "synthetic", "voxel": 0.5, "variant": "raw", "rot_deg": 0.0, "index": 0,
-                            "n_src": scene["n_src"], "n_tgt": scene["n_tgt"], "src_path": scene["src_path"],
-                            "tgt_path": scene["tgt_path"], "gt": scene["gt"], "seed": 1}
+                    case = {
+                        "dataset": "synthetic",
+                        "pair": "smoke",
+                        "name": "synthetic/smoke",
+                        "kind": "synthetic",
+                        "category": "synthetic",
+                        "voxel": 0.5,
+                        "variant": "raw",
+                        "rot_deg": 0.0,
+                        "index": 0,
+                        "n_src": scene["n_src"],
+                        "n_tgt": scene["n_tgt"],
+                        "src_path": scene["src_path"],
+                        "tgt_path": scene["tgt_path"],
+                        "gt": scene["gt"],
+                        "seed": 1,
+                    }
                     results["cases"] = [{k: v for k, v in case.items() if not k.endswith("_path")}]
                     run_real(args, [case], methods, args.threads, log, results)
                 else:
@@ -1274,8 +1570,10 @@ def main(argv=None) -> int:
     import report
 
     written = report.write_all(results, args.out, smoke=args.smoke)
-    print(f"bench: wrote {', '.join(str(p) for p in written)} and {args.raw} "
-          f"in {results['meta']['duration_s']:.0f} s", flush=True)
+    print(
+        f"bench: wrote {', '.join(str(p) for p in written)} and {args.raw} in {results['meta']['duration_s']:.0f} s",
+        flush=True,
+    )
     if results["errors"]:
         print("bench: errors:\n  " + "\n  ".join(results["errors"]), file=sys.stderr)
         return 1

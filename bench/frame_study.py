@@ -27,9 +27,8 @@ import statistics
 import sys
 from pathlib import Path
 
-import numpy as np
-
 import kissm
+import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "bindings" / "python" / "tests"))
@@ -82,8 +81,9 @@ def evaluate(r: kissm.Result, gt: np.ndarray, max_rot: float, max_trans: float, 
 
 def run(tally, args, family, name, source, target, gt, voxel, max_rot, max_trans, at=None) -> None:
     for mode in args.modes:
-        r = kissm.register(source, target, voxel_size=voxel, num_threads=args.threads, viewpoint_mode=mode,
-                           refine=args.refine)
+        r = kissm.register(
+            source, target, voxel_size=voxel, num_threads=args.threads, viewpoint_mode=mode, refine=args.refine
+        )
         e_rot, e_trans, right = evaluate(r, gt, max_rot, max_trans, at)
         line = (
             f"{name:52s} {mode:12s} valid={int(r.valid)} {e_rot:7.3f} deg {e_trans:8.4f} m "
@@ -105,8 +105,18 @@ def pairs(tally, args, rng) -> None:
         run(tally, args, family, f"{p.name} raw", src, tgt, p.gt, k.voxel, k.max_rot_deg, k.max_trans_m)
         for i in range(args.rotations):
             turn = rigid(axis_angle(rng.normal(size=3), rng.uniform(54, 180)), np.zeros(3))
-            run(tally, args, family, f"{p.name} rot{i}", apply(turn, src), tgt, p.gt @ np.linalg.inv(turn), k.voxel,
-                k.max_rot_deg, k.max_trans_m)
+            run(
+                tally,
+                args,
+                family,
+                f"{p.name} rot{i}",
+                apply(turn, src),
+                tgt,
+                p.gt @ np.linalg.inv(turn),
+                k.voxel,
+                k.max_rot_deg,
+                k.max_trans_m,
+            )
 
 
 def random_frame(rng, distance: float) -> np.ndarray:
@@ -123,8 +133,19 @@ def moved_frames(tally, args, rng) -> None:
             fs, ft = random_frame(rng, rng.uniform(40, 80) * scale), random_frame(rng, rng.uniform(40, 80) * scale)
             s2, t2 = apply(fs, src), apply(ft, tgt)
             gt = ft @ p.gt @ np.linalg.inv(fs)
-            run(tally, args, family, f"{p.name} moved{i}", s2, t2, gt, k.voxel, k.max_rot_deg, k.max_trans_m,
-                at=s2.mean(axis=0))
+            run(
+                tally,
+                args,
+                family,
+                f"{p.name} moved{i}",
+                s2,
+                t2,
+                gt,
+                k.voxel,
+                k.max_rot_deg,
+                k.max_trans_m,
+                at=s2.mean(axis=0),
+            )
 
 
 def keyframes(args) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
@@ -147,18 +168,42 @@ def scan_to_map(tally, args) -> None:
     for k in range(5):
         world_map = np.concatenate([apply(chain[j], cloud[j]) for j in range(5) if j != k])
         dist = np.linalg.norm(chain[k][:3, 3])
-        run(tally, args, "scan-to-map, scan in sensor frame", f"kf{k} ({dist:4.0f} m from the map origin)", cloud[k],
-            world_map, chain[k], 0.5, 5.0, 2.0)
-        run(tally, args, "scan-to-map, scan in world frame", f"kf{k} in world", apply(chain[k], cloud[k]), world_map,
-            np.eye(4), 0.5, 5.0, 2.0, at=chain[k][:3, 3])
+        run(
+            tally,
+            args,
+            "scan-to-map, scan in sensor frame",
+            f"kf{k} ({dist:4.0f} m from the map origin)",
+            cloud[k],
+            world_map,
+            chain[k],
+            0.5,
+            5.0,
+            2.0,
+        )
+        run(
+            tally,
+            args,
+            "scan-to-map, scan in world frame",
+            f"kf{k} in world",
+            apply(chain[k], cloud[k]),
+            world_map,
+            np.eye(4),
+            0.5,
+            5.0,
+            2.0,
+            at=chain[k][:3, 3],
+        )
 
 
 def shifted(args) -> list[str]:
     """How the relative pose changes when both clouds move by the same offset, per mode: in how many pairs the
     rotation is bitwise the same, and the largest change among the pairs valid in both runs."""
     lines = []
-    offsets = {"0.5 m": np.array([0.5, -12.25, 3.0]), "3.7 m": np.array([3.7, -12.3, 0.1]),
-               "1e7 m": np.array([1e7, -3e6, 250.0])}
+    offsets = {
+        "0.5 m": np.array([0.5, -12.25, 3.0]),
+        "3.7 m": np.array([3.7, -12.3, 0.1]),
+        "1e7 m": np.array([1e7, -3e6, 250.0]),
+    }
     pairs = realdata.load_pairs(args.data)
     for mode in args.modes:
         for label, off in offsets.items():
@@ -167,8 +212,9 @@ def shifted(args) -> list[str]:
             for p in pairs:
                 src, tgt = load(p)
                 base = kissm.register(src, tgt, voxel_size=p.kind.voxel, num_threads=args.threads, viewpoint_mode=mode)
-                r = kissm.register(src + off, tgt + off, voxel_size=p.kind.voxel, num_threads=args.threads,
-                                   viewpoint_mode=mode)
+                r = kissm.register(
+                    src + off, tgt + off, voxel_size=p.kind.voxel, num_threads=args.threads, viewpoint_mode=mode
+                )
                 same += int(np.array_equal(r.rotation, base.rotation))
                 if r.valid and base.valid:
                     valid_both += 1
@@ -176,16 +222,22 @@ def shifted(args) -> list[str]:
                     back = np.linalg.inv(shift) @ np.asarray(r.transform) @ shift
                     t0 = np.asarray(base.transform)
                     c = src.mean(axis=0)
-                    worst = (max(worst[0], rotation_error_deg(back[:3, :3], t0[:3, :3])),
-                             max(worst[1], float(np.linalg.norm(apply(back, c) - apply(t0, c)))))
-            lines.append(f"  {mode:12s} shift by {label:6s}: rotation bitwise the same in {same}/{len(pairs)} pairs; "
-                         f"valid in both runs {valid_both}, largest change there {worst[0]:.2e} deg, {worst[1]:.2e} m")
+                    worst = (
+                        max(worst[0], rotation_error_deg(back[:3, :3], t0[:3, :3])),
+                        max(worst[1], float(np.linalg.norm(apply(back, c) - apply(t0, c)))),
+                    )
+            lines.append(
+                f"  {mode:12s} shift by {label:6s}: rotation bitwise the same in {same}/{len(pairs)} pairs; "
+                f"valid in both runs {valid_both}, largest change there {worst[0]:.2e} deg, {worst[1]:.2e} m"
+            )
     return lines
 
 
 def report(tally: Tally, shift_lines: list[str], modes: list[str]) -> None:
     families = sorted({f for f, _ in tally.runs}, key=lambda f: (f.split(",")[0], f))
-    print("\nsuccess (valid and right) / runs, wrong poses reported valid, median error of the successes, median inliers")
+    print(
+        "\nsuccess (valid and right) / runs, wrong poses reported valid, median error of the successes, median inliers"
+    )
     header = f"{'family':40s}" + "".join(f" | {m:>40s}" for m in modes)
     print(header)
     for fam in families:
@@ -193,8 +245,11 @@ def report(tally: Tally, shift_lines: list[str], modes: list[str]) -> None:
         for m in modes:
             key = (fam, m)
             errs = tally.errors.get(key, [])
-            med = (f"{statistics.median(e[0] for e in errs):.3f}° {100 * statistics.median(e[1] for e in errs):.1f} cm"
-                   if errs else "-")
+            med = (
+                f"{statistics.median(e[0] for e in errs):.3f}° {100 * statistics.median(e[1] for e in errs):.1f} cm"
+                if errs
+                else "-"
+            )
             inl = statistics.median(tally.inliers[key]) if tally.inliers.get(key) else 0
             row += f" | {tally.right[key]:2d}/{tally.runs[key]:2d} wrong {tally.wrong_valid[key]} {med:>16s} {inl:5.0f}"
         print(row)

@@ -130,8 +130,20 @@ def ply_property(path: Path, names: tuple[str, ...]) -> np.ndarray | None:
     header = raw[:end].decode("ascii", "replace").splitlines()
     if "format binary_little_endian 1.0" not in header:
         return None
-    types = {"float": "<f4", "float32": "<f4", "double": "<f8", "float64": "<f8", "uchar": "u1", "uint8": "u1",
-             "int": "<i4", "int32": "<i4", "uint": "<u4", "uint32": "<u4", "short": "<i2", "ushort": "<u2"}
+    types = {
+        "float": "<f4",
+        "float32": "<f4",
+        "double": "<f8",
+        "float64": "<f8",
+        "uchar": "u1",
+        "uint8": "u1",
+        "int": "<i4",
+        "int32": "<i4",
+        "uint": "<u4",
+        "uint32": "<u4",
+        "short": "<i2",
+        "ushort": "<u2",
+    }
     fields, count, in_vertex = [], 0, False
     for line in header:
         parts = line.split()
@@ -388,8 +400,15 @@ def make_cases(pairs: list[Any], smoke: bool) -> list[dict[str, Any]]:
     for p in pairs:
         src = realdata.read_cached(p.source, p.source_format)
         tgt = realdata.read_cached(p.target, p.target_format)
-        base = {"pair": p.name, "voxel": p.kind.voxel, "max_rot": p.kind.max_rot_deg, "max_trans": p.kind.max_trans_m,
-                "tgt": tgt, "src0": src, "gt0": p.gt}
+        base = {
+            "pair": p.name,
+            "voxel": p.kind.voxel,
+            "max_rot": p.kind.max_rot_deg,
+            "max_trans": p.kind.max_trans_m,
+            "tgt": tgt,
+            "src0": src,
+            "gt0": p.gt,
+        }
         cases.append({**base, "group": "yaw", "axis": "z", "deg": 0.0, "variant": "raw"})
         for d in yaws:
             cases.append({**base, "group": "yaw", "axis": "z", "deg": d, "variant": f"yaw {d:+g}°"})
@@ -428,8 +447,14 @@ def run_registration(args: argparse.Namespace, results: dict[str, Any], threads:
             methods = case_methods(case, reference)
             timed = case["group"] == "yaw"
             reps = args.repeats if timed else 1
-            where = {"pair": case["pair"], "variant": case["variant"], "group": case["group"],
-                     "axis": case["axis"], "deg": case["deg"], "voxel": case["voxel"]}
+            where = {
+                "pair": case["pair"],
+                "variant": case["variant"],
+                "group": case["group"],
+                "axis": case["axis"],
+                "deg": case["deg"],
+                "voxel": case["voxel"],
+            }
 
             def one(method: str, case: dict[str, Any] = case) -> dict[str, Any]:
                 if method == "ref_quatro":
@@ -443,8 +468,9 @@ def run_registration(args: argparse.Namespace, results: dict[str, Any], threads:
                     try:
                         rec = one(method)
                     except Exception as exc:  # noqa: BLE001 - recorded, counted, and the run goes on
-                        results["errors"].append({**where, "method": method, "rep": rep,
-                                                  "error": f"{type(exc).__name__}: {exc}"})
+                        results["errors"].append(
+                            {**where, "method": method, "rep": rep, "error": f"{type(exc).__name__}: {exc}"}
+                        )
                         print(f"ground_bench: ERROR {where} {method}: {type(exc).__name__}: {exc}", flush=True)
                         continue
                     if method == "ref_quatro":
@@ -459,8 +485,11 @@ def run_registration(args: argparse.Namespace, results: dict[str, Any], threads:
                     rec["about_up_dev"] = about_up_deviation(np.asarray(rec["transform"])[:3, :3])
                     results["runs"].append(rec)
                     if rec["wrong_valid"] and method != "ref_quatro":
-                        print(f"ground_bench: !!! WRONG VALID: kissm {method} on {where}: {rot:.2f}° / {trans:.2f} m",
-                              file=sys.stderr, flush=True)
+                        print(
+                            f"ground_bench: !!! WRONG VALID: kissm {method} on {where}: {rot:.2f}° / {trans:.2f} m",
+                            file=sys.stderr,
+                            flush=True,
+                        )
             print(f"ground_bench: {progress_line(results, where)}", flush=True)
     finally:
         refs.close()
@@ -555,7 +584,9 @@ def summarise(results: dict[str, Any]) -> dict[str, Any]:
             (r["about_up_dev"] for r in runs if r["method"] == "dof1" and r["about_up_dev"] is not None), default=None
         ),
         "about_up_bad": sum(
-            1 for r in runs if r["method"] == "dof1" and (r["about_up_dev"] is None or r["about_up_dev"] >= ABOUT_UP_TOL)
+            1
+            for r in runs
+            if r["method"] == "dof1" and (r["about_up_dev"] is None or r["about_up_dev"] >= ABOUT_UP_TOL)
         ),
         "dof1_calls": sum(1 for r in runs if r["method"] == "dof1"),
         "solver_ratio": change("dof1", "none", "solver_ms"),  # 3-DoF solver time over 1-DoF
@@ -569,9 +600,13 @@ def summarise(results: dict[str, Any]) -> dict[str, Any]:
         entry = {"deg": d}
         for m in ("none", "ground"):
             rs = [r for r in runs if r["method"] == m and r["axis"] == "x" and r["deg"] == d]
-            entry[m] = {"calls": len(rs), "success": sum(r["success"] for r in rs),
-                        "valid0": sum(not r["valid"] for r in rs), "wrong_valid": sum(r["wrong_valid"] for r in rs),
-                        "reasons": sorted({r["reason"] for r in rs if not r["valid"]})}
+            entry[m] = {
+                "calls": len(rs),
+                "success": sum(r["success"] for r in rs),
+                "valid0": sum(not r["valid"] for r in rs),
+                "wrong_valid": sum(r["wrong_valid"] for r in rs),
+                "reasons": sorted({r["reason"] for r in rs if not r["valid"]}),
+            }
         entry["cases"] = len(sel)
         wrong_up.append(entry)
     tilt = []
@@ -605,8 +640,15 @@ def summarise(results: dict[str, Any]) -> dict[str, Any]:
             "scans": len(ks),
         }
     kissm_wrong = sum(1 for r in runs if r["wrong_valid"] and r["method"] != "ref_quatro")
-    return {"cases": cases, "supp": supp, "dof": dof, "wrong_up": wrong_up, "tilt": tilt, "seg": segsum,
-            "kissm_wrong_valid": kissm_wrong}
+    return {
+        "cases": cases,
+        "supp": supp,
+        "dof": dof,
+        "wrong_up": wrong_up,
+        "tilt": tilt,
+        "seg": segsum,
+        "kissm_wrong_valid": kissm_wrong,
+    }
 
 
 # ---- report ----------------------------------------------------------------------------------------------
@@ -653,8 +695,11 @@ def fok(s: dict[str, Any] | None) -> str:
 
 def short_pair(name: str) -> str:
     ds, _, pair = name.partition("/pairs/")
-    short = {"small_gicp_lidar": "small_gicp", "kitti07_keyframes_gtsam_points": "KITTI 07 kf",
-             "kitti_demo_scans_unverified": "KITTI sweeps"}.get(ds, ds)
+    short = {
+        "small_gicp_lidar": "small_gicp",
+        "kitti07_keyframes_gtsam_points": "KITTI 07 kf",
+        "kitti_demo_scans_unverified": "KITTI sweeps",
+    }.get(ds, ds)
     return f"{short} {pair}"
 
 
@@ -802,7 +847,7 @@ def write_report(results: dict[str, Any], out_dir: Path) -> list[Path]:
         f"initial correspondences {pct(sp['change_initial_corr'])}, inlier ratio {pct(sp['change_inlier_ratio'])}, "
         f"features + matching + pruning time {pct(sp['change_fmp_ms'])} (faster in {sp['fmp_faster_cases']}/"
         f"{sp['cases']} cases).",
-        f"- Target \"every LiDAR pair, raw and yaw-turned, still succeeds\": {sp['ground_success']}/{sp['cases']} "
+        f'- Target "every LiDAR pair, raw and yaw-turned, still succeeds": {sp["ground_success"]}/{sp["cases"]} '
         f"cases succeed on every call with suppression ({sp['none_success']}/{sp['cases']} without): "
         f"{verdict(sp['ground_success'] == sp['cases'])}. Wrong poses reported valid with suppression: "
         f"{sp['wrong_valid']}.",
@@ -860,23 +905,31 @@ def write_report(results: dict[str, Any], out_dir: Path) -> list[Path]:
     )
     L += [
         "",
-        f"- Target \"every run succeeds\": {dof['dof1_success']}/{dof['cases']} cases succeed on every 1-DoF call "
-        f"({dof['dof3_success']}/{dof['cases']} with 3-DoF; {ref_txt}): {verdict(dof['dof1_success'] == dof['cases'])}.",
-        f"- Target \"the rotation is exactly about up\": {dof['dof1_calls'] - dof['about_up_bad']}/{dof['dof1_calls']} "
+        f'- Target "every run succeeds": {dof["dof1_success"]}/{dof["cases"]} cases succeed on every 1-DoF call '
+        f"({dof['dof3_success']}/{dof['cases']} with 3-DoF; {ref_txt}): "
+        f"{verdict(dof['dof1_success'] == dof['cases'])}.",
+        f'- Target "the rotation is exactly about up": {dof["dof1_calls"] - dof["about_up_bad"]}/{dof["dof1_calls"]} '
         f"1-DoF calls within {ABOUT_UP_TOL:g} (largest deviation {fe(dof['about_up_max_dev'])}): "
         f"{verdict(dof['about_up_bad'] == 0)}.",
-        f"- Target \"the solver is faster than the 3-DoF one\": faster in {dof['solver_faster_cases']}/{dof['cases']} "
+        f'- Target "the solver is faster than the 3-DoF one": faster in {dof["solver_faster_cases"]}/{dof["cases"]} '
         f"cases, median 3-DoF / 1-DoF solver time {fx(dof['solver_ratio'])}: "
         f"{verdict(dof['solver_faster_cases'] == dof['cases'])}"
-        + (" (the slower cases differ by a few ms on a shared machine, possibly noise; the target is judged per case)."
-           if 0 < dof["cases"] - dof["solver_faster_cases"] <= 2 else "."),
+        + (
+            " (the slower cases differ by a few ms on a shared machine, possibly noise; the target is judged per case)."
+            if 0 < dof["cases"] - dof["solver_faster_cases"] <= 2
+            else "."
+        ),
     ]
-    vs = [(c["dof1"]["solver_ms"] / c["ref_quatro"]["solver_ms"], c["dof1"]["wall_ms"] / c["ref_quatro"]["wall_ms"])
-          for c in yaw if c["dof1"] and c["ref_quatro"] and c["ref_quatro"]["solver_ms"] and c["ref_quatro"]["wall_ms"]]
+    vs = [
+        (c["dof1"]["solver_ms"] / c["ref_quatro"]["solver_ms"], c["dof1"]["wall_ms"] / c["ref_quatro"]["wall_ms"])
+        for c in yaw
+        if c["dof1"] and c["ref_quatro"] and c["ref_quatro"]["solver_ms"] and c["ref_quatro"]["wall_ms"]
+    ]
     if vs:
         L.append(
-            f"- Against the reference's Quatro mode: kissm's 1-DoF solver stage takes a median {fx(med(v[0] for v in vs))} "
-            f"the reference's `get_solver_time()` (the two timers need not cover the same work), while kissm's whole call takes {fx(med(v[1] for v in vs))} "
+            "- Against the reference's Quatro mode: kissm's 1-DoF solver stage takes a median "
+            f"{fx(med(v[0] for v in vs))} the reference's `get_solver_time()` (the two timers need not cover the same "
+            f"work), while kissm's whole call takes {fx(med(v[1] for v in vs))} "
             "the reference's wall time."
         )
     L += [
@@ -887,7 +940,7 @@ def write_report(results: dict[str, Any], out_dir: Path) -> list[Path]:
         "### Tilted pairs under rotation_dof=1",
         "",
         "The source turned about x, so the pair's relative roll is that angle: the yaw-only model cannot "
-        "express it. Right: valid = 0 (reason \"" + TILT_REASON + "\"), or a valid pose within the "
+        'express it. Right: valid = 0 (reason "' + TILT_REASON + '"), or a valid pose within the '
         "thresholds. One call per pair.",
         "",
         "| turned about x | kissm 1-DoF: valid=0 (tilt reason) / ok / WRONG VALID | median tilt ° | other reasons | "
@@ -952,8 +1005,11 @@ def write_report(results: dict[str, Any], out_dir: Path) -> list[Path]:
         "- Timed registration cases (raw and yaw): one untimed warm-up call per method (the reference's helper "
         "once per voxel size), then the methods in turn, repeated. Wrong-up and tilted cases: one call each "
         "(kissm is deterministic: `same pose` held on every repeated case"
-        + ("" if all(c[m]["same_pose"] for c in yaw for m in ("none", "ground", "dof1") if c[m]) else
-           " — **except some; see the raw results**")
+        + (
+            ""
+            if all(c[m]["same_pose"] for c in yaw for m in ("none", "ground", "dof1") if c[m])
+            else " — **except some; see the raw results**"
+        )
         + ").",
         f"- Raw results: `{meta['raw']}`.",
     ]
@@ -975,14 +1031,21 @@ def suppression_inside(results: dict[str, Any]) -> list[dict[str, Any]]:
         runs = [r for r in results["runs"] if r["pair"] == pair and r["variant"] == "raw" and r["method"] == "ground"]
         dataset, names = pair.split("/")[0], pair.split("/")[-1].split("__")
         scans = [
-            s for s in results["seg"]
+            s
+            for s in results["seg"]
             if s["scan"].startswith(dataset + "/")
             and any(Path(s["scan"]).stem == n or Path(s["scan"]).parent.name == n for n in names)
         ]
         if not runs or len(scans) != 2:
             continue
-        rows.append({"pair": pair, "voxel": runs[0]["voxel"], "supp_ms": med(r["suppression_ms"] for r in runs),
-                     "pw_ms": sum(s["pw_ms"] for s in scans)})
+        rows.append(
+            {
+                "pair": pair,
+                "voxel": runs[0]["voxel"],
+                "supp_ms": med(r["suppression_ms"] for r in runs),
+                "pw_ms": sum(s["pw_ms"] for s in scans),
+            }
+        )
     return rows
 
 
@@ -1011,8 +1074,9 @@ def make_plots(results: dict[str, Any], s: dict[str, Any], img: Path) -> list[Pa
             sel = sel & keep
             ax.scatter(xyz[sel, 0], xyz[sel, 1], s=0.3, c=color, label=f"{label} ({sel.sum():,d})", linewidths=0)
         ax.set_aspect("equal")
-        ax.set_title(f"{results['bev']['scan']}: kissm ground_mask (voxel {results['bev']['voxel']}) vs Patchwork++",
-                     fontsize=9)
+        ax.set_title(
+            f"{results['bev']['scan']}: kissm ground_mask (voxel {results['bev']['voxel']}) vs Patchwork++", fontsize=9
+        )
         ax.legend(markerscale=20, fontsize=8, loc="upper right")
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
@@ -1034,8 +1098,12 @@ def make_plots(results: dict[str, Any], s: dict[str, Any], img: Path) -> list[Pa
                 vals = [r["pw_ms"] if key == "pw" else r["kissm"][key]["ms"] for r in seg]
                 ax.bar(x + (i - 1) * 0.27, vals, 0.27, label=label, color=color)
             ax.set_xticks(x)
-            ax.set_xticklabels([r["label"].replace("KITTI-style sweep", "sweep").replace("KITTI 07 keyframe", "kf")
-                                for r in seg], rotation=35, ha="right", fontsize=7)
+            ax.set_xticklabels(
+                [r["label"].replace("KITTI-style sweep", "sweep").replace("KITTI 07 keyframe", "kf") for r in seg],
+                rotation=35,
+                ha="right",
+                fontsize=7,
+            )
             ax.set_ylabel("ms per scan (median, 1 thread)")
             ax.set_title("Ground segmentation time", fontsize=10)
             ax.legend(fontsize=8)
@@ -1045,8 +1113,9 @@ def make_plots(results: dict[str, Any], s: dict[str, Any], img: Path) -> list[Pa
             ax.bar(x - 0.2, [c["none"]["fmp_ms"] for c in yaw], 0.4, label="suppression none", color="#7f7f7f")
             ax.bar(x + 0.2, [c["ground"]["fmp_ms"] for c in yaw], 0.4, label="suppression ground", color="#2ca02c")
             ax.set_xticks(x)
-            ax.set_xticklabels([f"{short_pair(c['pair'])} {c['variant']}" for c in yaw], rotation=60, ha="right",
-                               fontsize=6)
+            ax.set_xticklabels(
+                [f"{short_pair(c['pair'])} {c['variant']}" for c in yaw], rotation=60, ha="right", fontsize=6
+            )
             ax.set_ylabel("features + matching + pruning ms (median)")
             ax.set_title("Registration front end with and without suppression", fontsize=10)
             ax.legend(fontsize=8)
@@ -1062,25 +1131,36 @@ def make_plots(results: dict[str, Any], s: dict[str, Any], img: Path) -> list[Pa
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     data = Path(os.environ.get("KISSM_DATA_DIR", REPO.parent / "shared" / "data"))
     p.add_argument("--data", type=Path, default=data, help="the data folder (KISSM_DATA_DIR, else ../shared/data)")
     p.add_argument("--threads", type=int, default=1, help="CPUs pinned and kissm's num_threads (1)")
     p.add_argument("--repeats", type=int, default=3, help="timed registration calls per method and case (3)")
     p.add_argument("--seg-repeats", type=int, default=9, help="timed segmentation calls per method and scan (9)")
-    p.add_argument("--bev-scan", default="kitti_demo_scans_unverified/000000.bin",
-                   help="the scan drawn in docs/img/ground_agreement.png")
+    p.add_argument(
+        "--bev-scan",
+        default="kitti_demo_scans_unverified/000000.bin",
+        help="the scan drawn in docs/img/ground_agreement.png",
+    )
     p.add_argument("--no-reference", action="store_true", help="kissm only")
     p.add_argument("--no-seg", action="store_true", help="skip the segmentation part")
     p.add_argument("--no-reg", action="store_true", help="skip the registration parts")
     p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/ground.md and OUT/img/ (docs)")
-    p.add_argument("--raw", type=Path, default=None,
-                   help="raw results (bench/results/ground_latest.json with the default --out, else OUT/ground_raw.json)")
+    p.add_argument(
+        "--raw",
+        type=Path,
+        default=None,
+        help="raw results (bench/results/ground_latest.json with the default --out, else OUT/ground_raw.json)",
+    )
     p.add_argument("--report-from", type=Path, default=None, help="only rewrite the report from saved raw results")
-    p.add_argument("--smoke", action="store_true",
-                   help="well under a minute: one scan, the small_gicp pair (raw, one yaw, one wrong up, one tilt), "
-                        "1 repeat, results in a temp dir")
+    p.add_argument(
+        "--smoke",
+        action="store_true",
+        help="well under a minute: one scan, the small_gicp pair (raw, one yaw, one wrong up, one tilt), "
+        "1 repeat, results in a temp dir",
+    )
     args = p.parse_args(argv)
     if args.smoke:
         explicit = {a.split("=")[0] for a in argv if a.startswith("--")}
@@ -1143,8 +1223,11 @@ def main(argv: list[str] | None = None) -> int:
         "runs": [],
         "errors": [],
     }
-    print(f"ground_bench: threads {args.threads} (CPUs {cpus}), repeats {args.repeats}, seg repeats "
-          f"{args.seg_repeats}, data {args.data}, load {os.getloadavg()[0]:.1f}", flush=True)
+    print(
+        f"ground_bench: threads {args.threads} (CPUs {cpus}), repeats {args.repeats}, seg repeats "
+        f"{args.seg_repeats}, data {args.data}, load {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
     t0 = time.monotonic()
     if not args.no_seg:
         run_segmentation(args, results, args.threads)

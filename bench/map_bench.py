@@ -392,7 +392,12 @@ def one_map(
         extra = max(0, size - len(base))
         world_map = np.ascontiguousarray(np.concatenate([base, stream.points(extra)]))
     res["maps"].append(
-        {**where, "points": len(world_map), "base_points": 0 if args.absent else len(base), "tiles": stream.tiles_in(extra)}
+        {
+            **where,
+            "points": len(world_map),
+            "base_points": 0 if args.absent else len(base),
+            "tiles": stream.tiles_in(extra),
+        }
     )
     use_reference = km is not None and (args.reference_max_points is None or size <= args.reference_max_points)
     once = size > args.reference_once_above

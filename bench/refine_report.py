@@ -82,41 +82,60 @@ def verdicts(res: Results) -> list[str]:
                     continue
                 cat = res.cases[ids[0]]["category"]
                 if k[0] > s[0] or k[1] > s[1]:
-                    worse.append(f"{DATASET_LABEL.get(ds, ds)} (kissm {_err_cell(k[0], k[1], cat)} vs small_gicp "
-                                 f"{_err_cell(s[0], s[1], cat)})")
-            lines.append(f"**Errors, {_threads_title(threads)}**: kissm GICP's median RRE and RTE at least as good as "
-                         f"small_gicp's on every dataset: " + ("yes" if not worse else "**no** — " + "; ".join(worse)))
+                    worse.append(
+                        f"{DATASET_LABEL.get(ds, ds)} (kissm {_err_cell(k[0], k[1], cat)} vs small_gicp "
+                        f"{_err_cell(s[0], s[1], cat)})"
+                    )
+            lines.append(
+                f"**Errors, {_threads_title(threads)}**: kissm GICP's median RRE and RTE at least as good as "
+                f"small_gicp's on every dataset: " + ("yes" if not worse else "**no** — " + "; ".join(worse))
+            )
         if "kissm_gicp" in m and "sgicp" in m:
             lows = []
             for pair in res.pairs:
                 ids = res.case_ids(pair=pair)
-                r = _per_case_ratios(res, threads, ids, _case_median(res, threads, "sgicp", lambda x: x["wall_ms"]),
-                                     _case_median(res, threads, "kissm_gicp", lambda x: x["stages"].get("refine")))
+                r = _per_case_ratios(
+                    res,
+                    threads,
+                    ids,
+                    _case_median(res, threads, "sgicp", lambda x: x["wall_ms"]),
+                    _case_median(res, threads, "kissm_gicp", lambda x: x["stages"].get("refine")),
+                )
                 if r:
                     lows.append((min(r), pair))
             if lows:
                 lo = min(lows)
                 short = [p for v, p in lows if v < 2]
-                lines.append(f"**Refinement stage, {_threads_title(threads)}**: small_gicp preprocess + align / "
-                             f"kissm's refinement stage ≥ 2x on every pair: " + ("yes" if not short else "**no**")
-                             + f" (smallest per-case ratio {fmt_ratio(lo[0])}, {lo[1]})"
-                             + (f"; under 2x: {', '.join(short)}" if short else ""))
+                lines.append(
+                    f"**Refinement stage, {_threads_title(threads)}**: small_gicp preprocess + align / "
+                    f"kissm's refinement stage ≥ 2x on every pair: "
+                    + ("yes" if not short else "**no**")
+                    + f" (smallest per-case ratio {fmt_ratio(lo[0])}, {lo[1]})"
+                    + (f"; under 2x: {', '.join(short)}" if short else "")
+                )
         if "kissm_gicp" in m and "ref_sgicp" in m:
             lows = []
             for pair in res.pairs:
                 ids = res.case_ids(pair=pair)
-                r = _per_case_ratios(res, threads, ids,
-                                     _case_median(res, threads, "ref_sgicp", lambda x: x["engine_ms"]),
-                                     _case_median(res, threads, "kissm_gicp", lambda x: x["wall_ms"]))
+                r = _per_case_ratios(
+                    res,
+                    threads,
+                    ids,
+                    _case_median(res, threads, "ref_sgicp", lambda x: x["engine_ms"]),
+                    _case_median(res, threads, "kissm_gicp", lambda x: x["wall_ms"]),
+                )
                 if r:
                     lows.append((min(r), pair))
             if lows:
                 lo = min(lows)
                 short = [p for v, p in lows if v < 3]
-                lines.append(f"**End to end, {_threads_title(threads)}**: (reference + small_gicp) / (kissm coarse + "
-                             f"GICP) ≥ 3x on every pair: " + ("yes" if not short else "**no**")
-                             + f" (smallest per-case ratio {fmt_ratio(lo[0])}, {lo[1]})"
-                             + (f"; under 3x: {', '.join(short)}" if short else ""))
+                lines.append(
+                    f"**End to end, {_threads_title(threads)}**: (reference + small_gicp) / (kissm coarse + "
+                    f"GICP) ≥ 3x on every pair: "
+                    + ("yes" if not short else "**no**")
+                    + f" (smallest per-case ratio {fmt_ratio(lo[0])}, {lo[1]})"
+                    + (f"; under 3x: {', '.join(short)}" if short else "")
+                )
         ref = "reference" if "reference" in res.methods else ("ref_sgicp" if "ref_sgicp" in m else None)
         for km in ("kissm_gicp", "kissm_p2pl"):
             if km not in m:
@@ -135,11 +154,14 @@ def verdicts(res: Results) -> list[str]:
                     bunny = (k["success"], r["success"], k["n"])
             text = f"**Success, {SHORT[km]}, {_threads_title(threads)}**: "
             if ref is not None:
-                text += (f"at least {SHORT[ref]}'s on every dataset: "
-                         + ("yes" if not behind else "**no** — " + "; ".join(behind)))
+                text += f"at least {SHORT[ref]}'s on every dataset: " + (
+                    "yes" if not behind else "**no** — " + "; ".join(behind)
+                )
                 if bunny:
-                    text += (f"; bunny strictly better: {'yes' if bunny[0] > bunny[1] else '**no**'} "
-                             f"({bunny[0]}/{bunny[2]} vs {bunny[1]}/{bunny[2]})")
+                    text += (
+                        f"; bunny strictly better: {'yes' if bunny[0] > bunny[1] else '**no**'} "
+                        f"({bunny[0]}/{bunny[2]} vs {bunny[1]}/{bunny[2]})"
+                    )
                 text += "; "
             text += "wrong poses reported valid: " + ("none" if wrong == 0 else f"**{wrong}**")
             lines.append(text)
@@ -172,11 +194,11 @@ Same cases, workers, pinning and interleaving as above; every method is its own 
   include the conversion from numpy, downsampling and covariances / normals.
 - **reference + small_gicp** (KISS-Matcher's ROS loop-closure module): both clouds voxelised
   (`small_gicp.voxelgrid_sampling(v)`), the reference's `estimate` on them, covariances of both
-  ({chain.get('num_neighbors', '?')} neighbours), the target's Gaussian voxel map, and VGICP from the reference's
-  pose with correspondence distance {fmt(chain.get('corr_dist_gain'), 0)} v and {chain.get('max_iterations', '?')}
+  ({chain.get("num_neighbors", "?")} neighbours), the target's Gaussian voxel map, and VGICP from the reference's
+  pose with correspondence distance {fmt(chain.get("corr_dist_gain"), 0)} v and {chain.get("max_iterations", "?")}
   iterations (the module's configured cap is never applied, so its wrapper's default runs). Upstream skips the
-  fine step when its gates reject the coarse pose (valid with more than {chain.get('min_inliers', '?')} final
-  inliers, then overlap = inliers / source points ≥ {fmt((chain.get('min_overlap') or 0) * 100, 0)}%); here the
+  fine step when its gates reject the coarse pose (valid with more than {chain.get("min_inliers", "?")} final
+  inliers, then overlap = inliers / source points ≥ {fmt((chain.get("min_overlap") or 0) * 100, 0)}%); here the
   fine step always runs so its time is counted, and the gates are reported separately. "C++" is its wall time
   minus the reference binding's copy of the points (its Python wall minus its own stage times), the number the
   3x target is judged against.
@@ -186,17 +208,26 @@ Same cases, workers, pinning and interleaving as above; every method is its own 
   and at least 5 final inliers). Success and "wrong valid" as above.
 - **Errors** are medians over the calls whose start pose was within the success thresholds (for the peers and
   kissm the same cases; the chain starts from the reference's pose, so its set can differ: its count is shown).""")
-    starts = [r.get("same_start") for t in res.threads for x in ("kissm_gicp", "kissm_p2pl")
-              for r in res.collect(t, list(res.cases), x) if "same_start" in r]
+    starts = [
+        r.get("same_start")
+        for t in res.threads
+        for x in ("kissm_gicp", "kissm_p2pl")
+        for r in res.collect(t, list(res.cases), x)
+        if "same_start" in r
+    ]
     if starts:
-        L.append(f"- **Same start, checked**: kissm's refined calls started from the peers' start pose bit for bit in "
-                 f"{sum(starts)} of {len(starts)} calls" + ("." if all(starts) else " — **the comparison is not from "
-                                                              "one start where it differs**."))
+        L.append(
+            f"- **Same start, checked**: kissm's refined calls started from the peers' start pose bit for bit in "
+            f"{sum(starts)} of {len(starts)} calls"
+            + ("." if all(starts) else " — **the comparison is not from one start where it differs**.")
+        )
     if machine_busy(res.raw["meta"]) and max(res.threads) > 1:
-        L.append("- **Busy machine**: the peers' OpenMP threads spin at their barriers, so while another program "
-                 "holds a CPU a 2-thread call of small_gicp or Open3D can take many times its 1-thread time (not so "
-                 "with `OMP_WAIT_POLICY=passive`). In this run the peers' 2-thread times, and kissm's ratios against "
-                 "them, are inflated; only a quiet run settles the 2-thread targets.")
+        L.append(
+            "- **Busy machine**: the peers' OpenMP threads spin at their barriers, so while another program "
+            "holds a CPU a 2-thread call of small_gicp or Open3D can take many times its 1-thread time (not so "
+            "with `OMP_WAIT_POLICY=passive`). In this run the peers' 2-thread times, and kissm's ratios against "
+            "them, are inflated; only a quiet run settles the 2-thread targets."
+        )
     L.append("")
     lines = verdicts(res)
     if lines:
@@ -219,8 +250,10 @@ def _error_tables(res: Results) -> list[str]:
     cols = [x for x in ERROR_COLUMNS if x in m]
     start_from = next((x for x in FROM_KISSM if x in m), None)
     L = ["### Errors from the same start", ""]
-    L.append("Median RRE / RTE per dataset; \"kissm coarse\" is the pose every peer but the chain starts from. "
-             "(n) = calls from a start within the thresholds / all timed calls.")
+    L.append(
+        'Median RRE / RTE per dataset; "kissm coarse" is the pose every peer but the chain starts from. '
+        "(n) = calls from a start within the thresholds / all timed calls."
+    )
     L.append("")
     for threads in res.threads:
         compare = "kissm_gicp" in cols and "sgicp" in cols
@@ -250,8 +283,11 @@ def _error_tables(res: Results) -> list[str]:
                     row.append("–")
                 else:
                     ok_r, ok_t = k[0] <= s[0], k[1] <= s[1]
-                    row.append("yes" if ok_r and ok_t else "**no**: " + ", ".join(
-                        x for x, ok in (("RRE", ok_r), ("RTE", ok_t)) if not ok))
+                    row.append(
+                        "yes"
+                        if ok_r and ok_t
+                        else "**no**: " + ", ".join(x for x, ok in (("RRE", ok_r), ("RTE", ok_t)) if not ok)
+                    )
             rows.append(row)
         L.append(f"#### {_threads_title(threads)}")
         L.append("")
@@ -265,17 +301,30 @@ def _time_tables(res: Results) -> list[str]:
     L = []
     if "kissm_gicp" in m or "sgicp" in m:
         L += ["### Refinement time", ""]
-        L.append("Median ms per call per pair (over its variants and repeats). kissm: its refinement stage "
-                 "(`time_refine_ms`); \"kissm GICP − coarse\" is kissm + GICP's wall time minus plain kissm's, "
-                 "everything refinement adds (normals it keeps, the kd-tree, the stage), a difference of two noisy "
-                 "medians (\"vs GICP − coarse\" takes at least the stage itself). small_gicp: preprocess "
-                 "(both clouds) + align. Ratio = small_gicp total / kissm's GICP stage (\"min\": smallest per-case "
-                 "ratio). Target: ≥ 2x.")
+        L.append(
+            "Median ms per call per pair (over its variants and repeats). kissm: its refinement stage "
+            "(`time_refine_ms`); \"kissm GICP − coarse\" is kissm + GICP's wall time minus plain kissm's, "
+            "everything refinement adds (normals it keeps, the kd-tree, the stage), a difference of two noisy "
+            'medians ("vs GICP − coarse" takes at least the stage itself). small_gicp: preprocess '
+            '(both clouds) + align. Ratio = small_gicp total / kissm\'s GICP stage ("min": smallest per-case '
+            "ratio). Target: ≥ 2x."
+        )
         L.append("")
         for threads in res.threads:
-            header = ["pair", "kissm GICP stage", "kissm P2PL stage", "kissm GICP − coarse", "small_gicp preprocess",
-                      "small_gicp align", "small_gicp total", "ratio (min)", "≥ 2x", "vs GICP − coarse",
-                      "O3D GICP", "O3D P2PL"]
+            header = [
+                "pair",
+                "kissm GICP stage",
+                "kissm P2PL stage",
+                "kissm GICP − coarse",
+                "small_gicp preprocess",
+                "small_gicp align",
+                "small_gicp total",
+                "ratio (min)",
+                "≥ 2x",
+                "vs GICP − coarse",
+                "O3D GICP",
+                "O3D P2PL",
+            ]
             rows = []
             for pair in res.pairs:
                 ids = res.case_ids(pair=pair)
@@ -291,32 +340,54 @@ def _time_tables(res: Results) -> list[str]:
                 added_cell = fmt_ms(added) if added is None or added > 0 else "< 0 (noise)"
                 if added is not None and k_stage:
                     added = max(added, k_stage)  # refinement adds at least its own stage: less is noise
-                ratios = _per_case_ratios(res, threads, ids,
-                                          _case_median(res, threads, "sgicp", lambda x: x["wall_ms"]),
-                                          _case_median(res, threads, "kissm_gicp", lambda x: x["stages"].get("refine")))
+                ratios = _per_case_ratios(
+                    res,
+                    threads,
+                    ids,
+                    _case_median(res, threads, "sgicp", lambda x: x["wall_ms"]),
+                    _case_median(res, threads, "kissm_gicp", lambda x: x["stages"].get("refine")),
+                )
                 lo = min(ratios) if ratios else None
-                rows.append([
-                    pair, fmt_ms(k_stage), fmt_ms(_stage(kp, "refine")), added_cell,
-                    fmt_ms(_stage(sg, "preprocess")), fmt_ms(_stage(sg, "align")), fmt_ms(s_total),
-                    f"{fmt_ratio(s_total / k_stage if s_total and k_stage else None)} ({fmt_ratio(lo)})",
-                    "–" if lo is None else ("yes" if lo >= 2 else "**no**"),
-                    fmt_ratio(s_total / added if s_total and added and added > 0 else None),
-                    fmt_ms(med([r["wall_ms"] for r in res.collect(threads, ids, "o3d_gicp")])),
-                    fmt_ms(med([r["wall_ms"] for r in res.collect(threads, ids, "o3d_p2pl")])),
-                ])
+                rows.append(
+                    [
+                        pair,
+                        fmt_ms(k_stage),
+                        fmt_ms(_stage(kp, "refine")),
+                        added_cell,
+                        fmt_ms(_stage(sg, "preprocess")),
+                        fmt_ms(_stage(sg, "align")),
+                        fmt_ms(s_total),
+                        f"{fmt_ratio(s_total / k_stage if s_total and k_stage else None)} ({fmt_ratio(lo)})",
+                        "–" if lo is None else ("yes" if lo >= 2 else "**no**"),
+                        fmt_ratio(s_total / added if s_total and added and added > 0 else None),
+                        fmt_ms(med([r["wall_ms"] for r in res.collect(threads, ids, "o3d_gicp")])),
+                        fmt_ms(med([r["wall_ms"] for r in res.collect(threads, ids, "o3d_p2pl")])),
+                    ]
+                )
             L.append(f"#### {_threads_title(threads)}")
             L.append("")
             L.append(table(header, rows))
             L.append("")
     if "kissm_gicp" in m and "ref_sgicp" in m:
         L += ["### End to end: kissm coarse + refine against reference + small_gicp", ""]
-        L.append("Median ms per call from the raw arrays. The chain's \"C++\" leaves out the reference binding's "
-                 "copy of the points; ratio = chain C++ / kissm + GICP (\"min\": smallest per-case ratio). "
-                 "Target: ≥ 3x.")
+        L.append(
+            "Median ms per call from the raw arrays. The chain's \"C++\" leaves out the reference binding's "
+            'copy of the points; ratio = chain C++ / kissm + GICP ("min": smallest per-case ratio). '
+            "Target: ≥ 3x."
+        )
         L.append("")
         for threads in res.threads:
-            header = ["pair", "kissm + GICP", "kissm + P2PL", "chain wall", "chain C++", "of which VGICP",
-                      "ratio (min)", "≥ 3x", "vs chain wall"]
+            header = [
+                "pair",
+                "kissm + GICP",
+                "kissm + P2PL",
+                "chain wall",
+                "chain C++",
+                "of which VGICP",
+                "ratio (min)",
+                "≥ 3x",
+                "vs chain wall",
+            ]
             rows = []
             for pair in res.pairs:
                 ids = res.case_ids(pair=pair)
@@ -325,14 +396,27 @@ def _time_tables(res: Results) -> list[str]:
                 ch = res.collect(threads, ids, "ref_sgicp")
                 cw, ce = med([r["wall_ms"] for r in ch]), med([r["engine_ms"] for r in ch])
                 fine = med([(r["stages"].get("preprocess") or 0) + (r["stages"].get("align") or 0) for r in ch])
-                ratios = _per_case_ratios(res, threads, ids,
-                                          _case_median(res, threads, "ref_sgicp", lambda x: x["engine_ms"]),
-                                          _case_median(res, threads, "kissm_gicp", lambda x: x["wall_ms"]))
+                ratios = _per_case_ratios(
+                    res,
+                    threads,
+                    ids,
+                    _case_median(res, threads, "ref_sgicp", lambda x: x["engine_ms"]),
+                    _case_median(res, threads, "kissm_gicp", lambda x: x["wall_ms"]),
+                )
                 lo = min(ratios) if ratios else None
-                rows.append([pair, fmt_ms(kg), fmt_ms(kp), fmt_ms(cw), fmt_ms(ce), fmt_ms(fine),
-                             f"{fmt_ratio(ce / kg if ce and kg else None)} ({fmt_ratio(lo)})",
-                             "–" if lo is None else ("yes" if lo >= 3 else "**no**"),
-                             fmt_ratio(cw / kg if cw and kg else None)])
+                rows.append(
+                    [
+                        pair,
+                        fmt_ms(kg),
+                        fmt_ms(kp),
+                        fmt_ms(cw),
+                        fmt_ms(ce),
+                        fmt_ms(fine),
+                        f"{fmt_ratio(ce / kg if ce and kg else None)} ({fmt_ratio(lo)})",
+                        "–" if lo is None else ("yes" if lo >= 3 else "**no**"),
+                        fmt_ratio(cw / kg if cw and kg else None),
+                    ]
+                )
             L.append(f"#### {_threads_title(threads)}")
             L.append("")
             L.append(table(header, rows))
@@ -343,9 +427,11 @@ def _time_tables(res: Results) -> list[str]:
 def _success_tables(res: Results) -> list[str]:
     cols = [x for x in ("kissm", "reference") if x in res.methods] + res.refining
     L = ["### Success and validity", ""]
-    L.append("Successful calls / timed calls per dataset (raw and rotated variants, repeats); \"wrong valid\": "
-             "reported valid but outside the thresholds. For the chain, \"gates\" counts the calls upstream's "
-             "own gates would accept (and how many of those are wrong).")
+    L.append(
+        'Successful calls / timed calls per dataset (raw and rotated variants, repeats); "wrong valid": '
+        'reported valid but outside the thresholds. For the chain, "gates" counts the calls upstream\'s '
+        "own gates would accept (and how many of those are wrong)."
+    )
     L.append("")
     for threads in res.threads:
         rows = []
@@ -367,8 +453,10 @@ def _success_tables(res: Results) -> list[str]:
                     cell += f"; gates {len(gated)}" + (f" ({bad} wrong)" if bad else "")
                 row.append(cell)
             rows.append(row)
-        rows.append(["**total**"] + [f"**{t[0]}/{t[1]}**" + (f" ({t[2]} wrong valid)" if t[2] else "")
-                                     for t in (totals[x] for x in cols)])
+        rows.append(
+            ["**total**"]
+            + [f"**{t[0]}/{t[1]}**" + (f" ({t[2]} wrong valid)" if t[2] else "") for t in (totals[x] for x in cols)]
+        )
         L.append(f"#### {_threads_title(threads)}")
         L.append("")
         L.append(table(["dataset (cases)"] + [SHORT[x] for x in cols], rows, ["---"] * (len(cols) + 1)))
@@ -381,11 +469,15 @@ def _note(r: dict) -> str:
     if "refine_iterations" in info:
         ov = info.get("overlap")
         why = "" if r["valid"] else f"{info.get('reason')}; "  # why kissm reported the pose invalid
-        return (f"{why}overlap {fmt(ov, 2) if ov is not None else '–'}, "
-                f"{info['refine_iterations']} it{'' if info.get('refine_converged') else ' (cap)'}")
+        return (
+            f"{why}overlap {fmt(ov, 2) if ov is not None else '–'}, "
+            f"{info['refine_iterations']} it{'' if info.get('refine_converged') else ' (cap)'}"
+        )
     if "gates_valid" in info:
-        return (f"{r['inliers']} inliers, overlap {fmt(info['overlap'] * 100, 0)}%, gates "
-                f"{'accept' if info['gates_valid'] else 'reject'}")
+        return (
+            f"{r['inliers']} inliers, overlap {fmt(info['overlap'] * 100, 0)}%, gates "
+            f"{'accept' if info['gates_valid'] else 'reject'}"
+        )
     if "fitness" in info:
         return f"fitness {fmt(info['fitness'], 2)}"
     if "iterations" in info:
@@ -408,11 +500,18 @@ def _case_details(res: Results) -> list[str]:
                     continue
                 r = runs[len(runs) // 2]  # the errors do not change between repeats; times are medians
                 cat = c["category"]
-                rows.append([f"{c['name']} {c['variant']}" if first else "", SHORT[x],
-                             _err_cell(r.get("coarse_rre_deg"), r.get("coarse_rte_m"), cat),
-                             _err_cell(r["rre_deg"], r["rte_m"], cat), "yes" if r["valid"] else "no",
-                             f"{sum(q['success'] for q in runs)}/{len(runs)}",
-                             fmt_ms(med([q["wall_ms"] for q in runs])), _note(r)])
+                rows.append(
+                    [
+                        f"{c['name']} {c['variant']}" if first else "",
+                        SHORT[x],
+                        _err_cell(r.get("coarse_rre_deg"), r.get("coarse_rte_m"), cat),
+                        _err_cell(r["rre_deg"], r["rte_m"], cat),
+                        "yes" if r["valid"] else "no",
+                        f"{sum(q['success'] for q in runs)}/{len(runs)}",
+                        fmt_ms(med([q["wall_ms"] for q in runs])),
+                        _note(r),
+                    ]
+                )
                 first = False
         L.append(table(header, rows, ["---"] * len(header)))
         L.append("")
@@ -426,12 +525,17 @@ def make_plot(res: Results, img_dir: Path, plt) -> dict[str, Path]:
     shown = [x for x in ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl") if x in res.refining]
     if not shown or not res.pairs:
         return {}
-    parts = {"kissm_gicp": ("refine",), "kissm_p2pl": ("refine",), "sgicp": ("preprocess", "align"),
-             "o3d_gicp": ("input", "voxelize", "covariances", "align"),
-             "o3d_p2pl": ("input", "voxelize", "covariances", "align")}
+    parts = {
+        "kissm_gicp": ("refine",),
+        "kissm_p2pl": ("refine",),
+        "sgicp": ("preprocess", "align"),
+        "o3d_gicp": ("input", "voxelize", "covariances", "align"),
+        "o3d_p2pl": ("input", "voxelize", "covariances", "align"),
+    }
     n = len(res.pairs)
-    fig, axes = plt.subplots(1, len(res.threads), figsize=(6.5 * len(res.threads), 0.32 * n * len(shown) + 1.6),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        1, len(res.threads), figsize=(6.5 * len(res.threads), 0.32 * n * len(shown) + 1.6), squeeze=False
+    )
     used = set()
     for ax, threads in zip(axes.flat, res.threads, strict=False):
         labels, y = [], 0
@@ -445,8 +549,15 @@ def make_plot(res: Results, img_dir: Path, plt) -> dict[str, Path]:
                     if not v:
                         continue
                     label = "kissm's refinement stage" if st == "refine" else STAGE_LABEL[st]
-                    ax.barh(y, v, left=left, color=STAGE_COLOR[st], edgecolor="white", linewidth=0.4,
-                            label=label if label not in used else None)
+                    ax.barh(
+                        y,
+                        v,
+                        left=left,
+                        color=STAGE_COLOR[st],
+                        edgecolor="white",
+                        linewidth=0.4,
+                        label=label if label not in used else None,
+                    )
                     used.add(label)
                     left += v
                 if left:
@@ -460,8 +571,9 @@ def make_plot(res: Results, img_dir: Path, plt) -> dict[str, Path]:
         ax.margins(x=0.15)
         ax.grid(axis="x", alpha=0.3)
     fig.legend(loc="lower center", ncol=5, fontsize=7.5, frameon=False)
-    fig.suptitle("Refinement from kissm's coarse pose: kissm's stage vs the peers' preprocessing + alignment",
-                 fontsize=10)
+    fig.suptitle(
+        "Refinement from kissm's coarse pose: kissm's stage vs the peers' preprocessing + alignment", fontsize=10
+    )
     fig.tight_layout(rect=(0, 0.06, 1, 0.96))
     path = img_dir / "refine_times.png"
     fig.savefig(path, dpi=110)
@@ -477,4 +589,3 @@ def _tick_positions(pairs: int, per_pair: int) -> list[float]:
             y += 1
         y += 0.6
     return out
-

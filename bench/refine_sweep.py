@@ -21,9 +21,8 @@ import statistics
 import sys
 from pathlib import Path
 
-import numpy as np
-
 import kissm
+import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "bindings" / "python" / "tests"))
@@ -107,15 +106,19 @@ def main() -> int:
                     times.append(r.time_refine_ms)
             rot, trans = errors(r.transform, gt)
             c_rot, c_trans = errors(coarse, gt)
-            rows[dataset].append((rot, trans, min(times), r.refine_iterations, float(r.refine_converged), c_rot, c_trans))
+            rows[dataset].append(
+                (rot, trans, min(times), r.refine_iterations, float(r.refine_converged), c_rot, c_trans)
+            )
         print(f"== {setting}")
         for dataset, v in sorted(rows.items()):
-            col = list(zip(*v))
+            col = list(zip(*v, strict=True))
             print(
-                f"  {dataset:30s} n={len(v):2d} coarse {statistics.median(col[5]):.3f} deg {100 * statistics.median(col[6]):.2f} cm"
+                f"  {dataset:30s} n={len(v):2d} coarse {statistics.median(col[5]):.3f} deg"
+                f" {100 * statistics.median(col[6]):.2f} cm"
                 f" | refined {statistics.median(col[0]):.3f} deg (max {max(col[0]):.3f})"
                 f" {100 * statistics.median(col[1]):.2f} cm (max {100 * max(col[1]):.2f})"
-                f" | {statistics.median(col[2]):.1f} ms, {statistics.median(col[3]):.0f} it, converged {int(sum(col[4]))}/{len(v)}"
+                f" | {statistics.median(col[2]):.1f} ms, {statistics.median(col[3]):.0f} it,"
+                f" converged {int(sum(col[4]))}/{len(v)}"
             )
         sys.stdout.flush()
     return 0

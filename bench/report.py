@@ -25,9 +25,18 @@ METHOD_LABEL = {
     "o3d_p2pl": "Open3D point-to-plane ICP from kissm's coarse pose",
     "ref_sgicp": "reference + small_gicp VGICP (upstream chain)",
 }
-SHORT = {"kissm": "kissm", "reference": "reference", "o3d_ransac": "O3D RANSAC", "o3d_fgr": "O3D FGR",
-         "kissm_gicp": "kissm GICP", "kissm_p2pl": "kissm P2PL", "sgicp": "small_gicp", "o3d_gicp": "O3D GICP",
-         "o3d_p2pl": "O3D P2PL", "ref_sgicp": "ref + small_gicp"}
+SHORT = {
+    "kissm": "kissm",
+    "reference": "reference",
+    "o3d_ransac": "O3D RANSAC",
+    "o3d_fgr": "O3D FGR",
+    "kissm_gicp": "kissm GICP",
+    "kissm_p2pl": "kissm P2PL",
+    "sgicp": "small_gicp",
+    "o3d_gicp": "O3D GICP",
+    "o3d_p2pl": "O3D P2PL",
+    "ref_sgicp": "ref + small_gicp",
+}
 COARSE = ("kissm", "reference", "o3d_ransac", "o3d_fgr")
 REFINING = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl", "ref_sgicp")
 STAGE_LABEL = {
@@ -45,12 +54,33 @@ STAGE_LABEL = {
     "align": "alignment",
 }
 STAGE_COLOR = {
-    "input": "#9e9e9e", "voxelize": "#4e79a7", "features": "#f28e2b", "matching": "#59a14f", "pruning": "#e15759",
-    "solver": "#b07aa1", "registration": "#edc948", "refine": "#d62728", "reference": "#1f77b4",
-    "preprocess": "#ff9da7", "covariances": "#f1ce63", "align": "#76b7b2",
+    "input": "#9e9e9e",
+    "voxelize": "#4e79a7",
+    "features": "#f28e2b",
+    "matching": "#59a14f",
+    "pruning": "#e15759",
+    "solver": "#b07aa1",
+    "registration": "#edc948",
+    "refine": "#d62728",
+    "reference": "#1f77b4",
+    "preprocess": "#ff9da7",
+    "covariances": "#f1ce63",
+    "align": "#76b7b2",
 }
-STAGE_ORDER = ("input", "voxelize", "features", "matching", "pruning", "solver", "registration", "refine",
-               "reference", "preprocess", "covariances", "align")
+STAGE_ORDER = (
+    "input",
+    "voxelize",
+    "features",
+    "matching",
+    "pruning",
+    "solver",
+    "registration",
+    "refine",
+    "reference",
+    "preprocess",
+    "covariances",
+    "align",
+)
 METHOD_COLOR = {"kissm": "#d62728", "reference": "#1f77b4", "o3d_ransac": "#2ca02c", "o3d_fgr": "#9467bd"}
 DATASET_LABEL = {
     "small_gicp_lidar": "small_gicp LiDAR",
@@ -127,8 +157,13 @@ class Results:
                 self.pairs.append(c["name"])
 
     def case_ids(self, pair=None, category=None, dataset=None):
-        return [i for i, c in self.cases.items() if (pair is None or c["name"] == pair)
-                and (category is None or c["category"] == category) and (dataset is None or c["dataset"] == dataset)]
+        return [
+            i
+            for i, c in self.cases.items()
+            if (pair is None or c["name"] == pair)
+            and (category is None or c["category"] == category)
+            and (dataset is None or c["dataset"] == dataset)
+        ]
 
     def collect(self, threads, case_ids, method):
         out = []
@@ -147,10 +182,16 @@ class Results:
             if vals:
                 stages[s] = med(vals)
         return {
-            "n": len(statuses), "ok": len(runs), "success": len(good),
-            "timeouts": statuses.count("timeout"), "errors": statuses.count("error"),
-            "wall": med([r["wall_ms"] for r in runs]), "engine": med([r["engine_ms"] for r in runs]),
-            "stages": stages, "rre": med([r["rre_deg"] for r in good]), "rte": med([r["rte_m"] for r in good]),
+            "n": len(statuses),
+            "ok": len(runs),
+            "success": len(good),
+            "timeouts": statuses.count("timeout"),
+            "errors": statuses.count("error"),
+            "wall": med([r["wall_ms"] for r in runs]),
+            "engine": med([r["engine_ms"] for r in runs]),
+            "stages": stages,
+            "rre": med([r["rre_deg"] for r in good]),
+            "rte": med([r["rte_m"] for r in good]),
             "peak_mb": (max(p for p in peaks if p is not None) / 1024) if any(p is not None for p in peaks) else None,
             "valid": sum(r["valid"] for r in runs),
             "wrong_valid": sum(r["valid"] and not r["success"] for r in runs),
@@ -186,6 +227,7 @@ def rte_cell(value, category):
 
 # ---- plots ------------------------------------------------------------------------------------------------
 
+
 def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
     try:
         import matplotlib
@@ -204,8 +246,9 @@ def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
         n = len(show_pairs)
         cols = 2 if n > 1 else 1
         rows = math.ceil(n / cols)
-        fig, axes = plt.subplots(rows, cols, figsize=(7.0 * cols, 0.55 * len(res.methods) * rows + 1.0 * rows + 0.8),
-                                 squeeze=False)
+        fig, axes = plt.subplots(
+            rows, cols, figsize=(7.0 * cols, 0.55 * len(res.methods) * rows + 1.0 * rows + 0.8), squeeze=False
+        )
         used = set()
         for ax, pair in zip(axes.flat, show_pairs, strict=False):
             ids = res.case_ids(pair=pair)
@@ -218,9 +261,16 @@ def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
                     v = s["stages"].get(st)
                     if not v:
                         continue
-                    ax.barh(y, v, left=left, color=STAGE_COLOR[st], edgecolor="white", linewidth=0.4,
-                            hatch="//" if st == "input" and m == "reference" else None,
-                            label=STAGE_LABEL[st] if st not in used else None)
+                    ax.barh(
+                        y,
+                        v,
+                        left=left,
+                        color=STAGE_COLOR[st],
+                        edgecolor="white",
+                        linewidth=0.4,
+                        hatch="//" if st == "input" and m == "reference" else None,
+                        label=STAGE_LABEL[st] if st not in used else None,
+                    )
                     used.add(st)
                     left += v
                 if s["wall"] is not None:
@@ -240,8 +290,11 @@ def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
         for ax in list(axes.flat)[n:]:
             ax.axis("off")
         fig.legend(loc="lower center", ncol=4, fontsize=8, frameon=False)
-        fig.suptitle(f"Per-stage time, {threads} thread{'s' if threads > 1 else ''} "
-                     f"(median over raw + rotated variants and repeats)", fontsize=11)
+        fig.suptitle(
+            f"Per-stage time, {threads} thread{'s' if threads > 1 else ''} "
+            f"(median over raw + rotated variants and repeats)",
+            fontsize=11,
+        )
         fig.tight_layout(rect=(0, 0.07 if rows > 1 else 0.12, 1, 0.97))
         path = img_dir / f"stage_times_{threads}t.png"
         fig.savefig(path, dpi=110)
@@ -258,28 +311,52 @@ def make_plots(res: Results, img_dir: Path) -> dict[str, Path]:
         for kind in ("time", "memory"):
             fig, ax = plt.subplots(figsize=(7.5, 5.2))
             for m in res.methods:
-                pts = [(xs[r["size"]], r["wall_ms"] / 1e3 if kind == "time" else r["peak_kb"] / 1024)
-                       for r in sc["runs"] if r["method"] == m and r["status"] == "ok"]
+                pts = [
+                    (xs[r["size"]], r["wall_ms"] / 1e3 if kind == "time" else r["peak_kb"] / 1024)
+                    for r in sc["runs"]
+                    if r["method"] == m and r["status"] == "ok"
+                ]
                 if not pts:
                     continue
                 k = slope([p[0] for p in pts], [p[1] for p in pts])
-                ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", color=METHOD_COLOR[m], lw=2,
-                          label=f"{METHOD_LABEL[m]} (slope {k:.2f})" if k is not None else METHOD_LABEL[m])
+                ax.loglog(
+                    [p[0] for p in pts],
+                    [p[1] for p in pts],
+                    "o-",
+                    color=METHOD_COLOR[m],
+                    lw=2,
+                    label=f"{METHOD_LABEL[m]} (slope {k:.2f})" if k is not None else METHOD_LABEL[m],
+                )
                 stops = [r for r in sc["runs"] if r["method"] == m and r["status"] == "timeout"]
                 if stops and kind == "time":  # a timed-out call: drawn at the timeout, "more than this"
                     ax.plot([xs[stops[0]["size"]]], [sc["timeout_s"]], "x", color=METHOD_COLOR[m], ms=10, mew=2)
-                    ax.annotate("timeout", (xs[stops[0]["size"]], sc["timeout_s"]), textcoords="offset points",
-                                xytext=(6, -3), fontsize=7, color=METHOD_COLOR[m])
+                    ax.annotate(
+                        "timeout",
+                        (xs[stops[0]["size"]], sc["timeout_s"]),
+                        textcoords="offset points",
+                        xytext=(6, -3),
+                        fontsize=7,
+                        color=METHOD_COLOR[m],
+                    )
             if kind == "time":
                 for st in ("voxelize", "features", "matching", "pruning", "solver"):
-                    pts = [(xs[r["size"]], r["stages"].get(st, 0) / 1e3) for r in sc["runs"]
-                           if r["method"] == "kissm" and r["status"] == "ok"]
+                    pts = [
+                        (xs[r["size"]], r["stages"].get(st, 0) / 1e3)
+                        for r in sc["runs"]
+                        if r["method"] == "kissm" and r["status"] == "ok"
+                    ]
                     pts = [p for p in pts if p[1] > 0]
                     if len(pts) < 2:
                         continue
                     k = slope([p[0] for p in pts], [p[1] for p in pts])
-                    ax.loglog([p[0] for p in pts], [p[1] for p in pts], "--", color=STAGE_COLOR[st], lw=1.2,
-                              label=f"kissm {STAGE_LABEL[st]} (slope {k:.2f})")
+                    ax.loglog(
+                        [p[0] for p in pts],
+                        [p[1] for p in pts],
+                        "--",
+                        color=STAGE_COLOR[st],
+                        lw=1.2,
+                        label=f"kissm {STAGE_LABEL[st]} (slope {k:.2f})",
+                    )
                 ax.set_ylabel("median wall time per call [s]")
                 ax.set_title(f"Time vs size, synthetic scenes, {sc['threads']} thread(s), v = {sc['voxel']} m")
             else:
@@ -305,12 +382,16 @@ def scaling_x(sc) -> dict[int, float]:
     for size in sc["sizes"]:
         i = size["index"]
         k = [r for r in sc["runs"] if r["size"] == i and r["method"] == "kissm" and r["status"] == "ok"]
-        xs[i] = float(k[0]["info"]["src_voxels"]) if k and k[0].get("info", {}).get("src_voxels") else float(
-            size["voxels_numpy"])
+        xs[i] = (
+            float(k[0]["info"]["src_voxels"])
+            if k and k[0].get("info", {}).get("src_voxels")
+            else float(size["voxels_numpy"])
+        )
     return xs
 
 
 # ---- markdown ---------------------------------------------------------------------------------------------
+
 
 def table(header, rows, align=None):
     align = align or ["---"] + ["--:"] * (len(header) - 1)
@@ -331,26 +412,39 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     if smoke:
         L.append("**Smoke run** (a seconds-long check of the harness, not a measurement).")
         L.append("")
-    L.append("Generated by `bench/bench.py` (do not edit by hand; rerun it). kissm against the reference "
-             "implementation (PyPI `kiss-matcher`), Open3D FPFH + RANSAC and Open3D FPFH + FGR, and kissm's "
-             "refinement against small_gicp, Open3D GICP / point-to-plane ICP and the reference + small_gicp chain, "
-             "in one run on one machine, interleaved, with the same voxel size and thread count for every method.")
+    L.append(
+        "Generated by `bench/bench.py` (do not edit by hand; rerun it). kissm against the reference "
+        "implementation (PyPI `kiss-matcher`), Open3D FPFH + RANSAC and Open3D FPFH + FGR, and kissm's "
+        "refinement against small_gicp, Open3D GICP / point-to-plane ICP and the reference + small_gicp chain, "
+        "in one run on one machine, interleaved, with the same voxel size and thread count for every method."
+    )
     L.append("")
     L.append(f"- Command: `{meta['command']}`")
     L.append(f"- Run: {meta['started']} to {meta.get('finished', '?')} ({meta.get('duration_s', 0) / 60:.0f} min)")
     ls, le = meta.get("load_start"), meta.get("load_end")
     if ls and le:
         busy = machine_busy(meta)
-        L.append(f"- Load average (1/5/15 min) at the start {ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end "
-                 f"{le[0]:.2f} / {le[1]:.2f} / {le[2]:.2f} on {mach.get('cpus_online')} CPUs"
-                 + (" — **the machine was busy with other work: absolute times are noisy; ratios come from "
-                    "interleaved calls and are more robust**" if busy else ""))
-    L.append(f"- Machine: {mach.get('cpu', '?')}, {mach.get('cpus_online')} CPUs (allowed: "
-             f"{mach.get('cpus_allowed')}), {mach.get('mem_total_gb', '?')} GB RAM, {mach.get('platform')}, "
-             f"Python {mach.get('python')}")
+        L.append(
+            f"- Load average (1/5/15 min) at the start {ls[0]:.2f} / {ls[1]:.2f} / {ls[2]:.2f}, at the end "
+            f"{le[0]:.2f} / {le[1]:.2f} / {le[2]:.2f} on {mach.get('cpus_online')} CPUs"
+            + (
+                " — **the machine was busy with other work: absolute times are noisy; ratios come from "
+                "interleaved calls and are more robust**"
+                if busy
+                else ""
+            )
+        )
+    L.append(
+        f"- Machine: {mach.get('cpu', '?')}, {mach.get('cpus_online')} CPUs (allowed: "
+        f"{mach.get('cpus_allowed')}), {mach.get('mem_total_gb', '?')} GB RAM, {mach.get('platform')}, "
+        f"Python {mach.get('python')}"
+    )
     pk = mach.get("packages", {})
-    L.append("- Versions: " + ", ".join(f"{k} {v}" for k, v in pk.items())
-             + (f"; kissm build {mach['git']}" if mach.get("git") else ""))
+    L.append(
+        "- Versions: "
+        + ", ".join(f"{k} {v}" for k, v in pk.items())
+        + (f"; kissm build {mach['git']}" if mach.get("git") else "")
+    )
     if meta.get("missing_methods"):
         L.append("- Not run (not installed): " + ", ".join(METHOD_LABEL[m] for m in meta["missing_methods"]))
     L.append("")
@@ -397,10 +491,12 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     if res.runs and methods:
         L.append("## Speed-up of kissm")
         L.append("")
-        L.append("Median wall time of one call per LiDAR pair (over its raw and rotated variants and the repeats), "
-                 "and the speed-up of kissm = peer time / kissm time from the same interleaved run. "
-                 "\"min\" is the smallest per-variant ratio. Target (SPEC §8): kissm's end-to-end Python call at least "
-                 "3x faster than the reference's own C++ stage times on every LiDAR pair, at every thread count.")
+        L.append(
+            "Median wall time of one call per LiDAR pair (over its raw and rotated variants and the repeats), "
+            "and the speed-up of kissm = peer time / kissm time from the same interleaved run. "
+            '"min" is the smallest per-variant ratio. Target (SPEC §8): kissm\'s end-to-end Python call at least '
+            "3x faster than the reference's own C++ stage times on every LiDAR pair, at every thread count."
+        )
         L.append("")
         for threads in res.threads:
             header = ["pair (LiDAR)", "kissm [ms]"]
@@ -426,8 +522,13 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
                     lo = min(per_case) if per_case else None
                     verdict = "–" if lo is None else ("yes" if lo >= 3 else "**no**")
                     rw = r["wall"] / k["wall"] if r["wall"] and k["wall"] else None
-                    row += [fmt_ms(r["engine"]), fmt_ms(r["wall"]), f"{fmt_ratio(ratio)} ({fmt_ratio(lo)})", verdict,
-                            fmt_ratio(rw)]
+                    row += [
+                        fmt_ms(r["engine"]),
+                        fmt_ms(r["wall"]),
+                        f"{fmt_ratio(ratio)} ({fmt_ratio(lo)})",
+                        verdict,
+                        fmt_ratio(rw),
+                    ]
                 for m in peers:
                     if m == "reference":
                         continue
@@ -435,8 +536,10 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
                     note = ""
                     if p["timeouts"]:
                         note = " (timeouts)"
-                    row += [fmt_ms(p["wall"]) + note,
-                            fmt_ratio(p["wall"] / k["wall"] if p["wall"] and k["wall"] else None)]
+                    row += [
+                        fmt_ms(p["wall"]) + note,
+                        fmt_ratio(p["wall"] / k["wall"] if p["wall"] and k["wall"] else None),
+                    ]
                 rows.append(row)
             L.append(f"### {threads} thread{'s' if threads > 1 else ''}")
             L.append("")
@@ -447,8 +550,10 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     if res.runs and methods:
         L.append("## Success per dataset")
         L.append("")
-        L.append("Successful calls / timed calls, over raw and rotated variants and repeats; median RRE / RTE over "
-                 "the successes. \"wrong valid\" counts poses reported valid but outside the thresholds.")
+        L.append(
+            "Successful calls / timed calls, over raw and rotated variants and repeats; median RRE / RTE over "
+            'the successes. "wrong valid" counts poses reported valid but outside the thresholds.'
+        )
         L.append("")
         datasets = []
         for c in raw["cases"]:
@@ -474,8 +579,13 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
                         cell += f"; {s['wrong_valid']} wrong valid"
                     row.append(cell)
                 rows.append(row)
-            rows.append(["**total**"] + [f"**{t[0]}/{t[1]}**" + (f" ({t[2]} wrong valid)" if t[2] else "")
-                                         for t in (totals[m] for m in methods)])
+            rows.append(
+                ["**total**"]
+                + [
+                    f"**{t[0]}/{t[1]}**" + (f" ({t[2]} wrong valid)" if t[2] else "")
+                    for t in (totals[m] for m in methods)
+                ]
+            )
             L.append(f"### {threads} thread{'s' if threads > 1 else ''}")
             L.append("")
             L.append(table(header, rows, ["---"] + ["---"] * len(methods)))
@@ -491,8 +601,10 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     if stage_plots:
         L.append("## Where the time goes")
         L.append("")
-        L.append("Per-stage median times per method on each LiDAR pair (hatched: the reference's Python binding "
-                 "copying the points, outside its own C++ stage times).")
+        L.append(
+            "Per-stage median times per method on each LiDAR pair (hatched: the reference's Python binding "
+            "copying the points, outside its own C++ stage times)."
+        )
         L.append("")
         for k in sorted(stage_plots):
             L.append(f"![{k}]({plots[k].relative_to(out_dir).as_posix()})")
@@ -502,14 +614,30 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
     if res.runs and methods:
         L.append("## Per pair")
         L.append("")
-        L.append("Aggregated over each pair's variants (raw + rotated) and repeats. Times in ms (medians); "
-                 "peak memory is the largest over the pair's variants.")
+        L.append(
+            "Aggregated over each pair's variants (raw + rotated) and repeats. Times in ms (medians); "
+            "peak memory is the largest over the pair's variants."
+        )
         L.append("")
         for threads in res.threads:
             L.append(f"### {threads} thread{'s' if threads > 1 else ''}")
             L.append("")
-            header = ["pair", "method", "success", "RRE", "RTE", "wall", "voxelise", "features", "matching",
-                      "pruning", "solver", "RANSAC/FGR", "input/other", "peak MB"]
+            header = [
+                "pair",
+                "method",
+                "success",
+                "RRE",
+                "RTE",
+                "wall",
+                "voxelise",
+                "features",
+                "matching",
+                "pruning",
+                "solver",
+                "RANSAC/FGR",
+                "input/other",
+                "peak MB",
+            ]
             rows = []
             for pair in res.pairs:
                 ids = res.case_ids(pair=pair)
@@ -517,11 +645,29 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
                 for m in methods:
                     s = res.summary(threads, ids, m)
                     st = s["stages"]
-                    rows.append([pair if m == methods[0] else "", SHORT[m], success_cell(s), fmt(s["rre"], 2, "°"),
-                                 rte_cell(s["rte"], cat), fmt_ms(s["wall"]),
-                                 *(fmt_ms(st.get(x)) for x in ("voxelize", "features", "matching", "pruning", "solver",
-                                                                "registration", "input")),
-                                 fmt(s["peak_mb"], 0)])
+                    rows.append(
+                        [
+                            pair if m == methods[0] else "",
+                            SHORT[m],
+                            success_cell(s),
+                            fmt(s["rre"], 2, "°"),
+                            rte_cell(s["rte"], cat),
+                            fmt_ms(s["wall"]),
+                            *(
+                                fmt_ms(st.get(x))
+                                for x in (
+                                    "voxelize",
+                                    "features",
+                                    "matching",
+                                    "pruning",
+                                    "solver",
+                                    "registration",
+                                    "input",
+                                )
+                            ),
+                            fmt(s["peak_mb"], 0),
+                        ]
+                    )
             L.append(table(header, rows, ["---", "---", "---"] + ["--:"] * (len(header) - 3)))
             L.append("")
 
@@ -530,19 +676,37 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
         for threads in res.threads:
             L.append(f"#### {threads} thread{'s' if threads > 1 else ''}")
             L.append("")
-            header = ["case", "rotation", "method", "success", "RRE", "RTE", "inliers", "wall [ms]", "engine [ms]",
-                      "peak MB"]
+            header = [
+                "case",
+                "rotation",
+                "method",
+                "success",
+                "RRE",
+                "RTE",
+                "inliers",
+                "wall [ms]",
+                "engine [ms]",
+                "peak MB",
+            ]
             rows = []
             for i, c in res.cases.items():
                 for m in methods:
                     s = res.summary(threads, [i], m)
                     runs = res.runs.get((threads, i, m), [])
-                    rows.append([f"{c['name']} {c['variant']}" if m == methods[0] else "",
-                                 f"{c['rot_deg']:.0f}°" if m == methods[0] else "", SHORT[m], success_cell(s),
-                                 fmt(med([r["rre_deg"] for r in runs]), 2, "°"),
-                                 rte_cell(med([r["rte_m"] for r in runs]), c["category"]),
-                                 fmt(med([r["inliers"] for r in runs]), 0), fmt_ms(s["wall"]), fmt_ms(s["engine"]),
-                                 fmt(s["peak_mb"], 0)])
+                    rows.append(
+                        [
+                            f"{c['name']} {c['variant']}" if m == methods[0] else "",
+                            f"{c['rot_deg']:.0f}°" if m == methods[0] else "",
+                            SHORT[m],
+                            success_cell(s),
+                            fmt(med([r["rre_deg"] for r in runs]), 2, "°"),
+                            rte_cell(med([r["rte_m"] for r in runs]), c["category"]),
+                            fmt(med([r["inliers"] for r in runs]), 0),
+                            fmt_ms(s["wall"]),
+                            fmt_ms(s["engine"]),
+                            fmt(s["peak_mb"], 0),
+                        ]
+                    )
             L.append(table(header, rows, ["---", "--:", "---", "---"] + ["--:"] * 6))
             L.append("")
         L.append("(RRE/RTE here are medians over all calls, successful or not.)")
@@ -557,16 +721,18 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
         sm = [m for m in methods if any(r["method"] == m for r in sc["runs"])]
         L.append("## Scaling (synthetic scenes)")
         L.append("")
-        L.append(f"Synthetic outdoor scenes (seeded): wavy terrain, box buildings and poles, sampled at "
-                 f"{sc['density']:.0f} points/m² with 2 cm noise; source and target are independent samplings "
-                 f"overlapping by about 70% with a known pose (40° about a tilted axis, 7 m). Voxel size "
-                 f"{sc['voxel']} m, {sc['threads']} thread(s), one fresh worker per (method, size) with a warm-up on a "
-                 f"small scene and one untimed call at the size itself, then the median of up to 3 calls (1 past "
-                 f"20 s); a call over {sc['timeout_s']:.0f} s is a timeout and the method's larger sizes are "
-                 f"skipped. Peak memory as above. The untimed call is the first to touch that much memory in its "
-                 f"process: on this machine (a VM whose balloon driver hands freed memory back to the host) a first "
-                 f"touch costs about 2.5 s per GB, which only the largest sizes, measured once, would otherwise "
-                 f"pay; kissm's first-call times are listed below the table.")
+        L.append(
+            f"Synthetic outdoor scenes (seeded): wavy terrain, box buildings and poles, sampled at "
+            f"{sc['density']:.0f} points/m² with 2 cm noise; source and target are independent samplings "
+            f"overlapping by about 70% with a known pose (40° about a tilted axis, 7 m). Voxel size "
+            f"{sc['voxel']} m, {sc['threads']} thread(s), one fresh worker per (method, size) with a warm-up on a "
+            f"small scene and one untimed call at the size itself, then the median of up to 3 calls (1 past "
+            f"20 s); a call over {sc['timeout_s']:.0f} s is a timeout and the method's larger sizes are "
+            f"skipped. Peak memory as above. The untimed call is the first to touch that much memory in its "
+            f"process: on this machine (a VM whose balloon driver hands freed memory back to the host) a first "
+            f"touch costs about 2.5 s per GB, which only the largest sizes, measured once, would otherwise "
+            f"pay; kissm's first-call times are listed below the table."
+        )
         L.append("")
         header = ["voxels / cloud", "points (src + tgt)"]
         for m in sm:
@@ -591,22 +757,32 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
             rows.append(row)
         L.append(table(header, rows))
         L.append("")
-        firsts = [(sc["sizes"][r["size"]], r) for r in sc["runs"]
-                  if r["method"] == "kissm" and r["status"] == "ok" and r.get("first_wall_ms") is not None]
+        firsts = [
+            (sc["sizes"][r["size"]], r)
+            for r in sc["runs"]
+            if r["method"] == "kissm" and r["status"] == "ok" and r.get("first_wall_ms") is not None
+        ]
         if firsts:
-            L.append("kissm's untimed first call per size [s]: " + ", ".join(
-                f"{xs[size['index']]:,.0f} voxels {fmt(r['first_wall_ms'] / 1e3, 2)}" for size, r in firsts) + ".")
+            L.append(
+                "kissm's untimed first call per size [s]: "
+                + ", ".join(f"{xs[size['index']]:,.0f} voxels {fmt(r['first_wall_ms'] / 1e3, 2)}" for size, r in firsts)
+                + "."
+            )
             L.append("")
         for r in sc["runs"]:
             if r["status"] != "ok":
                 size = sc["sizes"][r["size"]]
-                L.append(f"- {METHOD_LABEL[r['method']]} at {size['target_voxels']:,} voxels: {r['status']} "
-                         f"({(r.get('error') or '').splitlines()[0] if r.get('error') else ''})")
+                L.append(
+                    f"- {METHOD_LABEL[r['method']]} at {size['target_voxels']:,} voxels: {r['status']} "
+                    f"({(r.get('error') or '').splitlines()[0] if r.get('error') else ''})"
+                )
         if any(r["status"] != "ok" for r in sc["runs"]):
             L.append("")
         # slopes
-        L.append("Log–log slopes (1.0 = linear): over every size the method finished (least squares), and between "
-                 "its two largest sizes (local, where superlinear growth shows first):")
+        L.append(
+            "Log–log slopes (1.0 = linear): over every size the method finished (least squares), and between "
+            "its two largest sizes (local, where superlinear growth shows first):"
+        )
         L.append("")
         rows = []
         superlinear = []
@@ -632,12 +808,18 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
                     ys = [r["stages"].get(st) for r in ok]
                     add(f"stage: {STAGE_LABEL[st]}", ys, f"{fmt_ms(ys[-1])} ms at the largest", "kissm")
             add("peak memory", [r["peak_kb"] for r in ok], f"{fmt(ok[-1]['peak_kb'] / 1024, 0)} MB at the largest")
-        L.append(table(["method", "quantity", "slope (all)", "slope (two largest)", "note"], rows,
-                       ["---", "---", "--:", "--:", "---"]))
+        L.append(
+            table(
+                ["method", "quantity", "slope (all)", "slope (two largest)", "note"],
+                rows,
+                ["---", "---", "--:", "--:", "---"],
+            )
+        )
         L.append("")
         if superlinear:
-            L.append("**Superlinear** (local slope above 1.15, ignoring parts under 50 ms): " + "; ".join(superlinear)
-                     + ".")
+            L.append(
+                "**Superlinear** (local slope above 1.15, ignoring parts under 50 ms): " + "; ".join(superlinear) + "."
+            )
         else:
             L.append("No time or memory grows superlinearly (every local slope at most 1.15).")
         L.append("")
@@ -647,29 +829,52 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
                 if r["method"] != m or r["status"] != "ok" or not r.get("cpu"):
                     continue
                 c = r["cpu"]
-                cpu_rows.append([METHOD_LABEL[m], f"{xs[r['size']]:,.0f}", fmt(r["wall_ms"] / 1e3, 2),
-                                 fmt(c["user_ms"] / 1e3, 2), fmt(c["sys_ms"] / 1e3, 2), f"{c['minflt']:,.0f}",
-                                 fmt(c["sys_ms"] * 1e3 / c["minflt"], 1) if c["minflt"] else "–"])
+                cpu_rows.append(
+                    [
+                        METHOD_LABEL[m],
+                        f"{xs[r['size']]:,.0f}",
+                        fmt(r["wall_ms"] / 1e3, 2),
+                        fmt(c["user_ms"] / 1e3, 2),
+                        fmt(c["sys_ms"] / 1e3, 2),
+                        f"{c['minflt']:,.0f}",
+                        fmt(c["sys_ms"] * 1e3 / c["minflt"], 1) if c["minflt"] else "–",
+                    ]
+                )
         if cpu_rows:
-            L.append("CPU time of the calls (all threads) and the page faults they took: the kernel's share (sys) is "
-                     "mostly the first touch of fresh memory, whose cost per fault depends on the machine (on a VM, "
-                     "on whether the host still backs the page):")
+            L.append(
+                "CPU time of the calls (all threads) and the page faults they took: the kernel's share (sys) is "
+                "mostly the first touch of fresh memory, whose cost per fault depends on the machine (on a VM, "
+                "on whether the host still backs the page):"
+            )
             L.append("")
-            L.append(table(["method", "voxels / cloud", "wall [s]", "user [s]", "sys [s]", "page faults",
-                            "sys µs / fault"], cpu_rows))
+            L.append(
+                table(
+                    ["method", "voxels / cloud", "wall [s]", "user [s]", "sys [s]", "page faults", "sys µs / fault"],
+                    cpu_rows,
+                )
+            )
             L.append("")
         k_ok = [r for r in sc["runs"] if r["method"] == "kissm" and r["status"] == "ok"]
         if k_ok:
-            L.append("kissm memory per input point (peak above the input arrays / (source + target points)), and per "
-                     "voxel (/ (source + target voxels)):")
+            L.append(
+                "kissm memory per input point (peak above the input arrays / (source + target points)), and per "
+                "voxel (/ (source + target voxels)):"
+            )
             L.append("")
             rows = []
             for r in k_ok:
                 size = sc["sizes"][r["size"]]
                 npts = size["n_src"] + size["n_tgt"]
                 nvox = (r["info"].get("src_voxels") or 0) + (r["info"].get("tgt_voxels") or 0)
-                rows.append([f"{xs[r['size']]:,.0f}", f"{npts:,}", fmt(r["peak_kb"] / 1024, 1),
-                             fmt(r["peak_kb"] * 1024 / npts, 0), fmt(r["peak_kb"] * 1024 / nvox, 0) if nvox else "–"])
+                rows.append(
+                    [
+                        f"{xs[r['size']]:,.0f}",
+                        f"{npts:,}",
+                        fmt(r["peak_kb"] / 1024, 1),
+                        fmt(r["peak_kb"] * 1024 / npts, 0),
+                        fmt(r["peak_kb"] * 1024 / nvox, 0) if nvox else "–",
+                    ]
+                )
             L.append(table(["voxels / cloud", "points", "peak MB", "bytes / point", "bytes / voxel"], rows))
             L.append("")
             # the input itself, for scale

@@ -31,9 +31,8 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 import kissm
+import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO / "bindings" / "python" / "tests"))
@@ -70,7 +69,15 @@ class Tally:
         self.values: dict[tuple[str, str, bool], list[float]] = collections.defaultdict(list)
 
     def add(self, family: str, mode: str, valid: bool, right: bool, line: str, r: kissm.Result | None = None) -> None:
-        key = "right, valid" if valid and right else "WRONG, VALID" if valid else "right, invalid" if right else "wrong, invalid"
+        key = (
+            "right, valid"
+            if valid and right
+            else "WRONG, VALID"
+            if valid
+            else "right, invalid"
+            if right
+            else "wrong, invalid"
+        )
         self.counts[(family, mode)][key] += 1
         if valid and not right:
             self.wrong_valid.append(line)
@@ -82,7 +89,10 @@ class Tally:
                 self.values[(name, kind, right)].append(get(r))
 
     def print(self) -> None:
-        print("\nfamily                              mode            right,valid  WRONG,VALID  right,invalid  wrong,invalid")
+        print(
+            "\nfamily                              mode            "
+            "right,valid  WRONG,VALID  right,invalid  wrong,invalid"
+        )
         for (family, mode), c in sorted(self.counts.items()):
             print(
                 f"{family:35s} {mode:15s} {c['right, valid']:11d} {c['WRONG, VALID']:12d} "
@@ -151,7 +161,18 @@ def real_pairs(tally, args, rng) -> None:
             turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
             gt = p.gt.copy()
             gt[:3, :3] = p.gt[:3, :3] @ turn.T  # the source turned by `turn`
-            run(tally, family, f"{p.name} rot{i}", turned(src, turn), tgt, gt, k.voxel, k.max_rot_deg, k.max_trans_m, args)
+            run(
+                tally,
+                family,
+                f"{p.name} rot{i}",
+                turned(src, turn),
+                tgt,
+                gt,
+                k.voxel,
+                k.max_rot_deg,
+                k.max_trans_m,
+                args,
+            )
         for i in range(3):  # the frame moved away from the sensor: p' = turn p + d
             turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
             d = rng.normal(size=3)
@@ -160,8 +181,19 @@ def real_pairs(tally, args, rng) -> None:
             gt[:3, :3] = p.gt[:3, :3] @ turn.T
             gt[:3, 3] = p.gt[:3, 3] - gt[:3, :3] @ d
             moved = turned(src, turn, d)
-            run(tally, family + " (moved frame)", f"{p.name} moved{i}", moved, tgt, gt, k.voxel, k.max_rot_deg,
-                k.max_trans_m, args, at=moved.mean(axis=0))
+            run(
+                tally,
+                family + " (moved frame)",
+                f"{p.name} moved{i}",
+                moved,
+                tgt,
+                gt,
+                k.voxel,
+                k.max_rot_deg,
+                k.max_trans_m,
+                args,
+                at=moved.mean(axis=0),
+            )
 
 
 def far_keyframes(tally, args, rng) -> None:
@@ -180,8 +212,18 @@ def far_keyframes(tally, args, rng) -> None:
             turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
             g2 = gt.copy()
             g2[:3, :3] = gt[:3, :3] @ turn.T
-            run(tally, "kitti07 keyframes 2-4 apart", f"kitti07 {a}<-{b} rot", turned(cloud[b], turn), cloud[a], g2,
-                0.5, 5, 2, args)
+            run(
+                tally,
+                "kitti07 keyframes 2-4 apart",
+                f"kitti07 {a}<-{b} rot",
+                turned(cloud[b], turn),
+                cloud[a],
+                g2,
+                0.5,
+                5,
+                2,
+                args,
+            )
 
 
 def unrelated(tally, args) -> None:
@@ -204,8 +246,18 @@ def unrelated(tally, args) -> None:
             if a // 2 == b // 2:
                 continue  # the same dataset's scans overlap
             for voxel in (0.3, 0.5):
-                run(tally, "unrelated scans", f"{lidar[a][0]} -> {lidar[b][0]} v{voxel}", clouds[a], clouds[b], nowhere,
-                    voxel, 5, 2, args)
+                run(
+                    tally,
+                    "unrelated scans",
+                    f"{lidar[a][0]} -> {lidar[b][0]} v{voxel}",
+                    clouds[a],
+                    clouds[b],
+                    nowhere,
+                    voxel,
+                    5,
+                    2,
+                    args,
+                )
     bunny = d / "stanford_bunny_scans/bun000.ply"
     fragment = d / "3dmatch_geotransformer_demo/src.npy"
     if bunny.is_file() and fragment.is_file():
@@ -225,7 +277,9 @@ def synthetic(tally, args) -> None:
         gt = np.eye(4)
         gt[:3, :3] = turn @ truth[:3, :3]
         gt[:3, 3] = turn @ truth[:3, 3] + shift
-        run(tally, "synthetic pair", f"synthetic, target yaw {yaw}", src, tgt @ turn.T + shift, gt, 0.25, 5.0, 0.3, args)
+        run(
+            tally, "synthetic pair", f"synthetic, target yaw {yaw}", src, tgt @ turn.T + shift, gt, 0.25, 5.0, 0.3, args
+        )
 
 
 def priors(args, rng) -> None:
@@ -246,7 +300,15 @@ def priors(args, rng) -> None:
                         start[:3, 3] += step / np.linalg.norm(step) * vox * k.voxel
                         r = m.refine_features(fs, ft, start)
                         e_rot, e_trans, right = evaluate(r, p.gt, k.max_rot_deg, k.max_trans_m, None)
-                        key = "right, valid" if r.valid and right else "WRONG, VALID" if r.valid else "right, invalid" if right else "wrong, invalid"
+                        key = (
+                            "right, valid"
+                            if r.valid and right
+                            else "WRONG, VALID"
+                            if r.valid
+                            else "right, invalid"
+                            if right
+                            else "wrong, invalid"
+                        )
                         counts[(deg, vox)][key] += 1
     print("\nkissm.refine from the ground truth disturbed by (degrees, voxels), every real pair, GICP:")
     print("  start             right,valid  WRONG,VALID  right,invalid  wrong,invalid")

@@ -133,7 +133,9 @@ def new_rows(table: str, header: str) -> tuple[dict[str, list[tuple[str, str, in
             raise LayoutError(f"{struct} is frozen (it has no struct_size): {now[len(old)][0]} cannot be added")
         rows[struct] = now
         if sum(r[3] for r in now) != size:
-            raise LayoutError(f"{struct} has padding ({size} bytes, fields {sum(r[3] for r in now)}): add reserved fields")
+            raise LayoutError(
+                f"{struct} has padding ({size} bytes, fields {sum(r[3] for r in now)}): add reserved fields"
+            )
     return rows, {s: layout[s][0] for s, _, _, _ in STRUCTS}
 
 
@@ -158,7 +160,13 @@ def render(table: str, rows: dict[str, list[tuple[str, str, int, int]]], sizes: 
     )
     for struct, _, name, _ in STRUCTS:
         entries = [f"X({struct}, {f}, {t}, {o}, {n})" for f, t, o, n in rows[struct]]
-        out = re.sub(r"#define %s\(X\).*?\n(?=\n)" % name, lambda _: macro(name, entries), out, count=1, flags=re.S)
+        out = re.sub(
+            r"#define %s\(X\).*?\n(?=\n)" % name,
+            lambda _, name=name, entries=entries: macro(name, entries),
+            out,
+            count=1,
+            flags=re.S,
+        )
     return out
 
 
@@ -179,7 +187,9 @@ def main() -> int:
         ).stdout
     if args.check:
         if fresh != table:
-            sys.stderr.writelines(difflib.unified_diff(table.splitlines(True), fresh.splitlines(True), "committed", "fresh"))
+            sys.stderr.writelines(
+                difflib.unified_diff(table.splitlines(True), fresh.splitlines(True), "committed", "fresh")
+            )
             print(f"gen_layout_table: {TABLE} is out of date: run python3 tools/gen_layout_table.py", file=sys.stderr)
             return 1
         return 0

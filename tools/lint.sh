@@ -6,6 +6,8 @@
 #   SPDX lines                       every source file we wrote starts with SPDX-License-Identifier: MIT
 #   .editorconfig basics             no trailing whitespace, a final newline, no tabs in source files
 #   bindings/python/lint.sh          ruff check, ruff format --check, mypy --strict
+#   ruff (ruff.toml)                 ruff check and ruff format --check on bench/, tools/ and tests/, with the
+#                                    ruff that bindings/python/lint.sh pins
 #   bindings/rust/lint.sh            cargo fmt --check, cargo clippy --all-targets -- -D warnings
 # clang-format and shellcheck come from tools/setup.sh (apt-get as root); the Python tools from PyPI into a
 # venv, the Rust ones with the toolchain (rustup components).
@@ -92,6 +94,17 @@ for sub in bindings/python/lint.sh bindings/rust/lint.sh; do
   step "$sub"
   if ! bash "$sub"; then fail "$sub"; fi
 done
+
+# ---- the repository's own Python outside the package ----------------------------------------------------
+# bindings/python/lint.sh made the venv (its pinned ruff); the settings are ruff.toml's.
+ruff_bin=${KISSM_LINT_VENV:-${KISSM_BUILD_DIR:-$here/build}/venv-lint}/bin/ruff
+step "ruff: bench/ tools/ tests/"
+mapfile -t pys < <(files 'bench/*.py' 'tools/*.py' 'tests/*.py')
+if [[ ! -x $ruff_bin ]]; then
+  fail "ruff: $ruff_bin is missing (bindings/python/lint.sh makes it)"
+elif ! "$ruff_bin" check --no-cache "${pys[@]}" || ! "$ruff_bin" format --check --no-cache "${pys[@]}"; then
+  fail "ruff on bench/ tools/ tests/ ($ruff_bin format fixes the formatting ones)"
+fi
 
 if ((${#failed[@]})); then
   echo "lint: ${#failed[@]} check(s) failed: ${failed[*]}" >&2

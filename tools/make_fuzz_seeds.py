@@ -3,6 +3,7 @@
 """Writes the fuzz targets' seed corpus (tests/fuzz/corpus/<target>/): small valid files for every reader
 and byte strings for the pipeline targets that decode (tests/fuzz/fuzz_input.hpp) into a registrable pair.
 Deterministic (fixed seeds); standard library only. Run from anywhere:  python3 tools/make_fuzz_seeds.py"""
+
 import math
 import random
 import struct
@@ -22,22 +23,45 @@ PTS = [(0.0, 0.0, 0.0), (1.0, 0.5, -0.25), (2.5, -1.0, 0.75), (-3.0, 4.0, 1.5), 
 
 def readers():
     v = "".join(f"{x} {y} {z}\n" for x, y, z in PTS)
-    write("ply", "ascii.ply", f"ply\nformat ascii 1.0\nelement vertex {len(PTS)}\nproperty float x\n"
-          f"property float y\nproperty float z\nend_header\n{v}")
+    write(
+        "ply",
+        "ascii.ply",
+        f"ply\nformat ascii 1.0\nelement vertex {len(PTS)}\nproperty float x\n"
+        f"property float y\nproperty float z\nend_header\n{v}",
+    )
     body = b"".join(struct.pack("<dddB", x, y, z, 7) for x, y, z in PTS)
-    write("ply", "binary_le_double.ply", (f"ply\nformat binary_little_endian 1.0\ncomment seed\n"
-          f"element vertex {len(PTS)}\nproperty double x\nproperty double y\nproperty double z\n"
-          f"property uchar intensity\nelement face 1\nproperty list uchar int vertex_indices\n"
-          f"end_header\n").encode() + body + struct.pack("<Biii", 3, 0, 1, 2))
+    write(
+        "ply",
+        "binary_le_double.ply",
+        (
+            f"ply\nformat binary_little_endian 1.0\ncomment seed\n"
+            f"element vertex {len(PTS)}\nproperty double x\nproperty double y\nproperty double z\n"
+            f"property uchar intensity\nelement face 1\nproperty list uchar int vertex_indices\n"
+            f"end_header\n"
+        ).encode()
+        + body
+        + struct.pack("<Biii", 3, 0, 1, 2),
+    )
     body = b"".join(struct.pack(">fff", x, y, z) for x, y, z in PTS)
-    write("ply", "binary_be_float.ply", (f"ply\nformat binary_big_endian 1.0\nelement vertex {len(PTS)}\n"
-          f"property float32 x\nproperty float32 y\nproperty float32 z\nend_header\n").encode() + body)
+    write(
+        "ply",
+        "binary_be_float.ply",
+        (
+            f"ply\nformat binary_big_endian 1.0\nelement vertex {len(PTS)}\n"
+            f"property float32 x\nproperty float32 y\nproperty float32 z\nend_header\n"
+        ).encode()
+        + body,
+    )
 
-    head = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-            f"WIDTH {len(PTS)}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {len(PTS)}\n")
+    head = (
+        "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+        f"WIDTH {len(PTS)}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {len(PTS)}\n"
+    )
     write("pcd", "ascii.pcd", head + "DATA ascii\n" + v)
-    head4 = ("VERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
-             f"WIDTH {len(PTS)}\nHEIGHT 1\nPOINTS {len(PTS)}\nDATA binary\n")
+    head4 = (
+        "VERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+        f"WIDTH {len(PTS)}\nHEIGHT 1\nPOINTS {len(PTS)}\nDATA binary\n"
+    )
     write("pcd", "binary.pcd", head4.encode() + b"".join(struct.pack("<ffff", x, y, z, 1.0) for x, y, z in PTS))
 
     def npy(descr, shape, values, fmt):
@@ -71,8 +95,15 @@ def scene(rng, n):
             cx, cy = rng.choice([(3, 4), (-6, 2), (5, -7), (-4, -8)])
             f = rng.randrange(5)
             a, b = rng.uniform(-1, 1), rng.uniform(-1.7, 0.5)
-            pts.append([(cx + a, cy - 1, b), (cx + a, cy + 1, b), (cx - 1, cy + a, b), (cx + 1, cy + a, b),
-                        (cx + a, cy + rng.uniform(-1, 1), 0.5)][f])
+            pts.append(
+                [
+                    (cx + a, cy - 1, b),
+                    (cx + a, cy + 1, b),
+                    (cx - 1, cy + a, b),
+                    (cx + 1, cy + a, b),
+                    (cx + a, cy + rng.uniform(-1, 1), 0.5),
+                ][f]
+            )
     return pts
 
 
@@ -110,10 +141,12 @@ def pipeline():
     config = bytes([3, 0x20, 0xC5])  # voxel 0.5, 1 thread, reject non-finite, min_inliers 5, gains 3.5/5, 903 matches
     pair = encode_cloud(base) + encode_cloud(moved)
     write("register", "yard_pair", config + pair)
-    write("register", "yard_pair_two_threads_f64", bytes([3, 0x21, 0xC5]) + encode_cloud(base, 0x01) + encode_cloud(moved))
+    write(
+        "register", "yard_pair_two_threads_f64", bytes([3, 0x21, 0xC5]) + encode_cloud(base, 0x01) + encode_cloud(moved)
+    )
     write("register", "tiny_clouds", config + encode_cloud(base[:4]) + encode_cloud(base[:5], 0x01))
     nan = bytearray(config[:1] + bytes([0x22]) + config[2:] + encode_cloud(base[:600]) + encode_cloud(moved[:600]))
-    nan[3 + 3 + 6 * 10:3 + 3 + 6 * 10 + 2] = b"\xff\xff"  # one NaN x, dropped by the policy
+    nan[3 + 3 + 6 * 10 : 3 + 3 + 6 * 10 + 2] = b"\xff\xff"  # one NaN x, dropped by the policy
     write("register", "nan_dropped", bytes(nan))
     small = scene(random.Random(3), 500)
     three = encode_cloud(base[:500]) + encode_cloud(moved[:500]) + encode_cloud(small)
@@ -127,19 +160,38 @@ def pipeline():
     gicp, p2p = 13, 23  # voxel 0.5 with refine_mode GICP / point-to-plane, default settings
     write("register", "refine_gicp_true_prior", bytes([gicp, 0x20, 0xC5]) + pair + encode_transform(1, *truth))
     write("register", "refine_p2p_float_prior", bytes([p2p, 0x21, 0xC5]) + pair + encode_transform(5, *truth, at=4))
-    write("register", "refine_capped_reflected_prior",
-          bytes([3 + 10 * 5, 0x20, 0xC5]) + pair + encode_transform(10, *truth, at=2))  # p2p, 1 iteration
-    write("register", "refine_min_overlap_all_nan_prior",
-          bytes([3 + 10 * 16, 0x20, 0xC5]) + pair + encode_transform(6, *truth, at=7))  # GICP, min_overlap 1
-    write("register", "loose_validity_rules",  # no refinement, every validity setting at its loosest
-          bytes([3 + 10 * 24, 0x20, 0xC5]) + pair + encode_transform(1, *truth))
-    write("register", "refine_far_prior",
-          bytes([gicp, 0x22, 0xC5]) + pair + encode_transform(1, (0.0, 0.0, ang), (30.0, -30.0, 0.0)))
+    write(
+        "register",
+        "refine_capped_reflected_prior",
+        bytes([3 + 10 * 5, 0x20, 0xC5]) + pair + encode_transform(10, *truth, at=2),
+    )  # p2p, 1 iteration
+    write(
+        "register",
+        "refine_min_overlap_all_nan_prior",
+        bytes([3 + 10 * 16, 0x20, 0xC5]) + pair + encode_transform(6, *truth, at=7),
+    )  # GICP, min_overlap 1
+    write(
+        "register",
+        "loose_validity_rules",  # no refinement, every validity setting at its loosest
+        bytes([3 + 10 * 24, 0x20, 0xC5]) + pair + encode_transform(1, *truth),
+    )
+    write(
+        "register",
+        "refine_far_prior",
+        bytes([gicp, 0x22, 0xC5]) + pair + encode_transform(1, (0.0, 0.0, ang), (30.0, -30.0, 0.0)),
+    )
     # One matcher: features of clouds 0 and 1, kissm_refine 0 -> 1 from the truth, kissm_refine_features from a
     # float-rounded truth and from a sheared one, a registration, kissm_refine from the identity.
-    refine_ops = (bytes([0x12, 0x10, 0x54]) + encode_transform(1, *truth) + bytes([0x66]) +
-                  encode_transform(5, *truth, at=1) + bytes([0x66]) + encode_transform(9, *truth, at=3) +
-                  bytes([0x03, 0x54]) + encode_transform(0))
+    refine_ops = (
+        bytes([0x12, 0x10, 0x54])
+        + encode_transform(1, *truth)
+        + bytes([0x66])
+        + encode_transform(5, *truth, at=1)
+        + bytes([0x66])
+        + encode_transform(9, *truth, at=3)
+        + bytes([0x03, 0x54])
+        + encode_transform(0)
+    )
     write("stateful", "refine_features_and_points", bytes([gicp, 0x20, 0xC5]) + three + refine_ops)
 
 

@@ -13,6 +13,7 @@ SplitMix64 is a copy of src/common/splitmix64.h, the reference (next, uniform, r
 test splitmix64_python runs `make_roundtrip_data.py --selftest PROGRAM`, which compares this class with
 the numbers that header gives (PROGRAM: the C test capi_splitmix64).
 """
+
 import math
 import os
 import struct
@@ -45,8 +46,12 @@ class SplitMix64:
 def scene(rng, n):
     """n points on the yard's surfaces, in the world frame."""
     pts = []
-    boxes = [(3.0, 2.0, 1.2, 1.0, 0.8), (-4.0, 3.5, 0.9, 1.6, 1.4), (1.5, -4.0, 2.0, 0.7, 0.6),
-             (-2.5, -2.0, 0.6, 0.6, 2.2)]  # x, y, sx, sy, height
+    boxes = [
+        (3.0, 2.0, 1.2, 1.0, 0.8),
+        (-4.0, 3.5, 0.9, 1.6, 1.4),
+        (1.5, -4.0, 2.0, 0.7, 0.6),
+        (-2.5, -2.0, 0.6, 0.6, 2.2),
+    ]  # x, y, sx, sy, height
     poles = [(5.5, -1.0, 0.15, 3.0), (-6.0, -5.0, 0.2, 2.5), (0.5, 5.5, 0.12, 3.5)]
     while len(pts) < n:
         r = rng.uniform()
@@ -88,15 +93,19 @@ def rotation(axis, angle):
     x, y, z = (a / s for a in axis)
     c, n = math.cos(angle), math.sin(angle)
     C = 1 - c
-    return [[c + x * x * C, x * y * C - z * n, x * z * C + y * n],
-            [y * x * C + z * n, c + y * y * C, y * z * C - x * n],
-            [z * x * C - y * n, z * y * C + x * n, c + z * z * C]]
+    return [
+        [c + x * x * C, x * y * C - z * n, x * z * C + y * n],
+        [y * x * C + z * n, c + y * y * C, y * z * C - x * n],
+        [z * x * C - y * n, z * y * C + x * n, c + z * z * C],
+    ]
 
 
 def write_ply(path, pts):
-    header = ("ply\nformat binary_little_endian 1.0\ncomment kissm round-trip test cloud "
-              "(tools/make_roundtrip_data.py)\nelement vertex %d\nproperty double x\nproperty double y\n"
-              "property double z\nend_header\n" % len(pts)).encode("ascii")
+    header = (
+        "ply\nformat binary_little_endian 1.0\ncomment kissm round-trip test cloud "
+        "(tools/make_roundtrip_data.py)\nelement vertex %d\nproperty double x\nproperty double y\n"
+        "property double z\nend_header\n" % len(pts)
+    ).encode("ascii")
     with open(path, "wb") as f:
         f.write(header)
         for p in pts:

@@ -50,7 +50,9 @@ def candidates() -> list[str]:
 
 
 def version_key(path: str) -> tuple[int, ...]:
-    return tuple(int(n) for n in re.findall(r"[0-9]+", os.path.basename(os.path.dirname(path)) + os.path.basename(path)))
+    return tuple(
+        int(n) for n in re.findall(r"[0-9]+", os.path.basename(os.path.dirname(path)) + os.path.basename(path))
+    )
 
 
 class CXUnsavedFile(ctypes.Structure):
@@ -67,8 +69,15 @@ def parse_errors(path: str) -> list[str]:
     lib.clang_createIndex.restype = ctypes.c_void_p
     lib.clang_createIndex.argtypes = [ctypes.c_int, ctypes.c_int]
     lib.clang_parseTranslationUnit.restype = ctypes.c_void_p
-    lib.clang_parseTranslationUnit.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.POINTER(ctypes.c_char_p),
-                                               ctypes.c_int, ctypes.POINTER(CXUnsavedFile), ctypes.c_uint, ctypes.c_uint]
+    lib.clang_parseTranslationUnit.argtypes = [
+        ctypes.c_void_p,
+        ctypes.c_char_p,
+        ctypes.POINTER(ctypes.c_char_p),
+        ctypes.c_int,
+        ctypes.POINTER(CXUnsavedFile),
+        ctypes.c_uint,
+        ctypes.c_uint,
+    ]
     lib.clang_getNumDiagnostics.restype = ctypes.c_uint
     lib.clang_getNumDiagnostics.argtypes = [ctypes.c_void_p]
     lib.clang_getDiagnostic.restype = ctypes.c_void_p

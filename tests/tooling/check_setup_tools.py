@@ -224,7 +224,7 @@ class Lexer:
                 self.advance()
         return Word("".join(text), line, expanded)
 
-    def run(self) -> "Lexer":
+    def run(self) -> Lexer:
         while self.i < len(self.s):
             c = self.peek()
             if c in " \t":
@@ -347,8 +347,27 @@ def programs_called(text: str, functions: set[str], line: int = 1) -> list[tuple
                 if w.text == "case":
                     in_case_pattern = True
                 break  # the rest of the segment is a word list
-            if w.text in ("if", "then", "else", "elif", "fi", "do", "done", "while", "until", "!", "{", "}",
-                          "time", "esac", "function") and not w.expanded:
+            if (
+                w.text
+                in (
+                    "if",
+                    "then",
+                    "else",
+                    "elif",
+                    "fi",
+                    "do",
+                    "done",
+                    "while",
+                    "until",
+                    "!",
+                    "{",
+                    "}",
+                    "time",
+                    "esac",
+                    "function",
+                )
+                and not w.expanded
+            ):
                 if w.text == "function":
                     break
                 k += 1
@@ -371,12 +390,20 @@ def programs_called(text: str, functions: set[str], line: int = 1) -> list[tuple
             if name.text not in BUILTINS:
                 found.append((name.text, name.line))
             rest = args
-            while rest and (rest[0].text.startswith("-") or ASSIGNMENT.match(rest[0].text)
-                            or (name.text == "timeout" and re.fullmatch(r"[0-9.]+[smhd]?", rest[0].text))):
+            while rest and (
+                rest[0].text.startswith("-")
+                or ASSIGNMENT.match(rest[0].text)
+                or (name.text == "timeout" and re.fullmatch(r"[0-9.]+[smhd]?", rest[0].text))
+            ):
                 takes_value = rest[0].text in PREFIX_VALUE_OPTIONS.get(name.text, ())
                 rest = rest[2:] if takes_value else rest[1:]
-            if rest and not rest[0].expanded and "/" not in rest[0].text and rest[0].text not in functions \
-                    and rest[0].text not in BUILTINS:
+            if (
+                rest
+                and not rest[0].expanded
+                and "/" not in rest[0].text
+                and rest[0].text not in functions
+                and rest[0].text not in BUILTINS
+            ):
                 found.append((rest[0].text, rest[0].line))
             continue
         if name.text == "command" and args and args[0].text in ("-v", "-V"):
@@ -400,9 +427,15 @@ def functions_defined(text: str) -> set[str]:
     """The names of `name() ...` and `function name ...` definitions (here-doc bodies are not code)."""
     tokens = Lexer(text).run().tokens
     names = set()
-    for a, b, c in zip(tokens, tokens[1:], tokens[2:]):
-        if isinstance(a, Word) and not a.expanded and isinstance(b, Op) and b.text == "(" \
-                and isinstance(c, Op) and c.text == ")":
+    for a, b, c in zip(tokens, tokens[1:], tokens[2:], strict=False):
+        if (
+            isinstance(a, Word)
+            and not a.expanded
+            and isinstance(b, Op)
+            and b.text == "("
+            and isinstance(c, Op)
+            and c.text == ")"
+        ):
             names.add(a.text)
         if isinstance(a, Word) and a.text == "function" and isinstance(b, Word):
             names.add(b.text)
@@ -412,11 +445,28 @@ def functions_defined(text: str) -> set[str]:
 def cmake_find_programs(text: str) -> list[tuple[str, int]]:
     """The program names of every find_program(VAR name | NAMES n1 n2 ... [options])."""
     found = []
-    keywords = {"NAMES_PER_DIR", "HINTS", "PATHS", "PATH_SUFFIXES", "DOC", "REQUIRED", "NO_CACHE", "VALIDATOR",
-                "REGISTRY_VIEW", "NO_DEFAULT_PATH", "NO_PACKAGE_ROOT_PATH", "NO_CMAKE_PATH",
-                "NO_CMAKE_ENVIRONMENT_PATH", "NO_SYSTEM_ENVIRONMENT_PATH", "NO_CMAKE_SYSTEM_PATH",
-                "CMAKE_FIND_ROOT_PATH_BOTH", "ONLY_CMAKE_FIND_ROOT_PATH", "NO_CMAKE_FIND_ROOT_PATH",
-                "ENV", "NO_CMAKE_INSTALL_PREFIX"}
+    keywords = {
+        "NAMES_PER_DIR",
+        "HINTS",
+        "PATHS",
+        "PATH_SUFFIXES",
+        "DOC",
+        "REQUIRED",
+        "NO_CACHE",
+        "VALIDATOR",
+        "REGISTRY_VIEW",
+        "NO_DEFAULT_PATH",
+        "NO_PACKAGE_ROOT_PATH",
+        "NO_CMAKE_PATH",
+        "NO_CMAKE_ENVIRONMENT_PATH",
+        "NO_SYSTEM_ENVIRONMENT_PATH",
+        "NO_CMAKE_SYSTEM_PATH",
+        "CMAKE_FIND_ROOT_PATH_BOTH",
+        "ONLY_CMAKE_FIND_ROOT_PATH",
+        "NO_CMAKE_FIND_ROOT_PATH",
+        "ENV",
+        "NO_CMAKE_INSTALL_PREFIX",
+    }
     for m in re.finditer(r"\bfind_program\s*\(([^)]*)\)", text, re.I):
         line = text.count("\n", 0, m.start()) + 1
         args = re.sub(r"#[^\n]*", "", m.group(1)).split()
@@ -456,8 +506,13 @@ def cmake_files(root: Path) -> list[Path]:
     for pattern in ("CMakeLists.txt", "**/CMakeLists.txt", "**/*.cmake"):
         found += root.glob(pattern)
     skip = ("build", "third_party", "target", ".git")
-    return sorted({f for f in found if not any(part in skip or part.startswith("build-")
-                                               for part in f.relative_to(root).parts[:-1])})
+    return sorted(
+        {
+            f
+            for f in found
+            if not any(part in skip or part.startswith("build-") for part in f.relative_to(root).parts[:-1])
+        }
+    )
 
 
 def check(root: Path) -> list[str]:
@@ -468,8 +523,11 @@ def check(root: Path) -> list[str]:
     problems = []
     for f in scripts:
         text = f.read_text(errors="replace")
-        sourced = {name for line in re.findall(r"^\s*(?:source|\.)\s.*$", text, re.M)
-                   for name in re.findall(r"([\w.-]+\.sh)\b", line)}
+        sourced = {
+            name
+            for line in re.findall(r"^\s*(?:source|\.)\s.*$", text, re.M)
+            for name in re.findall(r"([\w.-]+\.sh)\b", line)
+        }
         functions = set(defined[f])
         for g in scripts:
             if g.name in sourced:
@@ -490,12 +548,17 @@ def main() -> int:
     args = parser.parse_args()
     problems = check(args.root)
     for p in problems:
-        print(f"{p}, which is neither in tools/packages.tsv (a row setup installs, with the program in its "
-              f"'programs' column) nor in BASE_IMAGE of tests/tooling/check_setup_tools.py", file=sys.stderr)
+        print(
+            f"{p}, which is neither in tools/packages.tsv (a row setup installs, with the program in its "
+            f"'programs' column) nor in BASE_IMAGE of tests/tooling/check_setup_tools.py",
+            file=sys.stderr,
+        )
     if problems:
         return 1
-    print(f"check_setup_tools: every program of {len(shell_scripts(args.root))} scripts and "
-          f"{len(cmake_files(args.root))} CMake files is installed by setup or on the base image")
+    print(
+        f"check_setup_tools: every program of {len(shell_scripts(args.root))} scripts and "
+        f"{len(cmake_files(args.root))} CMake files is installed by setup or on the base image"
+    )
     return 0
 
 

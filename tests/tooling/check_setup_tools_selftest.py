@@ -53,8 +53,16 @@ listed 2>&1 | listed >/dev/null
 """
 
 EXPECTED = {
-    "frob_plain": 6, "frob_pipe": 7, "frob_subst": 8, "frob_procsub": 9, "frob_probe": 10, "frob_env": 11,
-    "frob_bashc": 12, "frob_trap": 13, "frob_subshell": 14, "frob_in_case": 24,
+    "frob_plain": 6,
+    "frob_pipe": 7,
+    "frob_subst": 8,
+    "frob_procsub": 9,
+    "frob_probe": 10,
+    "frob_env": 11,
+    "frob_bashc": 12,
+    "frob_trap": 13,
+    "frob_subshell": 14,
+    "frob_in_case": 24,
 }
 
 CMAKE = """cmake_minimum_required(VERSION 3.16)
@@ -86,8 +94,9 @@ def main() -> int:
             name = rest.split("'")[1] if "'" in rest else rest
             found[name] = where
         want = {n: f"tests/sub/a.sh:{ln}" for n, ln in EXPECTED.items()}
-        want.update({n: "CMakeLists.txt:" + str(k) for n, k in
-                     [("frob_cmake", 3), ("frob_names1", 4), ("frob_names2", 4)]})
+        want.update(
+            {n: "CMakeLists.txt:" + str(k) for n, k in [("frob_cmake", 3), ("frob_names1", 4), ("frob_names2", 4)]}
+        )
         for name, where in want.items():
             if found.get(name) != where:
                 failures.append(f"{name}: reported at {found.get(name)}, expected {where}")
@@ -106,8 +115,7 @@ def main() -> int:
         (root / "tools" / "user.sh").write_text('source "$(dirname "$0")/lib.sh"\nshared_fn\n')
         (root / "tools" / "other.sh").write_text("shared_fn\n")
         got = run(root)
-        if got.returncode != 1 or "tools/other.sh:1: calls 'shared_fn'" not in got.stderr \
-                or "user.sh" in got.stderr:
+        if got.returncode != 1 or "tools/other.sh:1: calls 'shared_fn'" not in got.stderr or "user.sh" in got.stderr:
             failures.append(f"functions of sourced scripts: exit {got.returncode}: {got.stderr.strip()}")
 
     for f in failures:
