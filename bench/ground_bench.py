@@ -718,7 +718,7 @@ def write_report(results: dict[str, Any], out_dir: Path) -> list[Path]:
     plot_paths = make_plots(results, s, img)
     written += plot_paths
     L = [
-        "# Ground-vehicle mode: ground suppression and the 4-DoF solver (issue 16)",
+        "# Ground-vehicle mode: ground suppression and the 4-DoF solver",
         "",
         f"Measured by `bench/ground_bench.py` (the command: `{cmd}`; this page is its output). The machine "
         f"has {mach.get('cpus_online', '?')} CPUs shared with other work, so the timings are noisy: the "

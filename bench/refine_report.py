@@ -175,7 +175,7 @@ def render_section(res: Results, plots: dict[str, Path], out_dir: Path) -> list[
     settings = res.raw["meta"].get("refine_settings", {})
     chain = settings.get("upstream_chain", {})
     gain, iters = settings.get("max_distance_gain"), settings.get("max_iterations")
-    L = ["## Refinement (issue 14)", ""]
+    L = ["## Refinement", ""]
     L.append(f"""kissm's refinement stage (`refine_mode` = `gicp` or `point_to_plane`, kissm's defaults) against
 fine registration peers that start from **kissm's coarse pose** (the solver's pose kissm's own refinement starts
 from; computed once per case, untimed, and identical at every thread count), and the upstream chain end to end.

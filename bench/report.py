@@ -482,7 +482,7 @@ def render(raw: dict, plots: dict[str, Path], out_dir: Path, smoke: bool) -> str
   length 0.9 and distance 1.5v checkers, `RANSACConvergenceCriteria(100000, 0.999)`, seeded per case; FGR:
   `FastGlobalRegistrationOption(maximum_correspondence_distance = 0.5v)`.
 - **small_gicp** and Open3D's ICP variants only register locally, from an initial guess: they are the peers
-  of kissm's refinement stage, from kissm's coarse pose, in [Refinement](#refinement-issue-14).""")
+  of kissm's refinement stage, from kissm's coarse pose, in [Refinement](#refinement).""")
     L.append("")
 
     lidar_pairs = [p for p in res.pairs if res.cases[res.case_ids(pair=p)[0]]["category"] == "lidar"]
