@@ -57,7 +57,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
-from report import METHOD_LABEL, STAGE_ORDER as STAGES  # noqa: E402, I001  (one definition, shared with the report)
+from report_common import METHOD_LABEL, STAGE_ORDER as STAGES  # noqa: E402, I001  (one definition, shared with the report)
 
 COARSE_METHODS = ("kissm", "reference", "o3d_ransac", "o3d_fgr")
 REFINE_METHODS = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl", "ref_sgicp")

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from report import (
+from report_common import (
     DATASET_LABEL,
     SHORT,
     STAGE_COLOR,
