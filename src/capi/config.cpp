@@ -9,6 +9,7 @@
 #include "capi/boundary.hpp"
 #include "capi/conversions.hpp"
 #include "core/setting_codes.hpp"
+#include "core/setting_limits.hpp"
 
 KISSM_DETAIL_BEGIN
 namespace capi {
@@ -102,25 +103,25 @@ static_assert(setting_code(Suppression::None) == KISSM_SUPPRESS_NONE &&
               "suppression codes");
 static_assert(log_code(LogLevel::Error) == 1 && log_code(LogLevel::Debug) == 4, "log levels are pinned");
 
-constexpr int32_t kMaxThreads = 1024;
-
 // hypot: no overflow for huge finite components (which normalise fine), no underflow for tiny ones.
 double up_length(const double up[3]) { return std::hypot(std::hypot(up[0], up[1]), up[2]); }
-constexpr int32_t kMaxCorrespondences = 100000;
-
-void require_range(double v, double lo, double hi, bool lo_open, const char *field) {
-    const bool good = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi;
-    if (!good)
-        fail(ErrorKind::InvalidArgument, std::string("config.") + field + " is " + number(v) + "; it must be in " +
-                                             (lo_open ? "(" : "[") + number(lo) + ", " + number(hi) + "]");
-}
 
 void require_int(int64_t v, int64_t lo, int64_t hi, const char *field) {
-    if (v < lo || v > hi)
+    if (!IntLimits{lo, hi}.contains(v))
         fail(ErrorKind::InvalidArgument, std::string("config.") + field + " is " + std::to_string(v) +
                                              "; it must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                                              "]");
 }
+
+// config.FIELD within core/setting_limits.hpp's limits, the message naming the field.
+void require_in(int64_t v, const IntLimits &range, const char *field) { require_int(v, range.lo, range.hi, field); }
+void require_in(double v, const RealLimits &range, const char *field) {
+    if (!range.contains(v))
+        fail(ErrorKind::InvalidArgument, std::string("config.") + field + " is " + number(v) + "; it must be in " +
+                                             (range.lo_open ? "(" : "[") + number(range.lo) + ", " + number(range.hi) +
+                                             "]");
+}
+#define KISSM_REQUIRE_IN_LIMITS(field) require_in(c.field, limits::field, #field)
 
 } // namespace
 
@@ -151,39 +152,39 @@ kissm_config validated_config(const kissm_config *given) {
     std::memcpy(&c, given, std::min<std::size_t>(given->struct_size, sizeof(kissm_config)));
     c.struct_size = sizeof(kissm_config);
 
-    require_int(c.num_threads, 0, kMaxThreads, "num_threads");
-    if (!(std::isfinite(c.voxel_size) && c.voxel_size > 0.0))
+    KISSM_REQUIRE_IN_LIMITS(num_threads);
+    if (!limits::voxel_size.contains(c.voxel_size))
         fail(ErrorKind::InvalidArgument,
              "config.voxel_size is " + number(c.voxel_size) + "; it must be a finite length > 0");
-    require_range(c.fpfh_radius_gain, 1.5, 50.0, false, "fpfh_radius_gain");
-    require_range(c.normal_radius_gain, 0.0, c.fpfh_radius_gain, true, "normal_radius_gain");
-    require_range(c.max_linearity, 0.0, 1.0, true, "max_linearity");
-    require_range(c.ratio_test, 0.0, 1.0, true, "ratio_test");
-    require_range(c.prune_noise_bound_gain, 0.0, 1e6, true, "prune_noise_bound_gain");
-    require_range(c.solver_noise_bound_gain, 0.0, 1e6, true, "solver_noise_bound_gain");
-    require_range(c.noise_bound_max, 0.0, 1e300, false, "noise_bound_max");
+    KISSM_REQUIRE_IN_LIMITS(fpfh_radius_gain);
+    require_in(c.normal_radius_gain, limits::normal_radius_gain_below(c.fpfh_radius_gain), "normal_radius_gain");
+    KISSM_REQUIRE_IN_LIMITS(max_linearity);
+    KISSM_REQUIRE_IN_LIMITS(ratio_test);
+    KISSM_REQUIRE_IN_LIMITS(prune_noise_bound_gain);
+    KISSM_REQUIRE_IN_LIMITS(solver_noise_bound_gain);
+    KISSM_REQUIRE_IN_LIMITS(noise_bound_max);
     for (int i = 0; i < 3; ++i)
         if (!std::isfinite(c.viewpoint[i]))
             fail(ErrorKind::InvalidArgument, "config.viewpoint[" + std::to_string(i) + "] is not finite");
-    require_int(c.min_normal_neighbors, 3, 100000, "min_normal_neighbors");
-    require_int(c.max_correspondences, 3, kMaxCorrespondences, "max_correspondences");
-    require_int(c.min_inliers, 3, kMaxCorrespondences, "min_inliers");
+    KISSM_REQUIRE_IN_LIMITS(min_normal_neighbors);
+    KISSM_REQUIRE_IN_LIMITS(max_correspondences);
+    KISSM_REQUIRE_IN_LIMITS(min_inliers);
     require_int(c.nonfinite_policy, 0, max_setting_code<NonFinitePolicy>(), "nonfinite_policy");
     require_int(c.viewpoint_mode, 0, max_setting_code<ViewpointMode>(), "viewpoint_mode");
     require_int(c.log_level, 0, KISSM_LOG_DEBUG, "log_level");
     require_int(c.refine_mode, 0, max_setting_code<RefineMode>(), "refine_mode");
-    require_int(c.refine_max_iterations, 1, 1000, "refine_max_iterations");
-    require_range(c.refine_max_distance_gain, 0.0, 100.0, true, "refine_max_distance_gain");
-    require_range(c.refine_kernel_gain, 0.0, 100.0, true, "refine_kernel_gain");
-    require_range(c.refine_rotation_epsilon, 0.0, 1.0, false, "refine_rotation_epsilon");
-    require_range(c.refine_translation_epsilon_gain, 0.0, 1.0, false, "refine_translation_epsilon_gain");
-    require_range(c.min_overlap, 0.0, 1.0, false, "min_overlap");
-    require_range(c.max_rotation_uncertainty, 0.0, 3.15, true, "max_rotation_uncertainty");
-    require_range(c.min_inlier_coverage, 0.0, 1.0, false, "min_inlier_coverage");
-    require_int(c.refine_min_inliers, 3, kMaxCorrespondences, "refine_min_inliers");
+    KISSM_REQUIRE_IN_LIMITS(refine_max_iterations);
+    KISSM_REQUIRE_IN_LIMITS(refine_max_distance_gain);
+    KISSM_REQUIRE_IN_LIMITS(refine_kernel_gain);
+    KISSM_REQUIRE_IN_LIMITS(refine_rotation_epsilon);
+    KISSM_REQUIRE_IN_LIMITS(refine_translation_epsilon_gain);
+    KISSM_REQUIRE_IN_LIMITS(min_overlap);
+    KISSM_REQUIRE_IN_LIMITS(max_rotation_uncertainty);
+    KISSM_REQUIRE_IN_LIMITS(min_inlier_coverage);
+    KISSM_REQUIRE_IN_LIMITS(refine_min_inliers);
     require_int(c.reserved1, 0, 0, "reserved1");
-    require_range(c.min_refine_condition, 0.0, 1.0, false, "min_refine_condition");
-    require_range(c.refine_normal_radius_gain, 0.0, 50.0, true, "refine_normal_radius_gain");
+    KISSM_REQUIRE_IN_LIMITS(min_refine_condition);
+    KISSM_REQUIRE_IN_LIMITS(refine_normal_radius_gain);
     require_int(c.suppression, 0, max_setting_code<Suppression>(), "suppression");
     if (c.rotation_dof != 1 && c.rotation_dof != 3)
         fail(ErrorKind::InvalidArgument,
@@ -194,7 +195,7 @@ kissm_config validated_config(const kissm_config *given) {
     if (!(up_length(c.up) > 1e-9))
         fail(ErrorKind::InvalidArgument, "config.up is (" + number(c.up[0]) + ", " + number(c.up[1]) + ", " +
                                              number(c.up[2]) + "); it must have a length above 1e-9");
-    require_range(c.sensor_height, 0.0, 1000.0, false, "sensor_height");
+    KISSM_REQUIRE_IN_LIMITS(sensor_height);
     return c;
 }
 
@@ -262,6 +263,7 @@ Hooks hooks_of(const kissm_config &c) {
 }
 
 #undef KISSM_SAME_FIELDS
+#undef KISSM_REQUIRE_IN_LIMITS
 
 } // namespace capi
 KISSM_DETAIL_END

@@ -14,6 +14,7 @@
 #include "failure.hpp"
 #include "little_endian.hpp"
 #include "setting_codes.hpp"
+#include "setting_limits.hpp"
 
 KISSM_DETAIL_BEGIN
 
@@ -146,12 +147,12 @@ private:
     std::size_t pos_ = 0;
 };
 
-double finite_in(Reader &r, const char *field, double lo, double hi, bool lo_open) {
+double finite_in(Reader &r, const char *field, const RealLimits &range) {
     const std::size_t at = r.offset();
     const double v = r.f64(field);
-    if (!(std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi))
-        malformed(std::string(field) + " is " + text(v) + "; it must be in " + (lo_open ? "(" : "[") + text(lo) + ", " +
-                      text(hi) + "]",
+    if (!range.contains(v))
+        malformed(std::string(field) + " is " + text(v) + "; it must be in " + (range.lo_open ? "(" : "[") +
+                      text(range.lo) + ", " + text(range.hi) + "]",
                   at);
     return v;
 }
@@ -169,26 +170,29 @@ E setting_in(Reader &r, const char *field) {
 }
 
 void read_settings(Reader &r, Params &p) {
-    p.voxel_size = finite_in(r, "voxel_size", 0.0, HUGE_VAL, true);
+    p.voxel_size = finite_in(r, "voxel_size", limits::voxel_size);
     // Read before the normal radius, whose upper bound it is (as in kissm_config_validate).
-    p.fpfh_radius_gain = finite_in(r, "fpfh_radius_gain", 1.5, 50.0, false);
-    p.normal_radius_gain = finite_in(r, "normal_radius_gain", 0.0, p.fpfh_radius_gain, true);
-    p.max_linearity = finite_in(r, "max_linearity", 0.0, 1.0, true);
-    p.refine_normal_radius_gain = finite_in(r, "refine_normal_radius_gain", 0.0, 50.0, true);
-    p.sensor_height = finite_in(r, "sensor_height", 0.0, 1000.0, false);
+    p.fpfh_radius_gain = finite_in(r, "fpfh_radius_gain", limits::fpfh_radius_gain);
+    p.normal_radius_gain = finite_in(r, "normal_radius_gain", limits::normal_radius_gain_below(p.fpfh_radius_gain));
+    p.max_linearity = finite_in(r, "max_linearity", limits::max_linearity);
+    p.refine_normal_radius_gain = finite_in(r, "refine_normal_radius_gain", limits::refine_normal_radius_gain);
+    p.sensor_height = finite_in(r, "sensor_height", limits::sensor_height);
     const char *viewpoint[3] = {"viewpoint[0]", "viewpoint[1]", "viewpoint[2]"};
     for (int i = 0; i < 3; ++i)
-        p.viewpoint[static_cast<std::size_t>(i)] = finite_in(r, viewpoint[i], -HUGE_VAL, HUGE_VAL, false);
+        p.viewpoint[static_cast<std::size_t>(i)] = finite_in(r, viewpoint[i], RealLimits{-HUGE_VAL, HUGE_VAL, false});
     const std::size_t up_at = r.offset();
     const char *up[3] = {"up[0]", "up[1]", "up[2]"};
-    for (int i = 0; i < 3; ++i) p.up[static_cast<std::size_t>(i)] = finite_in(r, up[i], -1.0, 1.0, false);
+    for (int i = 0; i < 3; ++i) p.up[static_cast<std::size_t>(i)] = finite_in(r, up[i], RealLimits{-1.0, 1.0, false});
     // The boundary normalises `up`: a stored one is a unit vector up to rounding.
     const double len = std::sqrt(p.up[0] * p.up[0] + p.up[1] * p.up[1] + p.up[2] * p.up[2]);
     if (!(std::fabs(len - 1.0) <= 1e-9)) malformed("up has length " + text(len) + "; it must be a unit vector", up_at);
     const std::size_t tau_at = r.offset();
     const std::int32_t tau = r.i32("min_normal_neighbors");
-    if (tau < 3 || tau > 100000)
-        malformed("min_normal_neighbors is " + std::to_string(tau) + "; it must be in [3, 100000]", tau_at);
+    if (!limits::min_normal_neighbors.contains(tau))
+        malformed("min_normal_neighbors is " + std::to_string(tau) + "; it must be in [" +
+                      std::to_string(limits::min_normal_neighbors.lo) + ", " +
+                      std::to_string(limits::min_normal_neighbors.hi) + "]",
+                  tau_at);
     p.min_normal_neighbors = tau;
     p.nonfinite = setting_in<NonFinitePolicy>(r, "nonfinite_policy");
     p.viewpoint_mode = setting_in<ViewpointMode>(r, "viewpoint_mode");
