@@ -50,11 +50,11 @@ static void test_docs_state_the_limits() {
     REQUIRE(g_doc != nullptr);
     std::map<std::string, std::string> rows = documented(g_doc);
     REQUIRE(!rows.empty());
-#define KISSM_CHECK_ROW(field)                                                                                         \
+#define KISSM_CHECK_ROW(field, ...)                                                                                    \
   CHECK_MSG(rows.count(#field) == 1 && rows[#field] == render(limits::field), "%s: docs '%s', limits '%s'", #field,    \
             rows.count(#field) ? rows[#field].c_str() : "(no row)", render(limits::field).c_str());                    \
   rows.erase(#field);
-    KISSM_SETTING_LIMITS(KISSM_CHECK_ROW)
+    KISSM_SETTING_LIMITS(KISSM_CHECK_ROW, KISSM_CHECK_ROW)
 #undef KISSM_CHECK_ROW
     CHECK(rows.count("normal_radius_gain") == 1 && rows["normal_radius_gain"] == "(0, fpfh_radius_gain]");
     CHECK(render(limits::normal_radius_gain_below(5.0)) == "(0, 5]");
