@@ -27,7 +27,6 @@ public:
     explicit PoseSolver(const Params &params);
 
     bool yaw_only() const { return yaw_only_; }
-    double noise_bound() const { return params_.noise_bound; }
     std::size_t max_measurements() const { return params_.max_tims; }
 
     // The pose of the correspondences (a[k], b[k]) from the translation-invariant measurements `pairs` (empty =
