@@ -11,8 +11,8 @@ keyframe in four pairs), registered
   (``DASK_FOR_KISSM`` below: ``MALLOC_TRIM_THRESHOLD_`` unset, the workers' profiler off, slower monitors);
 * the same on Ray, ``ray.init(num_cpus=2)``.
 
-Writes bench/results/batch_latest.json and docs/batch-throughput.md (with --refine none:
-bench/results/batch_coarse_latest.json and docs/batch-throughput-coarse.md).
+Writes bench/results/batch_latest.json and docs/reports/batch-throughput.md (with --refine none:
+bench/results/batch_coarse_latest.json and docs/reports/batch-throughput-coarse.md).
 
     python bench/batch_bench.py [--repeats 5] [--voxel 0.5] [--out docs] [--data DIR]
     python bench/batch_bench.py --smoke         # seconds: three keyframes, one repeat, no Dask or Ray, a temp dir
@@ -459,7 +459,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--data", type=Path, default=default_data, help="the shared data folder")
     parser.add_argument("--voxel", type=float, default=0.5)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--out", type=Path, default=REPO / "docs", help="where batch-throughput.md goes")
+    parser.add_argument("--out", type=Path, default=REPO / "docs" / "reports", help="where batch-throughput.md goes")
     parser.add_argument("--smoke", action="store_true", help="three keyframes, one repeat, no Dask or Ray")
     parser.add_argument(
         "--refine", choices=["gicp", "none"], default="gicp", help="refinement of every pair (none: coarse poses)"
@@ -493,7 +493,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ["OMP_NUM_THREADS"] = "1"
     if args.smoke and "--out" not in argv:
         args.out = Path(tempfile.mkdtemp(prefix="kissm-batch-smoke-"))
-    committed = not args.smoke and args.out.resolve() == (REPO / "docs").resolve()
+    committed = not args.smoke and args.out.resolve() == (REPO / "docs" / "reports").resolve()
     stem = "batch" + ("" if args.refine == "gicp" else f"_{COARSE}") + ("_long" if args.pair_repeats > 1 else "")
     stem += "_latest.json"
     raw = HERE / "results" / stem if committed else args.out / "batch_raw.json"

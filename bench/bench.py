@@ -87,7 +87,7 @@ UPSTREAM_CHAIN = {
     "min_overlap": 0.9,
 }
 
-# Voxel size and success thresholds per kind of data (SPEC §7; docs/accuracy.md).
+# Voxel size and success thresholds per kind of data (SPEC §7; docs/design/accuracy.md).
 KIND_SETTINGS = {
     "lidar_keyframe_downsampled": ("lidar", 0.5),
     "lidar_scan": ("lidar", 0.3),
@@ -1382,7 +1382,7 @@ def parse_args(argv):
     )
     p.add_argument("--pairs", nargs="*", default=None, help="only pairs whose dataset/pair contains one of these")
     p.add_argument("--data", type=Path, default=Path(os.environ.get("KISSM_DATA_DIR", REPO.parent / "shared" / "data")))
-    p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/benchmarks.md and OUT/img/*.png")
+    p.add_argument("--out", type=Path, default=REPO / "docs" / "reports", help="writes OUT/benchmarks.md and OUT/img/*.png")
     p.add_argument(
         "--raw",
         type=Path,
@@ -1469,7 +1469,7 @@ def main(argv=None) -> int:
         if "--pairs" not in explicit:
             args.pairs = ["kitti07_keyframes_gtsam_points/000002__000003"]
     if args.raw is None:  # the committed raw results only with the committed report
-        committed = not args.smoke and args.out.resolve() == (REPO / "docs").resolve()
+        committed = not args.smoke and args.out.resolve() == (REPO / "docs" / "reports").resolve()
         args.raw = HERE / "results" / "latest.json" if committed else args.out / "raw.json"
 
     methods, missing = available_methods(args.methods)

@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Does registration depend on the clouds' coordinate frames? The evidence behind the default viewpoint_mode
-(docs/frames.md): each viewpoint mode on the same runs, coarse (no refinement), success as in SPEC section 7.
+(docs/design/frames.md): each viewpoint mode on the same runs, coarse (no refinement), success as in SPEC section 7.
 
 The families:
   * pairs: every pair of ../shared/data raw and with the source turned by 3 random rotations (54-180 degrees),
-    the runs of docs/accuracy.md;
+    the runs of docs/design/accuracy.md;
   * moved frames: the same pairs with each cloud given in its own frame moved 40-80 m (LiDAR; 80-160 voxels
     otherwise) from its sensor and turned at random; the translation error is taken at the source's centroid;
   * scan-to-map: each KITTI 07 keyframe (its sensor frame) against the other four merged in the world frame,

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 """Ground-vehicle mode benchmark (issue 16): kissm's ground model against Patchwork++, ground suppression in
-registration, and the 4-DoF (yaw-only) solver against the reference's Quatro mode. Writes docs/ground.md,
-docs/img/ground_*.png and bench/results/ground_latest.json.
+registration, and the 4-DoF (yaw-only) solver against the reference's Quatro mode. Writes docs/reports/ground.md,
+docs/reports/img/ground_*.png and bench/results/ground_latest.json.
 
     python bench/ground_bench.py [--threads 1] [--repeats 3] [--seg-repeats 9] [--out DIR]
     python bench/ground_bench.py --smoke        # well under a minute: one scan, one pair, a temp dir
@@ -1142,12 +1142,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     p.add_argument(
         "--bev-scan",
         default="kitti_demo_scans_unverified/000000.bin",
-        help="the scan drawn in docs/img/ground_agreement.png",
+        help="the scan drawn in docs/reports/img/ground_agreement.png",
     )
     p.add_argument("--no-reference", action="store_true", help="kissm only")
     p.add_argument("--no-seg", action="store_true", help="skip the segmentation part")
     p.add_argument("--no-reg", action="store_true", help="skip the registration parts")
-    p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/ground.md and OUT/img/ (docs)")
+    p.add_argument("--out", type=Path, default=REPO / "docs" / "reports", help="writes OUT/ground.md and OUT/img/ (docs)")
     p.add_argument(
         "--raw",
         type=Path,
@@ -1200,7 +1200,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.smoke and "--out" not in explicit:
         args.out = Path(tempfile.mkdtemp(prefix="kissm-ground-smoke-"))
     if args.raw is None:
-        committed = not args.smoke and args.out.resolve() == (REPO / "docs").resolve()
+        committed = not args.smoke and args.out.resolve() == (REPO / "docs" / "reports").resolve()
         args.raw = HERE / "results" / "ground_latest.json" if committed else args.out / "ground_raw.json"
     command = os.environ.get("KISSM_BENCH_COMMAND") or "python bench/ground_bench.py " + " ".join(
         shlex.quote(a) for a in argv

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: MIT
 """Scan-to-map benchmark (issue 15): the time to register one LiDAR scan against maps of growing size, for
 kissm with the map described once and reused, kissm's full register per call, and the reference
-KISS-Matcher, which has no reusable map side. Writes docs/scan_to_map.md, docs/img/scan_to_map_time.png and
+KISS-Matcher, which has no reusable map side. Writes docs/reports/scan_to_map.md, docs/reports/img/scan_to_map_time.png and
 bench/results/map_latest.json.
 
     python bench/map_bench.py [--threads 1 2] [--sizes 100000 330000 1300000 5300000] [--repeats 3] [--out DIR]
@@ -106,7 +106,7 @@ def data_missing(data: Path) -> str | None:
 
 def load_keyframes(data: Path) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """World pose of each keyframe (chained ground truth, keyframe 0 at the identity) and its points."""
-    from frame_study import keyframes  # the same chain as docs/frames.md's scan-to-map runs
+    from frame_study import keyframes  # the same chain as docs/design/frames.md's scan-to-map runs
 
     kf = keyframes(argparse.Namespace(data=data))
     if kf is None:
@@ -847,7 +847,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         action="store_true",
         help="a control: maps of distractor tiles only, without the scan's place (any valid pose is wrong)",
     )
-    p.add_argument("--out", type=Path, default=REPO / "docs", help="writes OUT/scan_to_map.md and OUT/img/ (docs)")
+    p.add_argument("--out", type=Path, default=REPO / "docs" / "reports", help="writes OUT/scan_to_map.md and OUT/img/ (docs)")
     p.add_argument(
         "--raw",
         type=Path,
@@ -930,7 +930,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.smoke and "--out" not in explicit:
         args.out = Path(tempfile.mkdtemp(prefix="kissm-map-smoke-"))
     if args.raw is None:
-        committed = not args.smoke and args.out.resolve() == (REPO / "docs").resolve()
+        committed = not args.smoke and args.out.resolve() == (REPO / "docs" / "reports").resolve()
         args.raw = HERE / "results" / "map_latest.json" if committed else args.out / "map_raw.json"
     command = os.environ.get("KISSM_BENCH_COMMAND") or "python bench/map_bench.py " + " ".join(
         shlex.quote(a) for a in argv

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The refinement part of docs/benchmarks.md (issue 14): kissm's refinement against small_gicp and Open3D from
+"""The refinement part of docs/reports/benchmarks.md (issue 14): kissm's refinement against small_gicp and Open3D from
 the same coarse pose, and kissm coarse + refine against the upstream chain (reference + small_gicp), with the
 targets' verdicts. Called by report.py; the raw records come from bench.py's refinement methods."""
 

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Writes docs/benchmarks.md and the plots in docs/img/ from the results of bench.py.
+"""Writes docs/reports/benchmarks.md and the plots in docs/reports/img/ from the results of bench.py.
 
 ``python bench/report.py RAW.json --out DIR`` regenerates the report from a saved raw results file.
 """
@@ -710,7 +710,7 @@ def write_all(raw: dict, out_dir: Path, smoke: bool = False) -> list[Path]:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description="Regenerate the benchmark report from a raw results file.")
     p.add_argument("raw", type=Path)
-    p.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "docs")
+    p.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "docs" / "reports")
     p.add_argument("--smoke", action="store_true")
     args = p.parse_args(argv)
     written = write_all(json.loads(args.raw.read_text()), args.out, args.smoke)

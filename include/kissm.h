@@ -205,11 +205,11 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 #define KISSM_VIEWPOINT_FIXED 0        /**< kissm_config.viewpoint, in each cloud's own input frame (the sensor). */
 #define KISSM_VIEWPOINT_CLOUD_CENTER 1 /**< Each cloud's bounding-box centre. */
 /** No viewpoint: the descriptors do not depend on the normals' signs at all, so features depend on no cloud's
- * coordinate frame (docs/frames.md). */
+ * coordinate frame (docs/design/frames.md). */
 #define KISSM_VIEWPOINT_SIGN_FREE 2
 /** No viewpoint (the default): each normal turned away from the centroid of its neighbours within the FPFH
  * radius, a rule of the local shape alone, so features depend on no cloud's coordinate frame; where that
- * centroid lies too close to the surface to say, the descriptors ignore the normal's sign (docs/frames.md). */
+ * centroid lies too close to the surface to say, the descriptors ignore the normal's sign (docs/design/frames.md). */
 #define KISSM_VIEWPOINT_LOCAL 3
 /** @} */
 
@@ -217,7 +217,7 @@ KISSM_API const char *kissm_reason_string(int32_t reason);
 /** @{ */
 #define KISSM_SUPPRESS_NONE 0 /**< Every voxel may become a keypoint. */
 /** Ground voxels get no keypoint: a region-wise ground model around the sensor (kissm_config.viewpoint),
- * perpendicular to kissm_config.up (docs/ground.md). They stay in the clouds refinement aligns. */
+ * perpendicular to kissm_config.up (docs/reports/ground.md). They stay in the clouds refinement aligns. */
 #define KISSM_SUPPRESS_GROUND 1
 /** @} */
 
@@ -322,7 +322,7 @@ typedef struct kissm_config {
     int32_t nonfinite_policy;
     /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_LOCAL (features that depend on no
      * cloud's frame); #KISSM_VIEWPOINT_FIXED for scans in their sensor frame when kissm_config.viewpoint is
-     * known (docs/frames.md). */
+     * known (docs/design/frames.md). */
     int32_t viewpoint_mode;
     /** Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN. */
     int32_t log_level;
@@ -796,7 +796,7 @@ KISSM_API uint64_t kissm_features_memory_bytes(const kissm_features *features);
  * Voxelisation and feature times are reported as 0. The result is always fully overwritten. Features carry
  * the search index of their descriptors, so a large cloud described once (a map) is not indexed again: the
  * call costs about in proportion to the side with fewer keypoints, times the log of the other side's
- * (docs/frames.md, "Scan-to-map cost").
+ * (docs/design/frames.md, "Scan-to-map cost").
  * @param[in,out] matcher The matcher (its settings; one call at a time).
  * @param[in] source Features of the cloud to move.
  * @param[in] target Features of the cloud it is registered against.

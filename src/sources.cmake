@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-# The registration core: one pipeline stage per file (see docs/architecture.md).
+# The registration core: one pipeline stage per file (see docs/design/architecture.md).
 set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/run_context.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/radix_sort.cpp

@@ -44,7 +44,7 @@ void print_register_settings(std::FILE *out, const kissm_config &d) {
                  "                          down to RAD radians (rotation_uncertainty), in (0, 3.15]: few inliers,\n"
                  "                          or all on one compact object, do not\n"
                  "  --viewpoint MODE        how normals are oriented: local (the default) or sign-free (no\n"
-                 "                          viewpoint: features that depend on no cloud's frame; docs/frames.md),\n"
+                 "                          viewpoint: features that depend on no cloud's frame; docs/design/frames.md),\n"
                  "                          fixed (toward the sensor at the frame origin: single scans in their\n"
                  "                          sensor frame) or center (each cloud's centre)\n"
                  "  --viewpoint-center      the same as --viewpoint center\n"

@@ -95,7 +95,7 @@ sample_induced_edges(const CsrGraph &g, const std::vector<std::uint32_t> &vertic
         }
     }
     // Sorted (smaller, larger) pairs without repeats: a radix sort of the pairs as 64-bit keys gives the
-    // order std::sort did, in about half the time (docs/performance.md, "Radix sort").
+    // order std::sort did, in about half the time (docs/design/performance.md, "Radix sort").
     radix_sort_by_key(keys);
     for (std::size_t i = 0; i < keys.size(); ++i)
         if (i == 0 || keys[i].key != keys[i - 1].key)

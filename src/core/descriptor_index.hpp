@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Stage 3's search structure over one cloud's descriptors, built once with the cloud's features: a cloud
 // described once (a map) is searched by every later registration without being indexed again, so matching a
-// scan against it costs in proportion to the scan (docs/frames.md, "Scan-to-map cost").
+// scan against it costs in proportion to the scan (docs/design/frames.md, "Scan-to-map cost").
 #pragma once
 
 #include <cstdint>

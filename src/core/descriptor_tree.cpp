@@ -34,7 +34,7 @@ inline std::size_t lowest_bit(std::uint64_t m) {
 // Squared distances from q to a leaf's points, block by block, and a bit mask of the slots whose distance
 // is <= limit (bit i for slot i of the leaf), so that the caller visits only those: a whole leaf is usually
 // dismissed with one test, and the few candidates of the others are found without a pass over every slot
-// (docs/performance.md, second pass, "What changed"). Lane by lane the vector code performs the same
+// (docs/design/performance.md, second pass, "What changed"). Lane by lane the vector code performs the same
 // operations in the same order as the scalar loop over the dimensions. x - q rather than q - x: the same square
 // (rounding is symmetric in sign). Starting from the first square equals starting from 0 + it: a square is
 // never -0.
@@ -176,7 +176,7 @@ std::uint32_t ProjectedKdTree::build(std::uint32_t *begin, std::uint32_t *end, c
     // Split the widest dimension so that the low side holds whole leaves, half of them (rounded up): every
     // leaf is full but the last. With median splits leaves held between half and all of kLeafPoints
     // depending on where the point count fell between powers of two, and the search cost per query swung
-    // with it (more leaves per search when they are emptier; docs/performance.md, "kd-tree leaves").
+    // with it (more leaves per search when they are emptier; docs/design/performance.md, "kd-tree leaves").
     float lo[kDim], hi[kDim];
     for (int d = 0; d < kDim; ++d) lo[d] = hi[d] = coord(*begin, d);
     for (const std::uint32_t *p = begin + 1; p != end; ++p)

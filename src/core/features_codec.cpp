@@ -234,7 +234,7 @@ std::uint64_t features_checksum(const std::uint8_t *data, std::size_t size) {
     // FNV-1a's step over 64-bit little-endian words, then over the last size % 8 bytes one by one. Each step is
     // a bijection of the state for a given word (or byte), so any change of one word (every single-bit flip in
     // particular) changes the result. By words, not bytes: a step is a multiply that waits for the one
-    // before (docs/performance.md, "Features checksum").
+    // before (docs/design/performance.md, "Features checksum").
     constexpr std::uint64_t kPrime = 1099511628211ull;
     std::uint64_t h = 14695981039346656037ull;
     std::size_t i = 0;

@@ -94,7 +94,7 @@ UninitVector<float> compute_spfh(const std::vector<Vec3f> &points, const Neighbo
     // up to its end (rows inside it too: their codes for later chunks of the same span), so it rescans at
     // most about its own length. With one chunk per span a large scene rescanned far more, and more the
     // wider the scene: points are in voxel (x-major) order, so a neighbour can lie a few x-slices of the
-    // whole scene back (docs/performance.md, "SPFH second pass").
+    // whole scene back (docs/design/performance.md, "SPFH second pass").
     std::size_t reach = kChunk;
     for (std::size_t c = 0; c < num_chunks; ++c) reach = std::max<std::size_t>(reach, c * kChunk - first_source[c]);
     const std::size_t span = (reach + kChunk - 1) / kChunk * kChunk;

@@ -28,7 +28,7 @@ InputCloud gather_points(const PointsView &view, NonFinitePolicy policy, const s
     constexpr std::size_t kChunk = 16384;
     // Each chunk's summary is accumulated locally and stored once by map_fold: neighbouring summaries share
     // cache lines, so updating them in place from two threads makes the threads fight over them
-    // (docs/performance.md, "Input scan"). The fold reads them in chunk order, so the first non-finite point
+    // (docs/design/performance.md, "Input scan"). The fold reads them in chunk order, so the first non-finite point
     // reported is the lowest-numbered one.
     const std::size_t finite = ctx.map_fold(
         n, kChunk, std::size_t(0),

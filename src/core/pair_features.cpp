@@ -26,7 +26,7 @@ int bin_of(float value, float lo, float hi) {
 }
 
 // Bin of the angle atan2(y, x) in [start, start + span] split into 11 equal sectors, without calling atan2 (a
-// large part of the pair feature's cost; docs/performance.md, "Pair features"). Two tables: the whole circle
+// large part of the pair feature's cost; docs/design/performance.md, "Pair features"). Two tables: the whole circle
 // [-pi, pi] for oriented normals, the right half plane [-pi/2, pi/2] (x >= 0) for sign-free pairs. In both,
 // boundaries k = 1..5 lie below the x axis and k = 6..10 above it, and within one of those halves (less than
 // pi wide) "angle >= boundary" is the sign of a cross product with the boundary direction.

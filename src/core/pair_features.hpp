@@ -30,7 +30,7 @@ constexpr int kBinsPerFeature = 11;
 // either normal changes nothing and unoriented normals will do: f1 then lies in [-pi/2, pi/2] and f3 in
 // [0, 1], each still binned into 11 bins over its range. What is lost is only what the signs carried (a convex
 // edge and a concave one look alike); what is gained is features that do not depend on any viewpoint, so
-// on no cloud's frame (docs/frames.md). Mixed: as Oriented, but a normal whose sign is open (Normals::open_sign)
+// on no cloud's frame (docs/design/frames.md). Mixed: as Oriented, but a normal whose sign is open (Normals::open_sign)
 // is turned to the representative of its two choices: u so that f3 >= 0, n_b so that u . n_b >= 0 (the bins
 // stay those of the whole ranges, so that pairs of decided normals keep what their signs carry).
 enum class NormalSigns { Oriented, Ignored, Mixed };

@@ -38,7 +38,7 @@ struct Params {
     int max_correspondences = 5000;
     int min_inliers = 15;
     NonFinitePolicy nonfinite = NonFinitePolicy::Reject;
-    ViewpointMode viewpoint_mode = ViewpointMode::Local; // no frame dependence (docs/frames.md)
+    ViewpointMode viewpoint_mode = ViewpointMode::Local; // no frame dependence (docs/design/frames.md)
     RefineMode refine_mode = RefineMode::None;
     int refine_max_iterations = 30;
     double refine_max_distance_gain = 3.0;

@@ -27,7 +27,7 @@ constexpr int kFpfhWeightPower = 2;
 // Under ViewpointMode::Local a normal whose neighbours' mean offset along it is below this fraction of the normal
 // radius keeps no sign: its pair features ignore it. Deciding those signs from noise cost a tenth of the
 // coarse rotation accuracy of the sensor viewpoint on LiDAR pairs; leaving them open recovers it
-// (docs/frames.md, "Open signs").
+// (docs/design/frames.md, "Open signs").
 constexpr double kOpenSignGain = 0.1;
 
 class Stopwatch {

@@ -13,7 +13,7 @@ namespace {
 
 // Voters: an evenly spread sample of the scan's keypoints, each voting once for every cell among those of its
 // kVotes nearest map descriptors. A thousand voters cost about a twelfth of the matching that follows, and in
-// the scan-to-map benchmark the winning window held 4-8 times the votes of the next (docs/frames.md).
+// the scan-to-map benchmark the winning window held 4-8 times the votes of the next (docs/design/frames.md).
 constexpr std::size_t kVoters = 1024;
 constexpr int kVotes = 4;
 static_assert(kVotes <= RankedNeighbours::kMaxK, "a ranked search keeps at most kMaxK neighbours");

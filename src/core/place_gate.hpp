@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Stage 3, before the matching: the place in a map a scan is most likely in. Not in the paper, whose map-level
 // registration (Sec. V-C) matches against the whole map. A scan's nearest descriptor in a city-sized map is ever
-// more often some other place's look-alike (docs/frames.md, "Scan-to-map cost"), so against a much larger cloud
+// more often some other place's look-alike (docs/design/frames.md, "Scan-to-map cost"), so against a much larger cloud
 // a sample of the scan's keypoints vote with their nearest map descriptors for the map cells those lie in; when
 // one window of cells the size of the scan wins clearly, the whole scan matches only the map's keypoints around
 // it, which it then matches as well as it matches a map of its own size.

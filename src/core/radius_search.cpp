@@ -57,7 +57,7 @@ std::size_t append_within(const float *px, const float *py, const float *pz, con
 
 // Per thread: the scratch list of the chunk it runs, kept for its next chunk. A list per chunk (grown by
 // doubling) was the largest share of a description's page faults wherever freed memory goes straight back to
-// the system, as in a Dask worker (docs/performance.md, "Buffers kept across chunks and iterations").
+// the system, as in a Dask worker (docs/design/performance.md, "Buffers kept across chunks and iterations").
 thread_local UninitVector<std::uint32_t> t_chunk_scratch;
 
 } // namespace

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Stable sort of (key, index) records by key: LSD radix sort, 11 bits per pass, as many passes as the
 // largest key needs. Replaces comparison sorts of voxel and grid keys, which were a large share of a
-// registration's instructions (docs/performance.md, "Radix sort").
+// registration's instructions (docs/design/performance.md, "Radix sort").
 #pragma once
 
 #include <cstdint>

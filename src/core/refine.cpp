@@ -316,7 +316,7 @@ private:
     // The correspondences and terms of the current iteration, kept across iterations (only the last one's are
     // read): a new megabyte-sized array per iteration is fresh pages every time wherever freed memory goes back
     // to the system at once (a Dask worker's MALLOC_TRIM_THRESHOLD_), and three quarters of a pair's page
-    // faults were these (docs/performance.md, "Buffers kept across chunks and iterations").
+    // faults were these (docs/design/performance.md, "Buffers kept across chunks and iterations").
     Matches matches_;
     UninitVector<Term> terms_;
 };

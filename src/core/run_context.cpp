@@ -20,7 +20,7 @@ namespace {
 
 // How long a thread spins for the next event before it sleeps. A registration runs about a hundred
 // parallel loops (forty in the solver alone) with short serial stretches between them, and a sleep and a
-// wake-up through the kernel cost more than most of those stretches (docs/performance.md, "Thread pool").
+// wake-up through the kernel cost more than most of those stretches (docs/design/performance.md, "Thread pool").
 constexpr auto kSpin = std::chrono::microseconds(100);
 
 inline void cpu_relax() {

@@ -27,7 +27,7 @@ using Vec3d = Eigen::Vector3d;
 
 // One input cloud, still in the caller's array and frame: what the voxel stage must know before it reads
 // the points. Nothing is copied: a copy in double cost 24 bytes per point and, being fresh memory every
-// call, its page faults (docs/performance.md, "Input scan").
+// call, its page faults (docs/design/performance.md, "Input scan").
 struct InputCloud {
     PointsView view;
     bool skip_nonfinite = false; // some points are not finite and the policy drops them: readers skip them
@@ -38,7 +38,7 @@ struct InputCloud {
     std::uint64_t num_finite() const { return num_given - num_nonfinite; }
     // Calls f(i, point i converted to double) for the points [begin, end) of the caller's array, finite or
     // not. The scalar type is chosen once per call, not per point (a test per point slowed voxelisation
-    // down; docs/performance.md, "Input scan"); strides need not be aligned.
+    // down; docs/design/performance.md, "Input scan"); strides need not be aligned.
     template <class F>
     void for_each_point(std::size_t begin, std::size_t end, F &&f) const {
         if (view.is_double)
@@ -73,7 +73,7 @@ struct VoxelCloud {
 // the pipeline (4 bytes per neighbour instead of 8, about 100 neighbours per voxel). Rows are kept in
 // blocks of kBlockRows consecutive rows, each allocated at its exact size when the search finishes it:
 // one flat array had to be filled by a second copy of everything, with its page faults and twice the
-// memory while copying (docs/performance.md, "What the profiles showed").
+// memory while copying (docs/design/performance.md, "What the profiles showed").
 struct Neighborhoods {
     static constexpr std::size_t kBlockRows = 1024;
     std::vector<std::uint64_t> offsets;

@@ -2,7 +2,7 @@
 // A std::vector whose resize() leaves new elements of trivial types unset, for the large arrays whose every
 // element a parallel loop writes anyway. Zero-filling them first is a pass over all of it on one thread, and
 // that pass also takes every page fault of the fresh memory on that thread: on a VM whose balloon driver has
-// handed free pages back to the host, a first touch costs microseconds per page (docs/performance.md,
+// handed free pages back to the host, a first touch costs microseconds per page (docs/design/performance.md,
 // "Fresh memory is expensive here"), so the fill was a serial stretch that grew with the cloud.
 #pragma once
 

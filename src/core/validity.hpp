@@ -3,7 +3,7 @@
 // Paper: Sec. III-E (\label{subsec:nonminimal_solver}): valid when the final inlier set I_final is large
 // enough (no numbered equation). Everything else here is an addition of this library, each rule measured on
 // every real pair raw, rotated and with its frame moved, and on the synthetic pair at 24 yaws
-// (docs/accuracy.md, "The validity rules").
+// (docs/design/accuracy.md, "The validity rules").
 #pragma once
 
 #include <Eigen/Core>
@@ -62,7 +62,7 @@ Reason coarse_validity(std::uint64_t num_inliers, const InlierEvidence &inliers,
 // rotation_dof = 1: a yaw-only pose is refused (Tilted, with or without refinement) when the data contradict zero
 // roll and pitch: the best free rotation on its inliers tilts `up` by more than max_tilt (the rotation
 // uncertainty's bound; NaN, nothing measurable, counts as tilted), or the yaw rotation explains under a quarter of
-// the max core (the largest set of mutually consistent matches whatever the rotation). docs/accuracy.md, "The
+// the max core (the largest set of mutually consistent matches whatever the rotation). docs/design/accuracy.md, "The
 // validity rules", has the evidence.
 struct YawEvidence {
     std::uint64_t rotation_inliers;
@@ -97,7 +97,7 @@ Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers
                         const RefinedRule &rule);
 
 // The rule for a refinement from the caller's pose (kissm_refine): overlap, conditioning, convergence. It
-// cannot tell every prior outside the convergence basin that ends in a wrong local optimum (docs/accuracy.md).
+// cannot tell every prior outside the convergence basin that ends in a wrong local optimum (docs/design/accuracy.md).
 Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule);
 
 KISSM_DETAIL_END

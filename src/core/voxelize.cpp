@@ -191,7 +191,7 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
     // key order, so the output is in key order (the table's slot order depends on its growth history, the
     // key order does not). One table for the whole cloud was merged serially, by random probes far out of
-    // cache, and that merge grew faster than the point count (docs/performance.md, "What the profiles
+    // cache, and that merge grew faster than the point count (docs/design/performance.md, "What the profiles
     // showed"). About 8K entries per range (a function of the data alone), at
     // most 256 ranges; a small cloud is one range, merged straight from the chunks' tables.
     std::size_t all_entries = 0;
@@ -270,7 +270,7 @@ std::vector<std::uint32_t> voxel_of_points(const InputCloud &input, double voxel
     if (input.num_finite() == 0) return out;
     const Grid grid = grid_for(input, voxel_size, name);
     // Key -> voxel number in an open-addressing table (load at most 1/2): one probe or two per point, where a
-    // binary search over the keys took 16 and was most of kissm_ground_mask (docs/performance.md, "Ground").
+    // binary search over the keys took 16 and was most of kissm_ground_mask (docs/design/performance.md, "Ground").
     constexpr std::uint64_t kEmpty = ~std::uint64_t(0); // keys use at most 63 bits
     std::size_t capacity = 16;
     while (capacity < 2 * keys.size()) capacity *= 2;

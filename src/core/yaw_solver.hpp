@@ -56,7 +56,7 @@ double residual_tilt(const std::vector<Eigen::Vector3d> &a, const std::vector<Ei
 // half the bound, 50-90% outliers) zero-tilt pairs measure at most 0.06 degrees and tilted pairs their true tilt
 // within 0.06 degrees, from 0.5 to 30 (tests/core/test_yaw_solver.cpp). The pipeline refuses a pose whose tilt
 // exceeds Params::max_rotation_uncertainty (2 degrees by default): real car pairs tilt by up to 1.4 degrees
-// between keyframes (docs/ground.md), and a yaw pose off by that much is still right.
+// between keyframes (docs/reports/ground.md), and a yaw pose off by that much is still right.
 constexpr double kTiltThreshold = 0.017453292519943295;
 
 KISSM_DETAIL_END

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """The viewpoint-free modes on real scans (../shared/data, skipped when absent): clouds given in frames far from
-their sensors, scan-to-map in a world frame, and exact georeferenced shifts (docs/frames.md)."""
+their sensors, scan-to-map in a world frame, and exact georeferenced shifts (docs/design/frames.md)."""
 
 from __future__ import annotations
 

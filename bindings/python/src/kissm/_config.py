@@ -167,7 +167,7 @@ class Config:
     """'reject' (a NaN/Inf coordinate raises NonFiniteError) or 'drop' (such points are skipped and counted)."""
     viewpoint_mode: ViewpointMode = _DEFAULTS["viewpoint_mode"]
     """How normals are oriented. With no viewpoint at all, so that features depend on no cloud's frame (scans in
-    any frame, maps; docs/frames.md): 'local' (the default: each normal turned away from its neighbours'
+    any frame, maps; docs/design/frames.md): 'local' (the default: each normal turned away from its neighbours'
     centroid, its sign ignored where that centroid is too close to the surface to say) or 'sign_free'
     (descriptors blind to every normal's sign). With a viewpoint: 'fixed' (toward ``viewpoint``, in each cloud's
     frame: single scans in their sensor frame) or 'cloud_center' (toward each cloud's bounding-box centre)."""
@@ -213,7 +213,7 @@ class Config:
     suppression: Suppression = _DEFAULTS["suppression"]
     """Geometric suppression before keypoints: 'none', or 'ground' (the ground voxels around the sensor at
     ``viewpoint``, perpendicular to ``up``, get no keypoint; they stay in the clouds refinement aligns;
-    docs/ground.md). Computed with the features."""
+    docs/reports/ground.md). Computed with the features."""
     rotation_dof: int = _DEFAULTS["rotation_dof"]
     """Rotational degrees of freedom: 3, or 1 (yaw about ``up`` only; a clearly tilted pair ends ``valid`` False
     with reason "the clouds' relative roll or pitch is not zero")."""

@@ -176,7 +176,7 @@ pub struct kissm_config {
     pub nonfinite_policy: i32,
     /** KISSM_VIEWPOINT_*: how normals are oriented. Default #KISSM_VIEWPOINT_LOCAL (features that depend on no
  cloud's frame); #KISSM_VIEWPOINT_FIXED for scans in their sensor frame when kissm_config.viewpoint is
- known (docs/frames.md).*/
+ known (docs/design/frames.md).*/
     pub viewpoint_mode: i32,
     /// Most verbose level passed to log_fn, 0 (none)..4. Default #KISSM_LOG_WARN.
     pub log_level: i32,
@@ -916,7 +916,7 @@ extern "C" {
  Voxelisation and feature times are reported as 0. The result is always fully overwritten. Features carry
  the search index of their descriptors, so a large cloud described once (a map) is not indexed again: the
  call costs about in proportion to the side with fewer keypoints, times the log of the other side's
- (docs/frames.md, "Scan-to-map cost").
+ (docs/design/frames.md, "Scan-to-map cost").
  @param[in,out] matcher The matcher (its settings; one call at a time).
  @param[in] source Features of the cloud to move.
  @param[in] target Features of the cloud it is registered against.

@@ -69,11 +69,11 @@ pub enum Viewpoint {
     /// Each cloud's bounding-box centre.
     CloudCenter,
     /// No viewpoint: descriptors that do not depend on the normals' signs, so on no cloud's frame
-    /// (`docs/frames.md`).
+    /// (`docs/design/frames.md`).
     SignFree,
     /// No viewpoint (the default): each normal turned away from the centroid of its neighbours, a rule of the
     /// local shape alone, its sign ignored where that centroid is too close to the surface to say, so features
-    /// depend on no cloud's frame (`docs/frames.md`).
+    /// depend on no cloud's frame (`docs/design/frames.md`).
     #[default]
     Local,
 }
