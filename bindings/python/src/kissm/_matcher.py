@@ -153,8 +153,8 @@ class Features:
 
     def __reduce_ex__(self, protocol: Any) -> tuple[Any, tuple[Any]]:
         # Protocol 5 gets the bytes as a buffer, which a pickler with a buffer_callback (Dask's, Ray's) sends out
-        # of band: a keyframe's 2.5 MB are not copied into the pickle, nor out of it on the other side, where
-        # from_bytes reads the received buffer in place (docs/batch.md, "Where Dask's time goes").
+        # of band: the bytes are not copied into the pickle, nor out of it on the other side, where from_bytes
+        # reads the received buffer in place (docs/batch.md, "Where Dask's time goes").
         if isinstance(protocol, int) and protocol >= 5:
             return (_features_from_bytes, (pickle.PickleBuffer(self._serialized()),))
         return (_features_from_bytes, (self.to_bytes(),))
