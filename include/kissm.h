@@ -306,7 +306,7 @@ typedef struct kissm_config {
     double prune_noise_bound_gain;
     /** Solver inlier bound = gain * voxel_size; in (0, 1e6]. Default 0.75. */
     double solver_noise_bound_gain;
-    /** Cap on both noise bounds in metres, finite; 0 = no cap. Default 0. */
+    /** Cap on both noise bounds in metres, >= 0, finite; 0 = no cap. Default 0. */
     double noise_bound_max;
     /** For #KISSM_VIEWPOINT_FIXED: the sensor position, finite. Default (0, 0, 0). */
     double viewpoint[3];

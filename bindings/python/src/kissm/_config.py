@@ -154,7 +154,7 @@ class Config:
     solver_noise_bound_gain: float = _DEFAULTS["solver_noise_bound_gain"]
     """Solver inlier bound = gain * voxel_size; in (0, 1e6]."""
     noise_bound_max: float = _DEFAULTS["noise_bound_max"]
-    """Cap on both bounds, in the clouds' unit; 0 = no cap."""
+    """Cap on both bounds, in the clouds' unit, >= 0, finite; 0 = no cap."""
     viewpoint: tuple[float, float, float] = _DEFAULTS["viewpoint"]
     """Sensor position (x, y, z) toward which normals point, under viewpoint_mode='fixed'."""
     min_normal_neighbors: int = _DEFAULTS["min_normal_neighbors"]

@@ -161,7 +161,7 @@ pub struct kissm_config {
     pub prune_noise_bound_gain: f64,
     /// Solver inlier bound = gain * voxel_size; in (0, 1e6]. Default 0.75.
     pub solver_noise_bound_gain: f64,
-    /// Cap on both noise bounds in metres, finite; 0 = no cap. Default 0.
+    /// Cap on both noise bounds in metres, >= 0, finite; 0 = no cap. Default 0.
     pub noise_bound_max: f64,
     /// For #KISSM_VIEWPOINT_FIXED: the sensor position, finite. Default (0, 0, 0).
     pub viewpoint: [f64; 3usize],

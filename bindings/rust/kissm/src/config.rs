@@ -196,15 +196,10 @@ impl fmt::Display for Preset {
 
 /// A validated registration configuration.
 ///
-/// Built with [`Config::builder`], whose defaults are the C library's (`kissm_config_init`): voxel size
-/// 0.3, normal radius gain 3.5, FPFH radius gain 5.0, maximum linearity 0.99, ratio test 0.9, pruning
-/// and solver noise bound gains 1.0 and 0.75, no noise bound cap, viewpoint at the origin, 3 normal
-/// neighbours, 5000 correspondences, 15 inliers, non-finite points rejected, all hardware threads, no
-/// refinement ([`RefineMode::None`]; the refinement settings and the validity rules' thresholds as
-/// `kissm.h` documents them, read from the library), no suppression ([`Suppression::None`]), 3 rotational
-/// degrees of freedom, up +z and the sensor height estimated. Every length scales with the voxel size, so
-/// it is usually the only value to set; [`Config::preset`] sets it and the options a common kind of data
-/// wants.
+/// Built with [`Config::builder`], whose defaults are the C library's (`kissm_config_init`; each builder
+/// method states its range and default, checked against `docs/parameters.md`, "Ranges"). Every length
+/// scales with the voxel size, so it is usually the only value to set; [`Config::preset`] sets it and the
+/// options a common kind of data wants.
 ///
 /// ```
 /// let config = kissm::Config::builder().voxel_size(0.5).num_threads(2).build()?;
@@ -569,7 +564,7 @@ impl ConfigBuilder {
         prune_noise_bound_gain: f64,
         /// Solver inlier bound in voxel sizes, in (0, 1e6] (default 0.75).
         solver_noise_bound_gain: f64,
-        /// Cap on both noise bounds in the clouds' unit, finite; 0 = no cap (the default).
+        /// Cap on both noise bounds in the clouds' unit, >= 0, finite; 0 = no cap (default 0).
         noise_bound_max: f64,
     }
     /// Where normals are oriented toward (default: [`Viewpoint::Local`], no viewpoint).
@@ -609,41 +604,41 @@ impl ConfigBuilder {
         self
     }
     builder_setters! {
-        /// Refinement iteration cap, 1..=1000 (default: the library's, see `kissm.h`).
+        /// Refinement iteration cap, 1..=1000 (default 30).
         refine_max_iterations: count,
         /// Refinement's correspondence distance (and that of [`Refinement::overlap`](crate::Refinement::overlap))
-        /// in voxel sizes, in (0, 100] (default: the library's).
+        /// in voxel sizes, in (0, 100] (default 3.0).
         refine_max_distance_gain: f64,
-        /// Scale of refinement's Cauchy kernel in voxel sizes, in (0, 100] (default: the library's).
+        /// Scale of refinement's Cauchy kernel in voxel sizes, in (0, 100] (default 1.0).
         refine_kernel_gain: f64,
-        /// Convergence threshold on a step's rotation, radians, in [0, 1] (default: the library's).
+        /// Convergence threshold on a step's rotation, radians, in [0, 1] (default 5e-4).
         refine_rotation_epsilon: f64,
-        /// Convergence threshold on a step's translation in voxel sizes, in [0, 1] (default: the library's).
+        /// Convergence threshold on a step's translation in voxel sizes, in [0, 1] (default 5e-3).
         refine_translation_epsilon_gain: f64,
         /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this
-        /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default: the library's).
+        /// (below it: [`Reason::LowOverlap`](crate::Reason::LowOverlap)); in [0, 1] (default 0.2).
         min_overlap: f64,
         /// Without refinement, a valid pose needs inliers that pin its rotation down to this many radians
         /// ([`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this;
-        /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default:
-        /// the library's, 2 degrees).
+        /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default
+        /// 0.0349, 2 degrees).
         max_rotation_uncertainty: f64,
         /// With refinement, a valid registration needs solver inliers spread over at least this much of the
         /// aligned overlap ([`Refinement::inlier_coverage`](crate::Refinement::inlier_coverage); below it:
-        /// [`Reason::ClusteredInliers`](crate::Reason::ClusteredInliers)); in [0, 1] (default: the library's).
+        /// [`Reason::ClusteredInliers`](crate::Reason::ClusteredInliers)); in [0, 1] (default 0.25).
         min_inlier_coverage: f64,
         /// With refinement, final inliers a valid registration needs (fewer:
-        /// [`Reason::TooFewInliers`](crate::Reason::TooFewInliers)), 3..=100000 (default: the library's);
+        /// [`Reason::TooFewInliers`](crate::Reason::TooFewInliers)), 3..=100000 (default 10);
         /// [`min_inliers`](ConfigBuilder::min_inliers) applies without refinement.
         refine_min_inliers: count,
         /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
         /// [`Refinement::condition`](crate::Refinement::condition) at least this (below it:
         /// [`Reason::Unconstrained`](crate::Reason::Unconstrained)): a direction carrying less than this share
-        /// of the strongest one's information slides, as along a corridor; in [0, 1] (default: the library's).
+        /// of the strongest one's information slides, as along a corridor; in [0, 1] (default 0.01).
         min_refine_condition: f64,
         /// Refinement aligns planes fitted to the neighbours within this many voxel sizes (at least 5 of them;
         /// a value above [`normal_radius_gain`](ConfigBuilder::normal_radius_gain) acts as it); in (0, 50]
-        /// (default: the library's). They are computed with the features, so [`Features`](crate::Features) of
+        /// (default 2.0). They are computed with the features, so [`Features`](crate::Features) of
         /// a matcher with another value do not match this one's
         /// ([`ErrorKind::FeaturesMismatch`](crate::ErrorKind::FeaturesMismatch)).
         refine_normal_radius_gain: f64,
