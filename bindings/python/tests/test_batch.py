@@ -28,6 +28,29 @@ def test_the_module_is_an_attribute_of_kissm() -> None:
     assert "batch" in kissm.__all__
 
 
+def test_describe_many_and_register_many_take_the_same_settings() -> None:
+    # The keyword-only settings are written out in both signatures (type checkers and help() read them there);
+    # their meaning is stated once, in register_many's docstring, and this keeps the two lists one list.
+    import inspect
+
+    def settings(fn: Any) -> list[tuple[str, Any, Any, Any]]:
+        params = inspect.signature(fn).parameters.values()
+        return [(p.name, p.kind, p.default, p.annotation) for p in params if p.kind >= p.KEYWORD_ONLY]
+
+    shared = settings(kissm.batch.register_many)
+    assert [name for name, *_ in shared] == [
+        "threads_per_job",
+        "progress",
+        "voxel_size",
+        "refine",
+        "preset",
+        "config",
+        "overrides",
+    ]
+    assert settings(kissm.batch.describe_many) == shared
+    assert ":func:`register_many` for" in " ".join((kissm.batch.describe_many.__doc__ or "").split())
+
+
 # ---- the calling thread and a thread pool: synthetic clouds (no data needed) ---------------------------------
 
 

@@ -66,6 +66,10 @@ def _run(executor: Any, work: Work, progress: ProgressLike) -> Sink:
     return sink
 
 
+# describe_many and register_many take the same keyword-only settings, written out in both signatures so that type
+# checkers and help() show them; what they mean is stated once, in register_many's docstring, and
+# test_describe_many_and_register_many_take_the_same_settings keeps the two lists equal. Both hand them to
+# batch_config unchanged.
 def describe_many(
     clouds: Mapping[Hashable, Any],
     executor: Any = None,
