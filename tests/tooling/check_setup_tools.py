@@ -505,12 +505,15 @@ def cmake_files(root: Path) -> list[Path]:
     found = []
     for pattern in ("CMakeLists.txt", "**/CMakeLists.txt", "**/*.cmake"):
         found += root.glob(pattern)
-    skip = ("build", "third_party", "target", ".git")
+    # Build trees, vendored code and hidden folders (.git, venvs such as bench/.venv with a pip build tree inside)
+    # hold no script of ours; a folder named like a file (a build tree's ".cmake") is no file.
+    skip = ("build", "third_party", "target")
     return sorted(
         {
             f
             for f in found
-            if not any(part in skip or part.startswith("build-") for part in f.relative_to(root).parts[:-1])
+            if f.is_file()
+            and not any(part in skip or part.startswith(("build-", ".")) for part in f.relative_to(root).parts[:-1])
         }
     )
 
