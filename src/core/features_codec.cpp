@@ -277,7 +277,11 @@ void encode_features_to(const CloudFeatures &f, std::uint8_t *out) {
     for (int i = 0; i < 3; ++i) w.f64(f.voxels.origin[i]);
     for (const Vec3f &q : f.voxels.points) w.vec3(q);
     write_normals(w, f.normals);
-    write_normals(w, f.plane_normals);
+    if (f.has_planes) {
+        write_normals(w, f.plane_normals);
+    } else {
+        for (std::size_t i = 0; i < f.voxels.points.size(); ++i) w.u8(0); // described without the planes
+    }
     for (const std::uint32_t k : f.descriptors.keypoint) w.u32(k);
     for (const float v : f.descriptors.values) w.f32(v);
     w.u64(f.num_points);
@@ -360,7 +364,15 @@ CloudFeatures decode_features(const std::uint8_t *data, std::size_t size, RunCon
         f.voxels.points[i] = v;
     }
     read_normals(r, num_voxels, "normal flag", "normal", f.normals);
+    const std::size_t planes_at = r.offset();
     read_normals(r, num_voxels, "plane normal flag", "plane normal", f.plane_normals);
+    // Features described without refinement carry no planes (refinement fits them on its call): their flags are 0.
+    f.has_planes = f.params.refine_mode != RefineMode::None;
+    if (!f.has_planes) {
+        if (count_valid(f.plane_normals) != 0)
+            malformed("plane normals are stored, but refine_mode is none (features described without them)", planes_at);
+        f.plane_normals = Normals();
+    }
 
     // Keypoints as select_keypoints() makes them: voxels with a valid normal, in increasing order.
     const std::size_t keys_at = r.offset();

@@ -38,17 +38,27 @@ Normals estimate_normals(const std::vector<Vec3f> &points, const Neighborhoods &
     return estimate_normal_sets(points, nb, params, 0.0f, ctx).normals;
 }
 
-NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
-                                float plane_radius, RunContext &ctx) {
+namespace {
+
+// One pass over the neighbours: the planes when plane_radius > 0, the normals when wanted. A plane is a function of
+// the same rows whether the normals are computed beside it or not, so estimate_planes gives the bits of
+// estimate_normal_sets' planes.
+NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                       float plane_radius, bool want_normals, RunContext &ctx) {
     const std::size_t n = points.size();
     NormalSets sets;
     Normals &out = sets.normals;
-    out.normal.assign(n, Vec3f::Zero());
-    out.valid.assign(n, 0);
     const bool planes = plane_radius > 0.0f;
-    if (planes) sets.planes = out;
+    if (planes) {
+        sets.planes.normal.assign(n, Vec3f::Zero());
+        sets.planes.valid.assign(n, 0);
+    }
+    if (want_normals) {
+        out.normal.assign(n, Vec3f::Zero());
+        out.valid.assign(n, 0);
+    }
     const bool open_signs =
-        params.orientation == NormalOrientation::AwayFromNeighbours && params.open_sign_offset > 0.0f;
+        want_normals && params.orientation == NormalOrientation::AwayFromNeighbours && params.open_sign_offset > 0.0f;
     if (open_signs) out.open_sign.assign(n, 0);
     const double open_offset = params.open_sign_offset;
     const float rn2 = params.normal_radius * params.normal_radius, rp2 = plane_radius * plane_radius;
@@ -71,7 +81,7 @@ NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighbor
                 const float d2 = (points[j] - points[i]).squaredNorm();
                 if (d2 < rn2) {
                     near.push_back(j);
-                    near_d2.push_back(d2);
+                    if (planes) near_d2.push_back(d2);
                     mean += points[j].cast<double>();
                 }
             }
@@ -99,6 +109,7 @@ NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighbor
                     }
                 }
             }
+            if (!want_normals) continue;
             mean /= static_cast<double>(count);
             Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
             for (const std::uint32_t j : near) {
@@ -125,6 +136,18 @@ NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighbor
         }
     });
     return sets;
+}
+
+} // namespace
+
+NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                                float plane_radius, RunContext &ctx) {
+    return normal_pass(points, nb, params, plane_radius, true, ctx);
+}
+
+Normals estimate_planes(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                        float plane_radius, RunContext &ctx) {
+    return normal_pass(points, nb, params, plane_radius, false, ctx).planes;
 }
 
 std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Normals &normals, int min_neighbors) {

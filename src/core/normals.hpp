@@ -53,6 +53,11 @@ struct NormalSets {
 NormalSets estimate_normal_sets(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
                                 float plane_radius, RunContext &ctx);
 
+// The planes of estimate_normal_sets alone (plane_radius > 0), bitwise the same from the same neighbours: for
+// features described without refinement, which leave them out (the default path never pays for them).
+Normals estimate_planes(const std::vector<Vec3f> &points, const Neighborhoods &nb, const NormalParams &params,
+                        float plane_radius, RunContext &ctx);
+
 // Keypoints: points with a normal and at least tau_num neighbours (itself included) that have a normal.
 // Ascending indices.
 std::vector<std::uint32_t> select_keypoints(const Neighborhoods &nb, const Normals &normals, int min_neighbors);

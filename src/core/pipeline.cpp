@@ -105,6 +105,20 @@ void suppress_ground(const Params &params, std::vector<std::uint32_t> &keypoints
     f.time_suppression_ms = clock.lap();
 }
 
+// What a normal and a plane need (radius, neighbours, linearity); the orientation is the caller's.
+NormalParams normal_shape(const Params &params) {
+    NormalParams np;
+    np.normal_radius = static_cast<float>(params.normal_radius());
+    np.min_neighbors = params.min_normal_neighbors;
+    np.max_linearity = params.max_linearity;
+    np.viewpoint = Vec3f::Zero();
+    return np;
+}
+
+bool described_for_refinement(const Params &params, bool with_descriptors) {
+    return params.refine_mode != RefineMode::None || !with_descriptors;
+}
+
 void describe_voxels(const Params &params, const std::string &name, double progress_from, double progress_to,
                      bool with_descriptors, CloudFeatures &f, RunContext &ctx) {
     Stopwatch clock;
@@ -116,10 +130,7 @@ void describe_voxels(const Params &params, const std::string &name, double progr
     if (pts.size() > static_cast<std::size_t>(params.min_normal_neighbors)) {
         const Neighborhoods nb = radius_neighbors(pts, static_cast<float>(params.fpfh_radius()), ctx);
         progress(0.4);
-        NormalParams np;
-        np.normal_radius = static_cast<float>(params.normal_radius());
-        np.min_neighbors = params.min_normal_neighbors;
-        np.max_linearity = params.max_linearity;
+        NormalParams np = normal_shape(params);
         const Vec3d vp =
             params.viewpoint_mode == ViewpointMode::Fixed
                 ? Vec3d(Vec3d(params.viewpoint[0], params.viewpoint[1], params.viewpoint[2]) - f.voxels.origin)
@@ -130,7 +141,11 @@ void describe_voxels(const Params &params, const std::string &name, double progr
                                                                           : NormalOrientation::TowardViewpoint;
         if (params.viewpoint_mode == ViewpointMode::Local)
             np.open_sign_offset = static_cast<float>(kOpenSignGain * params.normal_radius());
-        NormalSets sets = estimate_normal_sets(pts, nb, np, static_cast<float>(params.refine_normal_radius()), ctx);
+        // The planes only where refinement will read them (refine_mode on, or kissm_refine's clouds): the default
+        // path does not pay for them, and refining features described without them fits them then.
+        f.has_planes = described_for_refinement(params, with_descriptors);
+        const float plane_radius = f.has_planes ? static_cast<float>(params.refine_normal_radius()) : 0.0f;
+        NormalSets sets = estimate_normal_sets(pts, nb, np, plane_radius, ctx);
         f.normals = std::move(sets.normals);
         f.plane_normals = std::move(sets.planes);
         progress(0.6);
@@ -147,7 +162,8 @@ void describe_voxels(const Params &params, const std::string &name, double progr
     } else {
         f.normals.normal.assign(pts.size(), Vec3f::Zero());
         f.normals.valid.assign(pts.size(), 0);
-        f.plane_normals = f.normals;
+        f.has_planes = described_for_refinement(params, with_descriptors);
+        if (f.has_planes) f.plane_normals = f.normals;
     }
     // The index refinement searches, kept with the features so that a map is indexed once.
     if (params.refine_mode != RefineMode::None) f.index = RefineIndex(pts, params.voxel_size);
@@ -253,6 +269,21 @@ RefineParams refine_params(const Params &params) {
     return rp;
 }
 
+// The planes of features described without them, as describing for refinement would have fitted them: the same
+// neighbour rows (the FPFH-radius search), the same pass without the normals, so the same bits.
+Normals planes_of(const CloudFeatures &f, RunContext &ctx) {
+    const Params &params = f.params;
+    const auto &pts = f.voxels.points;
+    if (pts.size() <= static_cast<std::size_t>(params.min_normal_neighbors)) {
+        Normals none;
+        none.normal.assign(pts.size(), Vec3f::Zero());
+        none.valid.assign(pts.size(), 0);
+        return none;
+    }
+    const Neighborhoods nb = radius_neighbors(pts, static_cast<float>(params.fpfh_radius()), ctx);
+    return estimate_planes(pts, nb, normal_shape(params), static_cast<float>(params.refine_normal_radius()), ctx);
+}
+
 // Stage 6 from (R, t) in the callers' frames: r's pose becomes the refined one, with its numbers.
 void refine_registration(const CloudFeatures &source, const CloudFeatures &target, const Eigen::Matrix3d &R,
                          const Eigen::Vector3d &t, const Params &params, Registration &r, RunContext &ctx) {
@@ -267,9 +298,12 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
         built = RefineIndex(target.voxels.points, params.voxel_size);
         index = &built;
     }
-    const RefineOutput o = refine_pose(RefineCloud{&source.voxels.points, &source.plane_normals},
-                                       RefineCloud{&target.voxels.points, &target.plane_normals}, *index, R, t_local,
-                                       refine_params(params), ctx);
+    Normals source_fitted, target_fitted;
+    const Normals &source_planes = source.has_planes ? source.plane_normals : (source_fitted = planes_of(source, ctx));
+    const Normals &target_planes = target.has_planes ? target.plane_normals : (target_fitted = planes_of(target, ctx));
+    const RefineOutput o =
+        refine_pose(RefineCloud{&source.voxels.points, &source_planes},
+                    RefineCloud{&target.voxels.points, &target_planes}, *index, R, t_local, refine_params(params), ctx);
     r.refined = true;
     r.rotation = o.rotation;
     r.translation = o.translation + ot - o.rotation * os;

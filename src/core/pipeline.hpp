@@ -28,8 +28,9 @@ struct CloudFeatures {
     std::uint64_t num_points = 0;
     std::uint64_t num_nonfinite = 0;
     VoxelCloud voxels;
-    Normals normals;       // per voxel (the descriptors'); all invalid when the cloud had too few voxels
-    Normals plane_normals; // per voxel, within refine_normal_radius: the planes refinement aligns
+    Normals normals;         // per voxel (the descriptors'); all invalid when the cloud had too few voxels
+    Normals plane_normals;   // per voxel, within refine_normal_radius: the planes refinement aligns (has_planes)
+    bool has_planes = false; // described for refinement; else refinement fits the planes on its call
     Descriptors descriptors;
     DescriptorIndex descriptor_index; // empty when there are no descriptors
     KeypointGrid keypoint_grid;       // the keypoints by position (columns of kKeypointColumnVoxels voxels)

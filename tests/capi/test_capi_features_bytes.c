@@ -405,6 +405,24 @@ static void test_forged(void) {
     FORGE(put_u64(b + l.counts + 8, 1), "num_nonfinite");
     FORGE(put_u64(b + l.counts + 16, 1), "num_suppressed");
 #undef FORGE
+    /* described without refinement, features carry no planes: every plane flag is 0, and a blob that stores a
+     * plane normal anyway (a valid unit vector, sized and sealed) is refused */
+    {
+        size_t i, at = l.plane_flags + (size_t)l.voxels;
+        uint8_t *planed = (uint8_t *)malloc((size_t)n + 12);
+        for (i = 0; i < l.voxels; ++i) CHECK_EQ_INT(orig[l.plane_flags + i], 0);
+        REQUIRE(planed != NULL);
+        memcpy(planed, orig, at);
+        planed[l.plane_flags] = 1;
+        put_f32(planed + at, 0.0f);
+        put_f32(planed + at + 4, 0.0f);
+        put_f32(planed + at + 8, 1.0f);
+        memcpy(planed + at + 12, orig + at, (size_t)n - at);
+        put_u64(planed + OFF_SIZE, n + 12);
+        reseal(planed, (size_t)n + 12);
+        CHECK(refused(planed, (size_t)n + 12, "refine_mode is none"));
+        free(planed);
+    }
     /* a trailing byte, even declared in the header and sealed, is refused */
     longer = (uint8_t *)malloc((size_t)n + 1);
     REQUIRE(longer != NULL);
