@@ -11,6 +11,7 @@
 #include "input.hpp"
 #include "matching.hpp"
 #include "normals.hpp"
+#include "place_gate.hpp"
 #include "pose_solver.hpp"
 #include "pruning.hpp"
 #include "radius_search.hpp"
@@ -176,9 +177,22 @@ void describe_voxels(const Params &params, const std::string &name, double progr
     }
 }
 
+// Whether the place gate could take cloud c of a pair as the map (PlaceRegion::find's size rule).
+bool gate_may_read_grid(const std::vector<CloudFeatures *> &pair, std::size_t c) {
+    const std::size_t mine = pair[c]->descriptors.keypoint.size();
+    for (std::size_t o = 0; o < pair.size(); ++o)
+        if (o != c && mine < PlaceRegion::kMinSizeRatio * pair[o]->descriptors.keypoint.size()) return false;
+    return true;
+}
+
+// Which clouds get a keypoint grid: every one (features to keep), or only those the place gate could read.
+enum class Grids { All, ForThePlaceGate };
+
 // The descriptors' search indexes, built together (the trees side by side when there are threads); each
-// cloud's feature time gains its share of the build by keypoints.
-void index_descriptors(const std::vector<CloudFeatures *> &clouds, RunContext &ctx) {
+// cloud's feature time gains its share of the build by keypoints. A pair described for one registration
+// needs a keypoint grid only on a side with kMinSizeRatio times the other's keypoints (the place gate reads no
+// other), so similar clouds skip it; features kept for later always get theirs.
+void index_descriptors(const std::vector<CloudFeatures *> &clouds, Grids grids, RunContext &ctx) {
     Stopwatch clock;
     std::vector<const Descriptors *> descriptors;
     double keypoints = 0.0;
@@ -188,7 +202,9 @@ void index_descriptors(const std::vector<CloudFeatures *> &clouds, RunContext &c
     }
     std::vector<DescriptorIndex> built = DescriptorIndex::build(descriptors, ctx);
     ctx.parallel_for(clouds.size(), 1, [&](std::size_t b, std::size_t e) {
-        for (std::size_t c = b; c < e; ++c) clouds[c]->keypoint_grid = keypoint_grid_of(*clouds[c]);
+        for (std::size_t c = b; c < e; ++c)
+            if (grids == Grids::All || gate_may_read_grid(clouds, c))
+                clouds[c]->keypoint_grid = keypoint_grid_of(*clouds[c]);
     });
     const double ms = clock.lap();
     for (std::size_t c = 0; c < clouds.size(); ++c) {
@@ -216,7 +232,7 @@ CloudFeatures describe_cloud(const PointsView &view, const Params &params, const
     CloudFeatures f;
     voxelize_cloud(view, params, name, 0.0, f, ctx);
     describe_voxels(params, name, 0.0, 1.0, true, f, ctx);
-    index_descriptors({&f}, ctx);
+    index_descriptors({&f}, Grids::All, ctx);
     return f;
 }
 
@@ -230,7 +246,7 @@ std::pair<CloudFeatures, CloudFeatures> describe_both(const PointsView &source, 
     voxelize_cloud(target, params, "target", 0.5, p.second, ctx);
     describe_voxels(params, "source", 0.0, 0.5, with_descriptors, p.first, ctx);
     describe_voxels(params, "target", 0.5, 1.0, with_descriptors, p.second, ctx);
-    if (with_descriptors) index_descriptors({&p.first, &p.second}, ctx);
+    if (with_descriptors) index_descriptors({&p.first, &p.second}, Grids::ForThePlaceGate, ctx);
     return p;
 }
 
