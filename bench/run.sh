@@ -6,7 +6,7 @@
 # yaw only against Patchwork++ and the reference's Quatro).
 #
 #   bash bench/run.sh                  # full run: threads 1 and 2, every pair raw + 2 rotations, scaling to 3M voxels;
-#                                      # writes docs/reports/benchmarks.md, docs/reports/img/*.png, bench/results/latest.json
+#                                      # writes docs/reports/benchmarks.md, docs/reports/img/*.png, bench/results/latest.json.gz
 #   bash bench/run.sh --smoke          # seconds: the harness on one small pair (results in a temp dir)
 #   bash bench/run.sh --quick          # minutes: 1 rotation, 1 repeat, scaling to 100K voxels
 #   bash bench/run.sh --refine-only --out /tmp/refine   # 15 minutes: the refinement comparison alone (issue 14)

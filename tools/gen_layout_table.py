@@ -160,9 +160,13 @@ def render(table: str, rows: dict[str, list[tuple[str, str, int, int]]], sizes: 
     )
     for struct, _, name, _ in STRUCTS:
         entries = [f"X({struct}, {f}, {t}, {o}, {n})" for f, t, o, n in rows[struct]]
+
+        def replacement(_: re.Match[str], name: str = name, entries: list[str] = entries) -> str:
+            return macro(name, entries)
+
         out = re.sub(
             r"#define %s\(X\).*?\n(?=\n)" % name,
-            lambda _, name=name, entries=entries: macro(name, entries),
+            replacement,
             out,
             count=1,
             flags=re.S,

@@ -8,6 +8,8 @@
 #   bindings/python/lint.sh          ruff check, ruff format --check, mypy --strict
 #   ruff (ruff.toml)                 ruff check and ruff format --check on bench/, tools/ and tests/, with the
 #                                    ruff that bindings/python/lint.sh pins
+#   mypy (mypy.ini)                  mypy --strict on bench/ (its scripts and kissm_bench) and tools/*.py, with
+#                                    the mypy that bindings/python/lint.sh pins
 #   bindings/rust/lint.sh            cargo fmt --check, cargo clippy --all-targets -- -D warnings
 # clang-format and shellcheck come from tools/setup.sh (apt-get as root); the Python tools from PyPI into a
 # venv, the Rust ones with the toolchain (rustup components).
@@ -70,7 +72,7 @@ if ((missing)); then fail "SPDX lines"; fi
 # ---- whitespace (.editorconfig) -----------------------------------------------------------------------
 step "whitespace (.editorconfig)"
 mapfile -t texts < <(files '*.c' '*.h' '*.cpp' '*.hpp' '*.py' '*.rs' '*.sh' '*.cmake' '*.in' '*.toml' '*.json' \
-  '*.txt' '*.md' '*.map' '*.yml' 'CMakeLists.txt' '.ci/run' | grep -v -e '^third_party/' -e '^tests/fuzz/corpus/' -e '^bench/results/')
+  '*.txt' '*.md' '*.map' '*.yml' 'CMakeLists.txt' '.ci/run' | grep -v -e '^third_party/' -e '^tests/fuzz/corpus/')
 ws=0
 for f in "${texts[@]}"; do
   if [[ -s $f && $(tail -c 1 "$f" | od -An -c | tr -d ' ') != '\n' ]]; then
@@ -96,14 +98,25 @@ for sub in bindings/python/lint.sh bindings/rust/lint.sh; do
 done
 
 # ---- the repository's own Python outside the package ----------------------------------------------------
-# bindings/python/lint.sh made the venv (its pinned ruff); the settings are ruff.toml's.
-ruff_bin=${KISSM_LINT_VENV:-${KISSM_BUILD_DIR:-$here/build}/venv-lint}/bin/ruff
+# bindings/python/lint.sh made the venv (its pinned ruff and mypy, and numpy for numpy's types); the settings are
+# ruff.toml's and mypy.ini's. mypy reads kissm's annotations from bindings/python/src (mypy.ini's mypy_path).
+lint_venv=${KISSM_LINT_VENV:-${KISSM_BUILD_DIR:-$here/build}/venv-lint}
+ruff_bin=$lint_venv/bin/ruff
 step "ruff: bench/ tools/ tests/"
 mapfile -t pys < <(files 'bench/*.py' 'tools/*.py' 'tests/*.py')
 if [[ ! -x $ruff_bin ]]; then
   fail "ruff: $ruff_bin is missing (bindings/python/lint.sh makes it)"
 elif ! "$ruff_bin" check --no-cache "${pys[@]}" || ! "$ruff_bin" format --check --no-cache "${pys[@]}"; then
   fail "ruff on bench/ tools/ tests/ ($ruff_bin format fixes the formatting ones)"
+fi
+
+mypy_bin=$lint_venv/bin/mypy
+step "mypy: bench/ tools/*.py"
+mapfile -t typed < <(files 'bench/*.py' 'tools/*.py')
+if [[ ! -x $mypy_bin ]]; then
+  fail "mypy: $mypy_bin is missing (bindings/python/lint.sh makes it)"
+elif ! "$mypy_bin" --config-file mypy.ini --cache-dir "$lint_venv/mypy-cache-repo" "${typed[@]}"; then
+  fail "mypy on bench/ tools/*.py"
 fi
 
 if ((${#failed[@]})); then

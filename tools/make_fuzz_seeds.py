@@ -7,12 +7,15 @@ Deterministic (fixed seeds); standard library only. Run from anywhere:  python3 
 import math
 import random
 import struct
+from collections.abc import Sequence
 from pathlib import Path
+
+Point = tuple[float, float, float]
 
 OUT = Path(__file__).resolve().parent.parent / "tests" / "fuzz" / "corpus"
 
 
-def write(target, name, data):
+def write(target: str, name: str, data: bytes | str) -> None:
     d = OUT / target
     d.mkdir(parents=True, exist_ok=True)
     (d / name).write_bytes(data if isinstance(data, bytes) else data.encode())
@@ -21,7 +24,7 @@ def write(target, name, data):
 PTS = [(0.0, 0.0, 0.0), (1.0, 0.5, -0.25), (2.5, -1.0, 0.75), (-3.0, 4.0, 1.5), (0.125, 0.25, 8.0)]
 
 
-def readers():
+def readers() -> None:
     v = "".join(f"{x} {y} {z}\n" for x, y, z in PTS)
     write(
         "ply",
@@ -64,7 +67,7 @@ def readers():
     )
     write("pcd", "binary.pcd", head4.encode() + b"".join(struct.pack("<ffff", x, y, z, 1.0) for x, y, z in PTS))
 
-    def npy(descr, shape, values, fmt):
+    def npy(descr: str, shape: tuple[int, int], values: Sequence[float], fmt: str) -> bytes:
         header = f"{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}"
         header += " " * ((64 - (10 + len(header) + 1) % 64) % 64) + "\n"
         return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(header)) + header.encode() + struct.pack(fmt, *values)
@@ -80,9 +83,9 @@ def readers():
     write("bin_xyz", "four.bin", b"".join(struct.pack("<fff", x, y, z) for x, y, z in PTS))
 
 
-def scene(rng, n):
+def scene(rng: random.Random, n: int) -> list[Point]:
     """Points on a floor, two walls and some boxes of a 30 m x 30 m yard."""
-    pts = []
+    pts: list[Point] = []
     for _ in range(n):
         k = rng.random()
         if k < 0.4:
@@ -107,7 +110,7 @@ def scene(rng, n):
     return pts
 
 
-def encode_cloud(pts, head=0x00, scale=1e-3):
+def encode_cloud(pts: Sequence[Sequence[float]], head: int = 0x00, scale: float = 1e-3) -> bytes:
     """The fuzz_input.hpp cloud encoding: head byte (bit 0 float64; bit 1 set: 1 mm steps), uint16 count,
     uint16 coordinates offset by 32768."""
     out = bytearray([head | 0x02]) + struct.pack("<H", len(pts))
@@ -118,7 +121,12 @@ def encode_cloud(pts, head=0x00, scale=1e-3):
     return bytes(out)
 
 
-def encode_transform(kind, rotation_vector=(0.0, 0.0, 0.0), translation=(0.0, 0.0, 0.0), at=0):
+def encode_transform(
+    kind: int,
+    rotation_vector: Sequence[float] = (0.0, 0.0, 0.0),
+    translation: Sequence[float] = (0.0, 0.0, 0.0),
+    at: int = 0,
+) -> bytes:
     """The fuzz_input.hpp transform encoding: kind byte (0 identity, 1-5 rigid, 6-12 refused), then for kinds
     above 0 a rotation vector (3 x uint16 at 1e-4 rad, offset 32768), a translation (3 x uint16 at 1 mm) and
     the byte choosing the entry a refused kind spoils."""
@@ -132,7 +140,7 @@ def encode_transform(kind, rotation_vector=(0.0, 0.0, 0.0), translation=(0.0, 0.
     return bytes(out + bytes([at]))
 
 
-def pipeline():
+def pipeline() -> None:
     rng = random.Random(7)
     base = scene(rng, 1500)
     ang = math.radians(25.0)

@@ -19,33 +19,36 @@ import os
 import struct
 import subprocess
 import sys
+from collections.abc import Sequence
+
+Point = tuple[float, ...]  # x, y, z
 
 MASK = (1 << 64) - 1
 
 
 class SplitMix64:
-    def __init__(self, seed):
+    def __init__(self, seed: int) -> None:
         self.state = seed & MASK
 
-    def next(self):
+    def next(self) -> int:
         self.state = (self.state + 0x9E3779B97F4A7C15) & MASK
         z = self.state
         z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK
         z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK
         return z ^ (z >> 31)
 
-    def uniform(self, lo=0.0, hi=1.0):
+    def uniform(self, lo: float = 0.0, hi: float = 1.0) -> float:
         return lo + (hi - lo) * ((self.next() >> 11) * (1.0 / 9007199254740992.0))
 
-    def normal(self):
+    def normal(self) -> float:
         u1 = self.uniform() + 1e-300
         u2 = self.uniform()
         return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
 
 
-def scene(rng, n):
+def scene(rng: SplitMix64, n: int) -> list[Point]:
     """n points on the yard's surfaces, in the world frame."""
-    pts = []
+    pts: list[Point] = []
     boxes = [
         (3.0, 2.0, 1.2, 1.0, 0.8),
         (-4.0, 3.5, 0.9, 1.6, 1.4),
@@ -88,7 +91,7 @@ def scene(rng, n):
     return pts
 
 
-def rotation(axis, angle):
+def rotation(axis: Sequence[float], angle: float) -> list[list[float]]:
     s = math.sqrt(sum(a * a for a in axis))
     x, y, z = (a / s for a in axis)
     c, n = math.cos(angle), math.sin(angle)
@@ -100,7 +103,7 @@ def rotation(axis, angle):
     ]
 
 
-def write_ply(path, pts):
+def write_ply(path: str, pts: Sequence[Sequence[float]]) -> None:
     header = (
         "ply\nformat binary_little_endian 1.0\ncomment kissm round-trip test cloud "
         "(tools/make_roundtrip_data.py)\nelement vertex %d\nproperty double x\nproperty double y\n"
@@ -112,7 +115,7 @@ def write_ply(path, pts):
             f.write(struct.pack("<3d", *p))
 
 
-def selftest(program):
+def selftest(program: str) -> int:
     """0 when SplitMix64 draws the same numbers as src/common/splitmix64.h (printed by program)."""
     checked = 0
     for seed in (0, 20261122, MASK):
@@ -132,7 +135,7 @@ def selftest(program):
     return 0
 
 
-def main():
+def main() -> None:
     if len(sys.argv) == 3 and sys.argv[1] == "--selftest":
         sys.exit(selftest(sys.argv[2]))
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "tests", "data")

@@ -80,6 +80,8 @@ step "map_bench.py --smoke" bench_smoke map_bench.py map-bench-smoke
 step "ground_bench.py --smoke" bench_smoke ground_bench.py ground-bench-smoke
 step "batch_bench.py --smoke" bench_smoke batch_bench.py batch-bench-smoke
 step "batch_accounting.py --smoke" bench_smoke batch_accounting.py batch-accounting-smoke
+# The committed pages of docs/reports/ are what the committed results of bench/results/ render (tables and text).
+step "check_pages.py" "$build/venv-python/bin/python" "$here/bench/check_pages.py"
 
 echo "== tools/docs.sh =="
 step docs bash "$here/tools/docs.sh"

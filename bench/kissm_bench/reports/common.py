@@ -1,12 +1,15 @@
 # SPDX-License-Identifier: MIT
-"""What the benchmark pages share: the methods', stages' and datasets' labels and colours, the raw results'
-reader (:class:`Results`) and the cell and table formatting. bench.py, report.py and refine_report.py import it;
-it imports none of them."""
+"""What the sections of the benchmark page share: the methods', stages' and datasets' labels and colours, the
+results' index (:class:`Results`) and the cell and table formatting. The benchmark (kissm_bench.benchmark and its
+workers) and the page (kissm_bench.reports.benchmarks) import it; it imports neither."""
 
 from __future__ import annotations
 
 import math
-import statistics
+from collections.abc import Sequence
+from typing import Any
+
+from ..common import med
 
 METHOD_LABEL = {
     "kissm": "kissm",
@@ -87,12 +90,7 @@ DATASET_LABEL = {
 }
 
 
-def med(values):
-    values = [v for v in values if v is not None]
-    return statistics.median(values) if values else None
-
-
-def fmt(value, digits=0, unit=""):
+def fmt(value: float | None, digits: int = 0, unit: str = "") -> str:
     if value is None:
         return "–"
     if isinstance(value, float) and not math.isfinite(value):
@@ -100,7 +98,7 @@ def fmt(value, digits=0, unit=""):
     return f"{value:,.{digits}f}{unit}"
 
 
-def fmt_ms(value):
+def fmt_ms(value: float | None) -> str:
     if value is None:
         return "–"
     if value >= 100:
@@ -110,11 +108,12 @@ def fmt_ms(value):
     return f"{value:.2f}"
 
 
-def fmt_ratio(value):
+def fmt_ratio(value: float | None) -> str:
     return "–" if value is None else f"{value:.1f}x"
 
 
-def slope(xs, ys):
+def slope(xs: Sequence[float], ys: Sequence[float | None]) -> float | None:
+    """The least-squares slope of log y against log x over the positive points (None under two)."""
     pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys, strict=False) if x and y and x > 0 and y > 0]
     if len(pts) < 2:
         return None
@@ -127,17 +126,17 @@ def slope(xs, ys):
 
 
 class Results:
-    """Indexes the raw results for the tables."""
+    """Indexes the results (raw or reduced) for the tables."""
 
-    def __init__(self, raw: dict):
+    def __init__(self, raw: dict[str, Any]):
         self.raw = raw
         self.cases = {c["index"]: c for c in raw["cases"]}
         self.all_methods = raw["meta"]["methods"]
         self.methods = [m for m in self.all_methods if m in COARSE]  # the coarse comparison's sections
         self.refining = [m for m in self.all_methods if m in REFINING]
         self.threads = sorted({r["threads"] for r in raw["runs"]})
-        self.runs: dict[tuple, list] = {}
-        self.status: dict[tuple, list] = {}
+        self.runs: dict[tuple[int, int, str], list[dict[str, Any]]] = {}
+        self.status: dict[tuple[int, int, str], list[str]] = {}
         for r in raw["runs"]:
             if r.get("warmup"):
                 continue
@@ -151,7 +150,7 @@ class Results:
             if c["name"] not in self.pairs:
                 self.pairs.append(c["name"])
 
-    def case_ids(self, pair=None, category=None, dataset=None):
+    def case_ids(self, pair: str | None = None, category: str | None = None, dataset: str | None = None) -> list[int]:
         return [
             i
             for i, c in self.cases.items()
@@ -160,13 +159,13 @@ class Results:
             and (dataset is None or c["dataset"] == dataset)
         ]
 
-    def collect(self, threads, case_ids, method):
-        out = []
+    def collect(self, threads: int, case_ids: list[int], method: str) -> list[dict[str, Any]]:
+        out: list[dict[str, Any]] = []
         for i in case_ids:
             out += self.runs.get((threads, i, method), [])
         return out
 
-    def summary(self, threads, case_ids, method):
+    def summary(self, threads: int, case_ids: list[int], method: str) -> dict[str, Any]:
         runs = self.collect(threads, case_ids, method)
         statuses = [s for i in case_ids for s in self.status.get((threads, i, method), [])]
         good = [r for r in runs if r["success"]]
@@ -193,13 +192,13 @@ class Results:
         }
 
 
-def machine_busy(meta: dict) -> bool:
+def machine_busy(meta: dict[str, Any]) -> bool:
     """Whether the load average at the start or the end of the run was over half the CPUs."""
     ls, le = meta.get("load_start"), meta.get("load_end")
     return bool(ls and le and max(ls[0], le[0]) > 0.5 * (meta["machine"].get("cpus_online") or 1))
 
 
-def success_cell(s):
+def success_cell(s: dict[str, Any]) -> str:
     if s["n"] == 0:
         return "–"
     cell = f"{s['success']}/{s['n']}"
@@ -210,7 +209,7 @@ def success_cell(s):
     return cell
 
 
-def rte_cell(value, category):
+def rte_cell(value: float | None, category: str) -> str:
     if value is None:
         return "–"
     if category == "object":
@@ -220,10 +219,10 @@ def rte_cell(value, category):
     return f"{value:.3f} m"
 
 
-# ---- plots ------------------------------------------------------------------------------------------------
+# ---- tables -----------------------------------------------------------------------------------------------
 
 
-def table(header, rows, align=None):
+def table(header: Sequence[str], rows: Sequence[Sequence[Any]], align: Sequence[str] | None = None) -> str:
     align = align or ["---"] + ["--:"] * (len(header) - 1)
     out = ["| " + " | ".join(header) + " |", "|" + "|".join(align) + "|"]
     out += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]

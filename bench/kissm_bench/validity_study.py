@@ -1,0 +1,284 @@
+# SPDX-License-Identifier: MIT
+"""The evidence behind the validity rules (docs/design/accuracy.md, "The validity rules"): registrations whose truth is
+known, each without refinement, with GICP and with point-to-plane, and the fields each rule reads. A run is
+RIGHT when its pose is within the success thresholds of SPEC section 7 and WRONG otherwise; a WRONG run reported
+valid is the worst bug kissm can ship, and the summary counts them per family and mode.
+
+The families:
+  * every pair of ../shared/data, raw, with the source turned by 6 random rotations (54-180 degrees), and with
+    the source's frame moved 20, 40 and 60 voxels away from its sensor (and turned): normals then face a point
+    that is not the sensor. For the moved frames the translation error is taken at the source's centroid, where
+    the data is: at the moved origin a 1 degree error alone would be a centimetre on the bunny;
+  * KITTI 07 keyframes two to four apart (ground truth chained through the pairs), raw and turned;
+  * pairs of unrelated scans (no overlap: every valid pose is wrong): LiDAR scans of three datasets against each
+    other at 0.3 and 0.5 m, and the bunny against a scaled 3DMatch fragment and back;
+  * the committed synthetic pair (tests/data) with its target turned about z every 15 degrees and moved;
+  * with --priors, kissm.refine from the ground truth disturbed by 0-180 degrees and 0-30 voxels (the refine
+    rule: overlap, conditioning, convergence).
+
+    python3 bench/validity_study.py [--data ../shared/data] [--threads 2] [--rotations 6] [--priors] [--rows]
+
+Needs the kissm Python package (e.g. build/venv-python from bindings/python/run_tests.sh) and numpy. About 4
+minutes at 2 threads (7 more with --priors).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import math
+from pathlib import Path
+from typing import Literal
+
+import kissm
+import numpy as np
+
+from .common import REPO, SHARED_DATA
+from .data import KEYFRAME_KIND, KINDS, Kind, Trial, has_index, keyframes, load_pairs  # the real-data tests' pairs
+from .geometry import axis_angle, judge_at
+
+SYNTHETIC_KIND = Kind("synthetic", 0.25, 5.0, 0.3)  # the committed synthetic pair (tests/data): a yard in metres
+RefineMode = Literal["none", "gicp", "point_to_plane"]
+MODES: tuple[RefineMode, ...] = ("none", "gicp", "point_to_plane")
+
+
+# The fields the rules read, with the mode whose rule reads them.
+RULE_FIELDS = (
+    ("rotation uncertainty (deg)", "none", lambda r: math.degrees(r.rotation_uncertainty)),
+    ("inlier coverage", "gicp", lambda r: r.inlier_coverage),
+    ("overlap", "gicp", lambda r: r.overlap),
+    ("refine condition", "gicp", lambda r: r.refine_condition),
+)
+
+
+class Tally:
+    def __init__(self) -> None:
+        self.counts: dict[tuple[str, str], collections.Counter[str]] = collections.defaultdict(collections.Counter)
+        self.wrong_valid: list[str] = []
+        # (field, family kind, right?) -> values, for the separation table
+        self.values: dict[tuple[str, str, bool], list[float]] = collections.defaultdict(list)
+
+    def add(self, family: str, mode: str, valid: bool, right: bool, line: str, r: kissm.Result | None = None) -> None:
+        key = (
+            "right, valid"
+            if valid and right
+            else "WRONG, VALID"
+            if valid
+            else "right, invalid"
+            if right
+            else "wrong, invalid"
+        )
+        self.counts[(family, mode)][key] += 1
+        if valid and not right:
+            self.wrong_valid.append(line)
+        if r is None or not np.isfinite(np.asarray(r.transform)).all():
+            return
+        kind = family if family in ("unrelated scans", "synthetic pair") else "real pairs"
+        for name, rule_mode, get in RULE_FIELDS:
+            if mode == rule_mode and r.num_final_inliers >= 10 and math.isfinite(get(r)):
+                self.values[(name, kind, right)].append(get(r))
+
+    def print(self) -> None:
+        print(
+            "\nfamily                              mode            "
+            "right,valid  WRONG,VALID  right,invalid  wrong,invalid"
+        )
+        for (family, mode), c in sorted(self.counts.items()):
+            print(
+                f"{family:35s} {mode:15s} {c['right, valid']:11d} {c['WRONG, VALID']:12d} "
+                f"{c['right, invalid']:14d} {c['wrong, invalid']:14d}"
+            )
+        print(f"\nwrong poses reported valid: {len(self.wrong_valid)}")
+        for line in self.wrong_valid:
+            print("  " + line)
+        print("\nwhat the rules read, runs with at least 10 inliers: range over right poses | over wrong poses")
+        for name, _, _ in RULE_FIELDS:
+            for kind in ("real pairs", "synthetic pair", "unrelated scans"):
+                right = self.values.get((name, kind, True), [])
+                wrong = self.values.get((name, kind, False), [])
+                print(f"  {name:28s} {kind:16s} {span(right)} | {span(wrong)}")
+
+
+def span(values: list[float]) -> str:
+    return f"{min(values):8.4f} .. {max(values):8.4f} ({len(values)})" if values else f"{'-':>24s}"
+
+
+def fields(r: kissm.Result, voxel: float) -> str:
+    return (
+        f"inliers {r.num_final_inliers:4d} sigma {math.degrees(r.rotation_uncertainty):6.2f} deg "
+        f"coverage {r.inlier_coverage:5.2f} overlap {r.overlap:5.3f} condition {r.refine_condition:7.4f} "
+        f"rmse/v {r.refine_rmse / voxel:5.3f} it {r.refine_iterations:2d}{'' if r.refine_converged else '!'} "
+        f"reason {r.reason}"
+    )
+
+
+def run(tally: Tally, family: str, t: Trial, args: argparse.Namespace) -> None:
+    k = t.kind
+    for mode in MODES:
+        r = kissm.register(t.source, t.target, voxel_size=k.voxel, num_threads=args.threads, refine=mode)
+        e_rot, e_trans, right = judge_at(r.transform, t.gt, k.max_rot_deg, k.max_trans_m, t.at)
+        line = (
+            f"{t.name:48s} {mode:14s} valid={int(r.valid)} error {e_rot:7.2f} deg {e_trans:8.4f} m "
+            f"{'right' if right else 'wrong'}  {fields(r, k.voxel)}"
+        )
+        tally.add(family, mode, r.valid, right, line, r)
+        if args.rows:
+            print(line, flush=True)
+
+
+def turned(points: np.ndarray, turn: np.ndarray, shift: np.ndarray | None = None) -> np.ndarray:
+    out: np.ndarray = points @ turn.T
+    return out if shift is None else out + shift
+
+
+def real_pairs(tally: Tally, args: argparse.Namespace, rng: np.random.Generator) -> None:
+    for p in load_pairs(args.data):
+        src, tgt = p.read()
+        k = p.kind
+        family = p.name.split("/")[0]
+        run(tally, family, Trial(f"{p.name} raw", src, tgt, p.gt, k), args)
+        for i in range(args.rotations):
+            turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
+            gt = p.gt.copy()
+            gt[:3, :3] = p.gt[:3, :3] @ turn.T  # the source turned by `turn`
+            run(tally, family, Trial(f"{p.name} rot{i}", turned(src, turn), tgt, gt, k), args)
+        for i in range(3):  # the frame moved away from the sensor: p' = turn p + d
+            turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
+            d = rng.normal(size=3)
+            d *= k.voxel * 20 * (i + 1) / np.linalg.norm(d)
+            gt = np.eye(4)
+            gt[:3, :3] = p.gt[:3, :3] @ turn.T
+            gt[:3, 3] = p.gt[:3, 3] - gt[:3, :3] @ d
+            moved = turned(src, turn, d)
+            run(
+                tally,
+                family + " (moved frame)",
+                Trial(f"{p.name} moved{i}", moved, tgt, gt, k, at=moved.mean(axis=0)),
+                args,
+            )
+
+
+def far_keyframes(tally: Tally, args: argparse.Namespace, rng: np.random.Generator) -> None:
+    kf = keyframes(args.data)
+    if kf is None:
+        return
+    chain, cloud = kf
+    for a in range(5):
+        for b in range(a + 2, 5):
+            gt = np.linalg.inv(chain[a]) @ chain[b]
+            far = "kitti07 keyframes 2-4 apart"
+            run(tally, far, Trial(f"kitti07 {a}<-{b} raw", cloud[b], cloud[a], gt, KEYFRAME_KIND), args)
+            turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
+            g2 = gt.copy()
+            g2[:3, :3] = gt[:3, :3] @ turn.T
+            run(tally, far, Trial(f"kitti07 {a}<-{b} rot", turned(cloud[b], turn), cloud[a], g2, KEYFRAME_KIND), args)
+
+
+def unrelated(tally: Tally, args: argparse.Namespace) -> None:
+    d = args.data
+    lidar = [
+        ("kitti07/000000", d / "kitti07_keyframes_gtsam_points/000000/points.bin", "bin_xyz"),
+        ("kitti07/000004", d / "kitti07_keyframes_gtsam_points/000004/points.bin", "bin_xyz"),
+        ("small_gicp/source", d / "small_gicp_lidar/source.ply", None),
+        ("small_gicp/target", d / "small_gicp_lidar/target.ply", None),
+        ("kitti_demo/000000", d / "kitti_demo_scans_unverified/000000.bin", "kitti_bin"),
+        ("kitti_demo/000015", d / "kitti_demo_scans_unverified/000015.bin", "kitti_bin"),
+    ]
+    if not all(p.is_file() for _, p, _ in lidar):
+        return
+    clouds = [kissm.read_points(p, format=f) if f else kissm.read_points(p) for _, p, f in lidar]
+    nowhere = np.eye(4)
+    nowhere[0, 3] = 1e6  # no pose is right
+    for a in range(len(lidar)):
+        for b in range(len(lidar)):
+            if a // 2 == b // 2:
+                continue  # the same dataset's scans overlap
+            for voxel in (0.3, 0.5):
+                name = f"{lidar[a][0]} -> {lidar[b][0]} v{voxel}"
+                run(
+                    tally,
+                    "unrelated scans",
+                    Trial(name, clouds[a], clouds[b], nowhere, Kind("lidar", voxel, 5, 2)),
+                    args,
+                )
+    bunny = d / "stanford_bunny_scans/bun000.ply"
+    fragment = d / "3dmatch_geotransformer_demo/src.npy"
+    if bunny.is_file() and fragment.is_file():
+        bun, frag = kissm.read_points(bunny), kissm.read_points(fragment)
+        bunny_kind = KINDS["object_range_scan"]  # voxel 0.006, 5 degrees and 0.01 m
+        run(tally, "unrelated scans", Trial("bunny -> fragment / 20", bun, frag * 0.05, nowhere, bunny_kind), args)
+        run(tally, "unrelated scans", Trial("fragment / 20 -> bunny", frag * 0.05, bun, nowhere, bunny_kind), args)
+
+
+def synthetic(tally: Tally, args: argparse.Namespace) -> None:
+    data = REPO / "tests" / "data"
+    src = kissm.read_points(data / "roundtrip_source.ply")
+    tgt = kissm.read_points(data / "roundtrip_target.ply")
+    truth = np.loadtxt(data / "roundtrip_ground_truth.txt")
+    shift = np.array([10.0, -5.0, 1.0])
+    for yaw in range(0, 360, 15):
+        turn = axis_angle(np.array([0.0, 0.0, 1.0]), yaw)
+        gt = np.eye(4)
+        gt[:3, :3] = turn @ truth[:3, :3]
+        gt[:3, 3] = turn @ truth[:3, 3] + shift
+        moved = tgt @ turn.T + shift
+        run(tally, "synthetic pair", Trial(f"synthetic, target yaw {yaw}", src, moved, gt, SYNTHETIC_KIND), args)
+
+
+def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
+    """kissm.refine from the ground truth disturbed by growing amounts: the basin, and what the refine rule says."""
+    counts: dict[tuple[int, int], collections.Counter[str]] = collections.defaultdict(collections.Counter)
+    for p in load_pairs(args.data):
+        src, tgt = p.read()
+        k = p.kind
+        with kissm.Matcher(voxel_size=k.voxel, num_threads=args.threads, refine_mode="gicp") as m:
+            fs, ft = m.compute_features(src), m.compute_features(tgt)
+            for deg in (0, 3, 10, 20, 45, 90, 180):
+                for vox in (0, 1, 3, 10, 30):
+                    for _ in range(2):
+                        start = p.gt.copy()
+                        start[:3, :3] = axis_angle(rng.normal(size=3), deg) @ p.gt[:3, :3]
+                        step = rng.normal(size=3)
+                        start[:3, 3] += step / np.linalg.norm(step) * vox * k.voxel
+                        r = m.refine_features(fs, ft, start)
+                        _, _, right = judge_at(r.transform, p.gt, k.max_rot_deg, k.max_trans_m)
+                        key = (
+                            "right, valid"
+                            if r.valid and right
+                            else "WRONG, VALID"
+                            if r.valid
+                            else "right, invalid"
+                            if right
+                            else "wrong, invalid"
+                        )
+                        counts[(deg, vox)][key] += 1
+    print("\nkissm.refine from the ground truth disturbed by (degrees, voxels), every real pair, GICP:")
+    print("  start             right,valid  WRONG,VALID  right,invalid  wrong,invalid")
+    for (deg, vox), c in sorted(counts.items()):
+        print(
+            f"  {deg:3d} deg {vox:2d} vox  {c['right, valid']:11d} {c['WRONG, VALID']:12d} "
+            f"{c['right, invalid']:14d} {c['wrong, invalid']:14d}"
+        )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--data", type=Path, default=SHARED_DATA)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--rotations", type=int, default=6)
+    parser.add_argument("--priors", action="store_true", help="also kissm.refine from disturbed ground truth")
+    parser.add_argument("--rows", action="store_true", help="print every run, not only the summary")
+    args = parser.parse_args()
+    rng = np.random.default_rng(12345)
+    tally = Tally()
+    if has_index(args.data):
+        real_pairs(tally, args, rng)
+        far_keyframes(tally, args, rng)
+        unrelated(tally, args)
+    else:
+        print(f"(no real data at {args.data}: the synthetic pair only)")
+    synthetic(tally, args)
+    tally.print()
+    if args.priors and has_index(args.data):
+        priors(args, rng)
+    return 0
