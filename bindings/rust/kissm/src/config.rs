@@ -39,26 +39,11 @@ pub enum RefineMode {
     PointToPlane,
 }
 
-impl RefineMode {
-    /// The mode of a `KISSM_REFINE_*` code (`None` for a value the library does not define).
-    pub fn from_code(code: i32) -> Option<RefineMode> {
-        match code {
-            sys::KISSM_REFINE_NONE => Some(RefineMode::None),
-            sys::KISSM_REFINE_GICP => Some(RefineMode::Gicp),
-            sys::KISSM_REFINE_POINT_TO_PLANE => Some(RefineMode::PointToPlane),
-            _ => None,
-        }
-    }
-
-    /// The `KISSM_REFINE_*` code.
-    pub fn code(self) -> i32 {
-        match self {
-            RefineMode::None => sys::KISSM_REFINE_NONE,
-            RefineMode::Gicp => sys::KISSM_REFINE_GICP,
-            RefineMode::PointToPlane => sys::KISSM_REFINE_POINT_TO_PLANE,
-        }
-    }
-}
+c_codes!(RefineMode, "KISSM_REFINE_", "mode" {
+    None => sys::KISSM_REFINE_NONE,
+    Gicp => sys::KISSM_REFINE_GICP,
+    PointToPlane => sys::KISSM_REFINE_POINT_TO_PLANE,
+});
 
 /// Where surface normals are oriented toward.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -96,24 +81,10 @@ pub enum Suppression {
     Ground,
 }
 
-impl Suppression {
-    /// The suppression of a `KISSM_SUPPRESS_*` code (`None` for a value the library does not define).
-    pub fn from_code(code: i32) -> Option<Suppression> {
-        match code {
-            sys::KISSM_SUPPRESS_NONE => Some(Suppression::None),
-            sys::KISSM_SUPPRESS_GROUND => Some(Suppression::Ground),
-            _ => None,
-        }
-    }
-
-    /// The `KISSM_SUPPRESS_*` code.
-    pub fn code(self) -> i32 {
-        match self {
-            Suppression::None => sys::KISSM_SUPPRESS_NONE,
-            Suppression::Ground => sys::KISSM_SUPPRESS_GROUND,
-        }
-    }
-}
+c_codes!(Suppression, "KISSM_SUPPRESS_", "suppression" {
+    None => sys::KISSM_SUPPRESS_NONE,
+    Ground => sys::KISSM_SUPPRESS_GROUND,
+});
 
 /// The settings for a common kind of data (`kissm_config_preset`, `docs/parameters.md`, "Presets"): the
 /// voxel size and the options that kind wants; every other field keeps its value.
@@ -147,30 +118,16 @@ pub enum Preset {
     Object,
 }
 
+c_codes!(Preset, "KISSM_PRESET_", "preset" {
+    LidarVehicle => sys::KISSM_PRESET_LIDAR_VEHICLE,
+    LidarHandheld => sys::KISSM_PRESET_LIDAR_HANDHELD,
+    IndoorRgbd => sys::KISSM_PRESET_INDOOR_RGBD,
+    Object => sys::KISSM_PRESET_OBJECT,
+});
+
 impl Preset {
     /// Every preset, in the order of their codes.
     pub const ALL: [Preset; 4] = [Preset::LidarVehicle, Preset::LidarHandheld, Preset::IndoorRgbd, Preset::Object];
-
-    /// The preset of a `KISSM_PRESET_*` code (`None` for a value the library does not define).
-    pub fn from_code(code: i32) -> Option<Preset> {
-        match code {
-            sys::KISSM_PRESET_LIDAR_VEHICLE => Some(Preset::LidarVehicle),
-            sys::KISSM_PRESET_LIDAR_HANDHELD => Some(Preset::LidarHandheld),
-            sys::KISSM_PRESET_INDOOR_RGBD => Some(Preset::IndoorRgbd),
-            sys::KISSM_PRESET_OBJECT => Some(Preset::Object),
-            _ => None,
-        }
-    }
-
-    /// The `KISSM_PRESET_*` code.
-    pub fn code(self) -> i32 {
-        match self {
-            Preset::LidarVehicle => sys::KISSM_PRESET_LIDAR_VEHICLE,
-            Preset::LidarHandheld => sys::KISSM_PRESET_LIDAR_HANDHELD,
-            Preset::IndoorRgbd => sys::KISSM_PRESET_INDOOR_RGBD,
-            Preset::Object => sys::KISSM_PRESET_OBJECT,
-        }
-    }
 
     /// The name the Python binding and the documentation use, such as `"lidar-vehicle"`.
     pub fn name(self) -> &'static str {

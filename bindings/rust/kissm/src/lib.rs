@@ -130,6 +130,8 @@
 #![deny(missing_docs)]
 #![warn(unsafe_op_in_unsafe_fn)]
 
+#[macro_use]
+mod codes; // first: its macro serves the modules below
 mod config;
 mod error;
 mod matcher;

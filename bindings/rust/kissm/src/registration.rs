@@ -57,47 +57,23 @@ pub enum Reason {
     Other(i32),
 }
 
+c_codes!(Reason, "KISSM_REASON_", "reason", Other {
+    None => sys::KISSM_REASON_NONE,
+    TooFewVoxels => sys::KISSM_REASON_TOO_FEW_VOXELS,
+    TooFewFeatures => sys::KISSM_REASON_TOO_FEW_FEATURES,
+    TooFewCorrespondences => sys::KISSM_REASON_TOO_FEW_CORRESPONDENCES,
+    SolverFailed => sys::KISSM_REASON_SOLVER_FAILED,
+    TooFewInliers => sys::KISSM_REASON_TOO_FEW_INLIERS,
+    Degenerate => sys::KISSM_REASON_DEGENERATE,
+    LowOverlap => sys::KISSM_REASON_LOW_OVERLAP,
+    Unconstrained => sys::KISSM_REASON_UNCONSTRAINED,
+    UncertainRotation => sys::KISSM_REASON_UNCERTAIN_ROTATION,
+    ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
+    NotConverged => sys::KISSM_REASON_NOT_CONVERGED,
+    Tilted => sys::KISSM_REASON_TILTED,
+});
+
 impl Reason {
-    /// The reason of a `KISSM_REASON_*` code.
-    pub fn from_code(code: i32) -> Reason {
-        match code {
-            sys::KISSM_REASON_NONE => Reason::None,
-            sys::KISSM_REASON_TOO_FEW_VOXELS => Reason::TooFewVoxels,
-            sys::KISSM_REASON_TOO_FEW_FEATURES => Reason::TooFewFeatures,
-            sys::KISSM_REASON_TOO_FEW_CORRESPONDENCES => Reason::TooFewCorrespondences,
-            sys::KISSM_REASON_SOLVER_FAILED => Reason::SolverFailed,
-            sys::KISSM_REASON_TOO_FEW_INLIERS => Reason::TooFewInliers,
-            sys::KISSM_REASON_DEGENERATE => Reason::Degenerate,
-            sys::KISSM_REASON_LOW_OVERLAP => Reason::LowOverlap,
-            sys::KISSM_REASON_UNCONSTRAINED => Reason::Unconstrained,
-            sys::KISSM_REASON_UNCERTAIN_ROTATION => Reason::UncertainRotation,
-            sys::KISSM_REASON_CLUSTERED_INLIERS => Reason::ClusteredInliers,
-            sys::KISSM_REASON_NOT_CONVERGED => Reason::NotConverged,
-            sys::KISSM_REASON_TILTED => Reason::Tilted,
-            other => Reason::Other(other),
-        }
-    }
-
-    /// The `KISSM_REASON_*` code.
-    pub fn code(self) -> i32 {
-        match self {
-            Reason::None => sys::KISSM_REASON_NONE,
-            Reason::TooFewVoxels => sys::KISSM_REASON_TOO_FEW_VOXELS,
-            Reason::TooFewFeatures => sys::KISSM_REASON_TOO_FEW_FEATURES,
-            Reason::TooFewCorrespondences => sys::KISSM_REASON_TOO_FEW_CORRESPONDENCES,
-            Reason::SolverFailed => sys::KISSM_REASON_SOLVER_FAILED,
-            Reason::TooFewInliers => sys::KISSM_REASON_TOO_FEW_INLIERS,
-            Reason::Degenerate => sys::KISSM_REASON_DEGENERATE,
-            Reason::LowOverlap => sys::KISSM_REASON_LOW_OVERLAP,
-            Reason::Unconstrained => sys::KISSM_REASON_UNCONSTRAINED,
-            Reason::UncertainRotation => sys::KISSM_REASON_UNCERTAIN_ROTATION,
-            Reason::ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
-            Reason::NotConverged => sys::KISSM_REASON_NOT_CONVERGED,
-            Reason::Tilted => sys::KISSM_REASON_TILTED,
-            Reason::Other(code) => code,
-        }
-    }
-
     /// The library's static description (`kissm_reason_string()`), such as `"none"`.
     pub fn as_str(self) -> &'static str {
         // SAFETY: no preconditions; returns a static string.
