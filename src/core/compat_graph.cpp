@@ -7,7 +7,76 @@
 
 #include "radix_sort.hpp"
 
+// SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
+#if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
+#  define KISSM_COMPAT_SSE2 1
+#  include <emmintrin.h>
+#else
+#  define KISSM_COMPAT_SSE2 0
+#endif
+
 KISSM_DETAIL_BEGIN
+
+namespace {
+
+// The correspondences as structure of arrays, padded with copies of the last one to a multiple of 4 so that
+// the row test reads whole vectors (padding columns are never reported).
+struct Columns {
+    std::size_t n;
+    std::vector<float> ax, ay, az, bx, by, bz;
+    Columns(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b) : n(a.size()) {
+        const std::size_t padded = (n + 3) & ~std::size_t(3);
+        for (auto *v : {&ax, &ay, &az, &bx, &by, &bz}) v->resize(padded);
+        for (std::size_t i = 0; i < padded; ++i) {
+            const std::size_t k = std::min(i, n - 1);
+            ax[i] = a[k].x(), ay[i] = a[k].y(), az[i] = a[k].z();
+            bx[i] = b[k].x(), by[i] = b[k].y(), bz[i] = b[k].z();
+        }
+    }
+};
+
+// Appends the edges (i, j) of row i, j > i in ascending order: | |b_j - b_i| - |a_j - a_i| | <= bound, each
+// length evaluated as sqrt((dx^2 + dy^2) + dz^2) in every path, so the vector and scalar tests agree bit for
+// bit. GCC does not vectorise the plain loop (the float test feeding a byte store), hence the intrinsics.
+void append_row_edges(const Columns &c, std::size_t i, float bound, std::vector<std::uint32_t> &out) {
+    const float pax = c.ax[i], pay = c.ay[i], paz = c.az[i], pbx = c.bx[i], pby = c.by[i], pbz = c.bz[i];
+    const auto emit = [&](std::size_t j) {
+        out.push_back(static_cast<std::uint32_t>(i));
+        out.push_back(static_cast<std::uint32_t>(j));
+    };
+    const auto scalar = [&](std::size_t j) {
+        const float dax = c.ax[j] - pax, day = c.ay[j] - pay, daz = c.az[j] - paz;
+        const float dbx = c.bx[j] - pbx, dby = c.by[j] - pby, dbz = c.bz[j] - pbz;
+        const float da = std::sqrt(dax * dax + day * day + daz * daz);
+        const float db = std::sqrt(dbx * dbx + dby * dby + dbz * dbz);
+        return std::fabs(da - db) <= bound;
+    };
+    std::size_t j = i + 1;
+#if KISSM_COMPAT_SSE2
+    for (; j < c.n && (j & 3) != 0; ++j)
+        if (scalar(j)) emit(j);
+    const __m128 vax = _mm_set1_ps(pax), vay = _mm_set1_ps(pay), vaz = _mm_set1_ps(paz);
+    const __m128 vbx = _mm_set1_ps(pbx), vby = _mm_set1_ps(pby), vbz = _mm_set1_ps(pbz);
+    const __m128 vbound = _mm_set1_ps(bound), abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+    for (; j < c.n; j += 4) {
+        const __m128 dax = _mm_sub_ps(_mm_load_ps(&c.ax[j]), vax), day = _mm_sub_ps(_mm_load_ps(&c.ay[j]), vay);
+        const __m128 daz = _mm_sub_ps(_mm_load_ps(&c.az[j]), vaz), dbx = _mm_sub_ps(_mm_load_ps(&c.bx[j]), vbx);
+        const __m128 dby = _mm_sub_ps(_mm_load_ps(&c.by[j]), vby), dbz = _mm_sub_ps(_mm_load_ps(&c.bz[j]), vbz);
+        const __m128 da =
+            _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dax, dax), _mm_mul_ps(day, day)), _mm_mul_ps(daz, daz)));
+        const __m128 db =
+            _mm_sqrt_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dbx, dbx), _mm_mul_ps(dby, dby)), _mm_mul_ps(dbz, dbz)));
+        int mask = _mm_movemask_ps(_mm_cmple_ps(_mm_and_ps(_mm_sub_ps(da, db), abs_mask), vbound));
+        if (c.n - j < 4) mask &= (1 << (c.n - j)) - 1; // padding columns
+        for (; mask != 0; mask &= mask - 1) emit(j + static_cast<std::size_t>(__builtin_ctz(mask)));
+    }
+#else
+    for (; j < c.n; ++j)
+        if (scalar(j)) emit(j);
+#endif
+}
+
+} // namespace
 
 CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f> &b, float noise_bound,
                             RunContext &ctx) {
@@ -16,38 +85,14 @@ CsrGraph build_compat_graph(const std::vector<Vec3f> &a, const std::vector<Vec3f
     g.offsets.assign(n + 1, 0);
     if (n < 2) return g;
 
-    // Structure of arrays so the inner loop vectorises.
-    std::vector<float> ax(n), ay(n), az(n), bx(n), by(n), bz(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        ax[i] = a[i].x(), ay[i] = a[i].y(), az[i] = a[i].z();
-        bx[i] = b[i].x(), by[i] = b[i].y(), bz[i] = b[i].z();
-    }
+    const Columns columns(a, b);
 
     // Upper triangle, rows in small chunks (row lengths shrink, so small chunks balance the threads). Each
     // chunk records its edges (i < j) in row order; merged below in chunk order.
     constexpr std::size_t kRows = 32;
     std::vector<std::vector<std::uint32_t>> edges = ctx.map_chunks(n, kRows, [&](std::size_t begin, std::size_t end) {
         std::vector<std::uint32_t> out; // built locally, stored once: neighbouring vectors share cache lines
-        std::vector<unsigned char> ok(n);
-        for (std::size_t i = begin; i < end; ++i) {
-            const float pax = ax[i], pay = ay[i], paz = az[i], pbx = bx[i], pby = by[i], pbz = bz[i];
-            const std::size_t m = n - i - 1;
-            const float *qax = &ax[i + 1], *qay = &ay[i + 1], *qaz = &az[i + 1];
-            const float *qbx = &bx[i + 1], *qby = &by[i + 1], *qbz = &bz[i + 1];
-            for (std::size_t j = 0; j < m; ++j) {
-                const float dax = qax[j] - pax, day = qay[j] - pay, daz = qaz[j] - paz;
-                const float dbx = qbx[j] - pbx, dby = qby[j] - pby, dbz = qbz[j] - pbz;
-                const float da = std::sqrt(dax * dax + day * day + daz * daz);
-                const float db = std::sqrt(dbx * dbx + dby * dby + dbz * dbz);
-                ok[j] = std::fabs(da - db) <= noise_bound;
-            }
-            for (std::size_t j = 0; j < m; ++j) {
-                if (ok[j]) {
-                    out.push_back(static_cast<std::uint32_t>(i));
-                    out.push_back(static_cast<std::uint32_t>(i + 1 + j));
-                }
-            }
-        }
+        for (std::size_t i = begin; i < end; ++i) append_row_edges(columns, i, noise_bound, out);
         return out;
     });
 
