@@ -4,9 +4,59 @@
 #include <algorithm>
 #include <cmath>
 
+// SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
+#if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
+#  define KISSM_FPFH_SSE2 1
+#  include <emmintrin.h>
+#else
+#  define KISSM_FPFH_SSE2 0
+#endif
+
 KISSM_DETAIL_BEGIN
 
 namespace {
+
+// acc[c] += w * h[c] for the 33 bins of one neighbour per call, each bin its own running sum in neighbour order,
+// so the bits are those of the plain loop. The sums stay in registers across a keypoint's neighbours (the plain
+// loop over a 33-float array loads and stores them for every neighbour).
+class WeightedSum {
+public:
+    WeightedSum() { clear(); }
+    void clear() {
+#if KISSM_FPFH_SSE2
+        for (__m128 &a : acc_) a = _mm_setzero_ps();
+#else
+        std::fill(acc_, acc_ + 32, 0.0f);
+#endif
+        last_ = 0.0f;
+    }
+    void add(float w, const float *h) {
+#if KISSM_FPFH_SSE2
+        const __m128 vw = _mm_set1_ps(w);
+        for (int k = 0; k < 8; ++k) acc_[k] = _mm_add_ps(acc_[k], _mm_mul_ps(vw, _mm_loadu_ps(h + 4 * k)));
+#else
+        for (int c = 0; c < 32; ++c) acc_[c] += w * h[c];
+#endif
+        last_ += w * h[32];
+    }
+    void store(float *out) const {
+#if KISSM_FPFH_SSE2
+        for (int k = 0; k < 8; ++k) _mm_storeu_ps(out + 4 * k, acc_[k]);
+#else
+        std::copy(acc_, acc_ + 32, out);
+#endif
+        out[32] = last_;
+    }
+
+private:
+    static_assert(kDescriptorDim == 33, "32 bins in vectors, the last one alone");
+#if KISSM_FPFH_SSE2
+    __m128 acc_[8];
+#else
+    float acc_[32];
+#endif
+    float last_;
+};
 
 inline void add_code(float *h, std::uint16_t code) {
     h[code & 0xF] += 1.0f;
@@ -141,9 +191,10 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
         // Single precision: at most a few hundred terms of size <= 100 with weights <= 1, summed in a fixed
         // order; the loop over the 33 bins vectorises.
         float acc[D];
+        WeightedSum sum_of;
         for (std::size_t q = b; q < e; ++q) {
             const std::uint32_t i = out.keypoint[q];
-            std::fill(acc, acc + D, 0.0f);
+            sum_of.clear();
             int count = 0;
             const std::uint32_t *row = nb.row(i);
             for (std::size_t t = 0, size = nb.count(i); t < size; ++t) {
@@ -151,10 +202,10 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
                 if (j == i || !normals.valid[j]) continue;
                 const float w2 = v2 / (points[j] - points[i]).squaredNorm();
                 const float w = weight_power == 2 ? w2 : std::sqrt(w2);
-                const float *h = &spfh[static_cast<std::size_t>(j) * D];
-                for (int c = 0; c < D; ++c) acc[c] += w * h[c];
+                sum_of.add(w, &spfh[static_cast<std::size_t>(j) * D]);
                 ++count;
             }
+            sum_of.store(acc);
             const float *own = &spfh[static_cast<std::size_t>(i) * D];
             const float inv_count = count > 0 ? 1.0f / static_cast<float>(count) : 0.0f;
             float *dst = &out.values[q * D];

@@ -61,6 +61,7 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
         want_normals && params.orientation == NormalOrientation::AwayFromNeighbours && params.open_sign_offset > 0.0f;
     if (open_signs) out.open_sign.assign(n, 0);
     const double open_offset = params.open_sign_offset;
+    const bool away = want_normals && params.orientation == NormalOrientation::AwayFromNeighbours;
     const float rn2 = params.normal_radius * params.normal_radius, rp2 = plane_radius * plane_radius;
     const std::uint64_t tau = static_cast<std::uint64_t>(params.min_neighbors);
     const std::uint64_t plane_tau = std::max<std::uint64_t>(kPlaneMinNeighbors, tau);
@@ -75,10 +76,15 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
             near.clear();
             near_d2.clear();
             Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+            // AwayFromNeighbours: offsets of all the neighbours from the point, in double and in row order (no
+            // cancellation, the same at any thread count), summed in the same pass.
+            const Eigen::Vector3d p = points[i].cast<double>();
+            Eigen::Vector3d to_centroid = Eigen::Vector3d::Zero();
             const std::uint32_t *row = nb.row(i);
             for (std::size_t t = 0; t < size; ++t) {
                 const std::uint32_t j = row[t];
                 const float d2 = (points[j] - points[i]).squaredNorm();
+                if (away) to_centroid += points[j].cast<double>() - p;
                 if (d2 < rn2) {
                     near.push_back(j);
                     if (planes) near_d2.push_back(d2);
@@ -89,7 +95,6 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
             if (count < tau) continue;
             if (planes) {
                 // The smaller neighbourhood, summed about the point itself (a few voxels wide: no cancellation).
-                const Eigen::Vector3d p = points[i].cast<double>();
                 Eigen::Vector3d s = Eigen::Vector3d::Zero();
                 Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
                 std::uint64_t m = 0;
@@ -111,22 +116,23 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
             }
             if (!want_normals) continue;
             mean /= static_cast<double>(count);
-            Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+            // The six distinct sums of d d^T (the other three are the same products, so the same bits).
+            double sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
             for (const std::uint32_t j : near) {
-                const Eigen::Vector3d d = points[j].cast<double>() - mean;
-                cov.noalias() += d * d.transpose();
+                const double dx = static_cast<double>(points[j].x()) - mean.x();
+                const double dy = static_cast<double>(points[j].y()) - mean.y();
+                const double dz = static_cast<double>(points[j].z()) - mean.z();
+                sxx += dx * dx, sxy += dx * dy, sxz += dx * dz, syy += dy * dy, syz += dy * dz, szz += dz * dz;
             }
+            Eigen::Matrix3d cov;
+            cov << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
             cov /= static_cast<double>(count);
             Eigen::Vector3d normal;
             if (!plane_normal(cov, params.max_linearity, normal)) continue;
             if (params.orientation == NormalOrientation::TowardViewpoint) {
                 const Eigen::Vector3d to_view = params.viewpoint.cast<double>() - points[i].cast<double>();
                 if (normal.dot(to_view) < 0.0) normal = -normal;
-            } else if (params.orientation == NormalOrientation::AwayFromNeighbours) {
-                // Offsets from the point, in double and in row order: no cancellation, the same at any thread count.
-                const Eigen::Vector3d p = points[i].cast<double>();
-                Eigen::Vector3d to_centroid = Eigen::Vector3d::Zero();
-                for (std::size_t t = 0; t < size; ++t) to_centroid += points[row[t]].cast<double>() - p;
+            } else if (away) {
                 const double along = normal.dot(to_centroid);
                 if (along > 0.0) normal = -normal;
                 if (open_signs && std::fabs(along) < open_offset * static_cast<double>(size)) out.open_sign[i] = 1;
