@@ -26,7 +26,7 @@ struct SolverParams {
     double noise_bound; // inlier bound on one correspondence, metres
     int max_iterations = 100;
     double gnc_factor = 1.4;
-    std::size_t max_tims = 20000; // translation-invariant measurements used by the rotation solver
+    std::size_t max_tims = 5000; // translation-invariant measurements used by the rotation solver
 };
 
 struct SolverOutput {
