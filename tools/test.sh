@@ -80,6 +80,9 @@ step "map_bench.py --smoke" bench_smoke map_bench.py map-bench-smoke
 step "ground_bench.py --smoke" bench_smoke ground_bench.py ground-bench-smoke
 step "batch_bench.py --smoke" bench_smoke batch_bench.py batch-bench-smoke
 step "batch_accounting.py --smoke" bench_smoke batch_accounting.py batch-accounting-smoke
+# The default path's instructions per stage (callgrind) against bench/results/instructions.json: a stage that grew
+# fails the run, so the next capability cannot slow the default path unnoticed.
+step "instruction_check.py --smoke" bench_smoke instruction_check.py instruction-check
 # The committed pages of docs/reports/ are what the committed results of bench/results/ render (tables and text).
 step "check_pages.py" "$build/venv-python/bin/python" "$here/bench/check_pages.py"
 
