@@ -351,6 +351,9 @@ def render(raw: dict[str, Any], plots: dict[str, Path], out_dir: Path, smoke: bo
             L.append("")
             L.append(table(header, rows))
             L.append("")
+            if "reference" in methods:
+                L += _speed_target_lines(res, threads, lidar_pairs or res.pairs)
+        L += _stage_scaling_table(res, lidar_pairs or res.pairs)
 
     # ---- success per dataset ----
     if res.runs and methods:
@@ -680,6 +683,61 @@ def render(raw: dict[str, Any], plots: dict[str, Path], out_dir: Path, smoke: bo
 
 FROM_KISSM = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl")  # start from kissm's coarse pose
 ERROR_COLUMNS = ("kissm_gicp", "kissm_p2pl", "sgicp", "o3d_gicp", "o3d_p2pl", "ref_sgicp")
+
+
+#: The speed targets of the default coarse path against the reference's C++ time: a geometric mean over the LiDAR
+#: pairs, and the slowest pair; and the 1 -> 2 thread scaling under which a stage is flagged.
+GEOMEAN_TARGET, SLOWEST_TARGET, SCALING_TARGET = 6.0, 4.5, 1.6
+
+
+def _speed_target_lines(res: Results, threads: int, pairs: list[str]) -> list[str]:
+    """The geometric mean of kissm's speed-up over the reference's C++ time across ``pairs`` and the slowest pair's,
+    against GEOMEAN_TARGET and SLOWEST_TARGET."""
+    ratios = {}
+    for pair in pairs:
+        ids = res.case_ids(pair=pair)
+        k, r = res.summary(threads, ids, "kissm"), res.summary(threads, ids, "reference")
+        if k["wall"] and r["engine"]:
+            ratios[pair] = r["engine"] / k["wall"]
+    if not ratios:
+        return []
+    geomean = math.exp(sum(math.log(v) for v in ratios.values()) / len(ratios))
+    slowest = min(ratios, key=lambda p: ratios[p])
+    met = geomean >= GEOMEAN_TARGET and ratios[slowest] >= SLOWEST_TARGET
+    return [
+        f"Over the {len(ratios)} LiDAR pairs: geometric mean {fmt_ratio(geomean)} (target {GEOMEAN_TARGET:g}x), "
+        f"slowest {slowest} {fmt_ratio(ratios[slowest])} (target {SLOWEST_TARGET:g}x): "
+        + ("**met**." if met else "**not met**."),
+        "",
+    ]
+
+
+def _stage_scaling_table(res: Results, pairs: list[str]) -> list[str]:
+    """kissm's stage times at one thread over those at two, per LiDAR pair; a stage under SCALING_TARGET in bold."""
+    if not {1, 2} <= set(res.threads) or "kissm" not in res.methods:
+        return []
+    stages = ("voxelize", "features", "matching", "pruning", "solver")
+    rows = []
+    for pair in pairs:
+        ids = res.case_ids(pair=pair)
+        one, two = res.summary(1, ids, "kissm"), res.summary(2, ids, "kissm")
+        row = [pair]
+        for stage in (*stages, "total"):
+            a = one["wall"] if stage == "total" else one["stages"].get(stage)
+            b = two["wall"] if stage == "total" else two["stages"].get(stage)
+            x = a / b if a and b else None
+            cell = fmt_ratio(x)
+            row.append(f"**{cell}**" if x is not None and x < SCALING_TARGET else cell)
+        rows.append(row)
+    return [
+        "### Two threads: scaling per stage",
+        "",
+        "kissm's median stage time at one thread over that at two, per LiDAR pair (the same runs as above); a stage "
+        f"under {SCALING_TARGET:g}x is in bold. Stages of a few milliseconds are noisy here.",
+        "",
+        table(["pair (LiDAR)", *stages, "whole call"], rows),
+        "",
+    ]
 
 
 def _threads_title(threads: int) -> str:
@@ -1341,6 +1399,7 @@ def write_all(raw: dict[str, Any], out_dir: Path, smoke: bool = False) -> list[P
     res = Results(reduced)
     plots = make_plots(res, out_dir / "img")
     md = out_dir / "benchmarks.md"
+    out_dir.mkdir(parents=True, exist_ok=True)  # make_plots makes it only when it draws
     md.write_text(render(reduced, plots, out_dir, smoke))
     return [md, *plots.values()]
 
