@@ -47,7 +47,9 @@ bool spin_until(Done done) {
 // A minimal pool: workers wait for a job, grab chunk indices from an atomic counter until none are left.
 // Which thread runs which chunk varies; what each chunk computes does not. Waiting is a short spin, then
 // a condition variable; every shared state change happens under the mutex as well, so a sleeper is never
-// missed.
+// missed. A job is done when its chunks are: the caller waits for the workers that joined it, not for all of
+// them, so a worker still starting (the pool lives for one call, and a thread's first wake-up is slow) holds
+// up no loop; it joins whichever job is posted when it is ready.
 class ThreadPool {
 public:
     explicit ThreadPool(int workers) {
@@ -68,16 +70,20 @@ public:
             job_ = &job;
             num_chunks_ = num_chunks;
             next_.store(0);
-            active_.store(static_cast<int>(threads_.size()));
+            pending_.store(num_chunks);
             generation_.fetch_add(1, std::memory_order_release);
         }
         cv_.notify_all();
         drain(job, num_chunks);
-        if (!spin_until([this] { return active_.load(std::memory_order_acquire) == 0; })) {
+        if (!spin_until([this] { return pending_.load(std::memory_order_acquire) == 0; })) {
             std::unique_lock<std::mutex> lock(mutex_);
-            done_cv_.wait(lock, [this] { return active_.load() == 0; });
+            done_cv_.wait(lock, [this] { return pending_.load() == 0; });
         }
-        std::lock_guard<std::mutex> lock(mutex_);
+        // Every chunk is done; a worker may still be between its last chunk and leaving the job (or have just
+        // joined it and found nothing left). No worker can join once job_ is cleared under the mutex, so after
+        // this wait none reads next_ again: the next job may reset it.
+        std::unique_lock<std::mutex> lock(mutex_);
+        done_cv_.wait(lock, [this] { return joined_ == 0; });
         job_ = nullptr;
     }
 
@@ -87,6 +93,10 @@ private:
             std::size_t c = next_.fetch_add(1);
             if (c >= num_chunks) break;
             job(c);
+            if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+                std::lock_guard<std::mutex> lock(mutex_);
+                done_cv_.notify_all();
+            }
         }
     }
 
@@ -104,14 +114,15 @@ private:
                 cv_.wait(lock, ready);
                 if (stop_.load()) return;
                 seen = generation_.load();
+                if (job_ == nullptr) continue; // that job is over already: wait for the next
                 job = job_;
                 n = num_chunks_;
+                ++joined_;
             }
             drain(*job, n);
-            if (active_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
-                std::lock_guard<std::mutex> lock(mutex_);
-                done_cv_.notify_all();
-            }
+            std::lock_guard<std::mutex> lock(mutex_);
+            --joined_;
+            done_cv_.notify_all();
         }
     }
 
@@ -129,10 +140,11 @@ private:
     std::vector<std::thread> threads_;
     std::mutex mutex_;
     std::condition_variable cv_, done_cv_;
-    const std::function<void(std::size_t)> *job_ = nullptr;
+    const std::function<void(std::size_t)> *job_ = nullptr; // the posted job; null between jobs
     std::size_t num_chunks_ = 0;
-    std::atomic<std::size_t> next_{0};
-    std::atomic<int> active_{0};
+    std::atomic<std::size_t> next_{0};    // the next chunk to take
+    std::atomic<std::size_t> pending_{0}; // chunks of the posted job not finished yet
+    int joined_ = 0;                      // workers inside the posted job (under the mutex)
     std::atomic<std::uint64_t> generation_{0};
     std::atomic<bool> stop_{false};
 };

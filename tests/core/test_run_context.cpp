@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // RunContext::map_chunks / map_fold: chunk c's result lands in slot c, the fold sees the slots in chunk
 // order on the calling thread, the chunks do not depend on the thread count, and errors and cancellation
-// still reach the caller.
+// still reach the caller; loops posted while the pool's workers are still starting run every chunk once.
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
@@ -184,6 +184,26 @@ void test_cancellation_propagates() {
     }
 }
 
+// Fresh contexts run loops at once, while their workers are still starting: a worker that joins a loop late, or
+// wakes after it is over, must neither run a chunk twice nor miss one, and a loop must not end before its chunks
+// have (each loop writes every element once and reads the one before's results).
+void test_loops_right_after_the_pool_starts() {
+    for (int round = 0; round < 300; ++round) {
+        const int threads = 2 + round % 3;
+        RunContext ctx(threads, nullptr, Hooks{});
+        std::vector<int> count;
+        for (const std::size_t n : {std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(64), std::size_t(7)}) {
+            count.assign(n, 0);
+            ctx.parallel_for(n, 1, [&](std::size_t b, std::size_t e) {
+                for (std::size_t i = b; i < e; ++i) ++count[i];
+            });
+            CHECK_MSG(std::all_of(count.begin(), count.end(), [](int c) { return c == 1; }),
+                      "round %d, %zu chunks: a chunk ran %s", round, n,
+                      std::any_of(count.begin(), count.end(), [](int c) { return c == 0; }) ? "never" : "twice");
+        }
+    }
+}
+
 } // namespace
 
 int main() {
@@ -192,5 +212,6 @@ int main() {
     RUN_TEST(test_map_exception_propagates_and_skips_the_fold);
     RUN_TEST(test_fold_exception_propagates_at_its_chunk);
     RUN_TEST(test_cancellation_propagates);
+    RUN_TEST(test_loops_right_after_the_pool_starts);
     return TEST_SUMMARY();
 }
