@@ -173,6 +173,10 @@ KISSM_API const char *kissm_last_error_message(void);
  * of the matches that pruning found mutually consistent (kissm_result.num_rotation_inliers against
  * num_pruned_correspondences). */
 #define KISSM_REASON_TILTED 12
+/** Refinement ran and the aligned clouds stay apart by more than kissm_config.max_refine_rmse_gain voxels
+ * (kissm_result.refine_rmse): a local optimum beside the right pose, as refinements from a prior outside the
+ * convergence basin reach (a road shifted along itself, a scene turned onto its own symmetry). */
+#define KISSM_REASON_LOOSE_ALIGNMENT 13
 
 /**
  * @brief Describes a reason code.
@@ -383,6 +387,10 @@ typedef struct kissm_config {
     /** Height of the sensor (kissm_config.viewpoint) above the ground along up, metres, for suppression; 0 =
      * estimate it from the cloud; in [0, 1000]. Default 0. */
     double sensor_height;
+    /** With refinement, valid needs kissm_result.refine_rmse <= gain * voxel_size: right alignments of
+     * voxelised clouds stay within a fraction of a voxel, wrong local optima do not; in (0, 100].
+     * Default 0.45. */
+    double max_refine_rmse_gain;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -557,7 +565,8 @@ typedef struct kissm_result {
      * of a target voxel, in [0, 1]. NaN when refinement did not run. */
     double overlap;
     /** Weighted (Cauchy) RMS distance of the final correspondences to the target's planes, metres. NaN when
-     * refinement did not run or found no correspondence. */
+     * refinement did not run or found no correspondence. A valid refined pose has it at most
+     * kissm_config.max_refine_rmse_gain * voxel_size. */
     double refine_rmse;
     /** Weakest over strongest direction of the information, with rotations as displacements at the matched
      * points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run. */

@@ -44,7 +44,8 @@ namespace {
   X(min_refine_condition)                                                                                              \
   X(refine_normal_radius_gain)                                                                                         \
   X(rotation_dof)                                                                                                      \
-  X(sensor_height)
+  X(sensor_height)                                                                                                     \
+  X(max_refine_rmse_gain)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -196,6 +197,7 @@ kissm_config validated_config(const kissm_config *given) {
         fail(ErrorKind::InvalidArgument, "config.up is (" + number(c.up[0]) + ", " + number(c.up[1]) + ", " +
                                              number(c.up[2]) + "); it must have a length above 1e-9");
     KISSM_REQUIRE_IN_LIMITS(sensor_height);
+    KISSM_REQUIRE_IN_LIMITS(max_refine_rmse_gain);
     return c;
 }
 

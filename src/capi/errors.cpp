@@ -134,6 +134,7 @@ const char *kissm_reason_string(int32_t reason) {
     case KISSM_REASON_CLUSTERED_INLIERS: return "the inliers cover too little of the overlap";
     case KISSM_REASON_NOT_CONVERGED: return "refinement did not converge";
     case KISSM_REASON_TILTED: return "the clouds' relative roll or pitch is not zero (rotation_dof = 1)";
+    case KISSM_REASON_LOOSE_ALIGNMENT: return "the refined clouds stay apart (a local optimum beside the right pose)";
     default: return "unknown reason";
     }
 }

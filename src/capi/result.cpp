@@ -59,6 +59,7 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::ClusteredInliers: return KISSM_REASON_CLUSTERED_INLIERS;
     case Reason::NotConverged: return KISSM_REASON_NOT_CONVERGED;
     case Reason::Tilted: return KISSM_REASON_TILTED;
+    case Reason::LooseAlignment: return KISSM_REASON_LOOSE_ALIGNMENT;
     }
     return KISSM_REASON_NONE;
 }

@@ -43,6 +43,7 @@ constexpr FieldOption kFieldOptions[] = {
     {"config.min_inlier_coverage ", "--min-inlier-coverage"},
     {"config.refine_min_inliers ", "--refine-min-inliers"},
     {"config.min_refine_condition ", "--min-refine-condition"},
+    {"config.max_refine_rmse_gain ", "--max-refine-rmse"},
     {"config.refine_normal_radius_gain ", "--refine-normal-radius"},
     {"config.suppression ", "--suppression"},
     {"config.rotation_dof ", "--rotation-dof"},
@@ -297,6 +298,9 @@ bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, Pa
     } else if (name == "--min-refine-condition") {
         opt.min_refine_condition = parse_double(name, cur.value());
         opt.have_min_refine_condition = true;
+    } else if (name == "--max-refine-rmse") {
+        opt.max_refine_rmse_gain = parse_double(name, cur.value());
+        opt.have_max_refine_rmse = true;
     } else if (name == "--refine-normal-radius") {
         opt.refine_normal_radius_gain = parse_double(name, cur.value());
         opt.have_refine_normal_radius = true;
@@ -389,6 +393,7 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
     if (opt.have_refine_distance) config.refine_max_distance_gain = opt.refine_distance;
     if (opt.have_min_overlap) config.min_overlap = opt.min_overlap;
     if (opt.have_min_refine_condition) config.min_refine_condition = opt.min_refine_condition;
+    if (opt.have_max_refine_rmse) config.max_refine_rmse_gain = opt.max_refine_rmse_gain;
     if (opt.have_refine_normal_radius) config.refine_normal_radius_gain = opt.refine_normal_radius_gain;
     if (opt.viewpoint_mode >= 0) config.viewpoint_mode = opt.viewpoint_mode;
     if (opt.viewpoint_center) config.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
@@ -478,11 +483,15 @@ void print_refinement_help(std::FILE *out, PairCommand command, const kissm_conf
                  "                          least condition of a valid refined pose, in [0, 1]: the weakest\n"
                  "                          direction's share of the strongest one's information; below it the\n"
                  "                          pose slides (a corridor, a plane)\n"
+                 "  --max-refine-rmse GAIN (default %g)\n"
+                 "                          largest residual of a valid refined pose = GAIN * voxel, in (0, 100]:\n"
+                 "                          right alignments stay within a fraction of a voxel, the wrong optima\n"
+                 "                          a far initial pose leads to do not\n"
                  "  --refine-normal-radius GAIN (default %g)\n"
                  "                          refinement aligns planes fitted to the neighbours within GAIN * voxel\n"
                  "                          (at least 5 of them; at most the normals' radius), in (0, 50]\n",
                  d.refine_max_iterations, d.refine_max_distance_gain, d.min_overlap, d.min_refine_condition,
-                 d.refine_normal_radius_gain);
+                 d.max_refine_rmse_gain, d.refine_normal_radius_gain);
     if (command == PairCommand::Register) {
         std::fprintf(out,
                      "  --refine-min-inliers N  final inliers a valid refined pose needs, 3..100000 (default %d);\n"

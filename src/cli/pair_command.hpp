@@ -83,6 +83,8 @@ struct PairOptions {
     // of the planes refinement aligns.
     bool have_min_refine_condition = false;
     double min_refine_condition = 0.0;
+    bool have_max_refine_rmse = false; // and the refined clouds' largest residual, in voxels
+    double max_refine_rmse_gain = 0.0;
     bool have_refine_normal_radius = false;
     double refine_normal_radius_gain = 0.0;
     std::string initial; // refine only: the initial transform file

@@ -55,12 +55,14 @@ struct Params {
     int rotation_dof = 3;                      // 3, or 1: yaw about `up` only (yaw_solver.hpp)
     std::array<double, 3> up{{0.0, 0.0, 1.0}}; // in each cloud's own frame; normalised at the boundary
     double sensor_height = 0.0;                // metres above the ground; 0 = estimate
+    double max_refine_rmse_gain = 0.45;        // validity with refinement: refine_rmse <= gain * voxel_size
 
     double normal_radius() const { return normal_radius_gain * voxel_size; }
     double fpfh_radius() const { return fpfh_radius_gain * voxel_size; }
     double prune_noise_bound() const { return capped(prune_noise_bound_gain * voxel_size); }
     double solver_noise_bound() const { return capped(solver_noise_bound_gain * voxel_size); }
     double refine_max_distance() const { return refine_max_distance_gain * voxel_size; }
+    double max_refine_rmse() const { return max_refine_rmse_gain * voxel_size; }
     // Within the descriptors' normal radius: the planes are fitted to a subset of the same neighbours.
     double refine_normal_radius() const { return std::min(refine_normal_radius_gain, normal_radius_gain) * voxel_size; }
 

@@ -266,12 +266,13 @@ RefinedEvidence refined_evidence(const Registration &r) {
     e.condition = r.refine_condition;
     e.inlier_coverage = r.inlier_coverage;
     e.converged = r.refine_converged;
+    e.rmse = r.refine_rmse;
     return e;
 }
 
 RefinedRule refined_rule(const Params &params) {
     return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers), params.min_overlap,
-                       params.min_refine_condition, params.min_inlier_coverage};
+                       params.min_refine_condition, params.min_inlier_coverage, params.max_refine_rmse()};
 }
 
 RefineParams refine_params(const Params &params) {

@@ -50,7 +50,8 @@ struct IntLimits {
   INT(refine_min_inliers, 3, 100000)                                                                                   \
   REAL(min_refine_condition, 0.0, 1.0, false)                                                                          \
   REAL(refine_normal_radius_gain, 0.0, 50.0, true)                                                                     \
-  REAL(sensor_height, 0.0, 1000.0, false)
+  REAL(sensor_height, 0.0, 1000.0, false)                                                                              \
+  REAL(max_refine_rmse_gain, 0.0, 100.0, true)
 
 namespace limits {
 

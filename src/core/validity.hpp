@@ -28,6 +28,7 @@ enum class Reason {
     ClusteredInliers,
     NotConverged,
     Tilted,
+    LooseAlignment,
 };
 
 // Before matching: both clouds need more voxels than a normal needs neighbours (min_voxels) and at least three
@@ -78,6 +79,7 @@ struct RefinedEvidence {
     double condition = 0.0;                // see RefineOutput::condition
     double inlier_coverage = 0.0;          // solver inliers' spread over the aligned overlap's (NaN: no solver)
     bool converged = false;                // stopped on its convergence test, not its iteration cap
+    double rmse = 0.0;                     // the aligned clouds' residual (RefineOutput::rmse), metres
 };
 
 struct RefinedRule {
@@ -85,6 +87,7 @@ struct RefinedRule {
     double min_overlap;
     double min_condition;
     double min_inlier_coverage;
+    double max_rmse; // metres: max_refine_rmse_gain * voxel_size
 };
 
 // The rule with refinement, for a registration: the dense alignment decides the accuracy, so the inliers
@@ -92,12 +95,18 @@ struct RefinedRule {
 // degenerate, and spread over at least min_inlier_coverage of the aligned overlap (inliers on one compact
 // object cover a small part of it, whatever the pose). Then the refined pose must overlap (min_overlap), be
 // constrained in every direction (min_condition) and have converged: a refinement still moving at its
-// iteration cap is crossing from one basin to another (most wrong local optima measured did).
+// iteration cap is crossing from one basin to another (most wrong local optima measured did), and leave the
+// clouds within max_rmse of each other (prior_validity).
 Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const RefinedEvidence &refined,
                         const RefinedRule &rule);
 
-// The rule for a refinement from the caller's pose (kissm_refine): overlap, conditioning, convergence. It
-// cannot tell every prior outside the convergence basin that ends in a wrong local optimum (docs/design/accuracy.md).
+// The rule for a refinement from the caller's pose (kissm_refine): overlap, conditioning, convergence, and the
+// aligned clouds within max_rmse of each other. Right alignments of two voxelised clouds leave a residual of a
+// fraction of a voxel (every real pair measured: at most 0.39 voxels); the wrong local optima that refinements
+// from a prior outside the convergence basin reach, and that pass the other tests, leave more (at least 0.48),
+// since a road shifted along itself or a scene turned onto its own symmetry matches only part of its structure
+// (docs/design/accuracy.md, "Refinement from a prior"). The residual test comes last, so a result another test
+// refuses keeps that test's reason.
 Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule);
 
 KISSM_DETAIL_END

@@ -16,7 +16,7 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 280)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 288)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
   X(kissm_result, KISSM_STRUCT_RESULT, 952)
 
@@ -58,7 +58,8 @@
   X(kissm_config, suppression, int32_t, 240, 4)                                                                        \
   X(kissm_config, rotation_dof, int32_t, 244, 4)                                                                       \
   X(kissm_config, up, double[3], 248, 24)                                                                              \
-  X(kissm_config, sensor_height, double, 272, 8)
+  X(kissm_config, sensor_height, double, 272, 8)                                                                       \
+  X(kissm_config, max_refine_rmse_gain, double, 280, 8)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \

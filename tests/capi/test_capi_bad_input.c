@@ -509,7 +509,8 @@ enum {
     F_UP0,
     F_UP2,
     F_UP_ALL, /* all three components */
-    F_SENSOR_HEIGHT
+    F_SENSOR_HEIGHT,
+    F_MAX_REFINE_RMSE_GAIN
 };
 
 typedef struct field_case {
@@ -555,6 +556,7 @@ static void set_field(kissm_config *c, int field, double v) {
     case F_UP2: c->up[2] = v; break;
     case F_UP_ALL: c->up[0] = c->up[1] = c->up[2] = v; break;
     case F_SENSOR_HEIGHT: c->sensor_height = v; break;
+    case F_MAX_REFINE_RMSE_GAIN: c->max_refine_rmse_gain = v; break;
     default: break;
     }
 }
@@ -669,6 +671,10 @@ static const field_case k_bad_fields[] = {
     {F_SENSOR_HEIGHT, -0.1, "config.sensor_height"},
     {F_SENSOR_HEIGHT, 1000.5, "config.sensor_height"},
     {F_SENSOR_HEIGHT, NAN, "config.sensor_height"},
+    {F_MAX_REFINE_RMSE_GAIN, 0.0, "config.max_refine_rmse_gain"},
+    {F_MAX_REFINE_RMSE_GAIN, -1.0, "config.max_refine_rmse_gain"},
+    {F_MAX_REFINE_RMSE_GAIN, 100.5, "config.max_refine_rmse_gain"},
+    {F_MAX_REFINE_RMSE_GAIN, NAN, "config.max_refine_rmse_gain"},
 };
 
 /* Documented boundary values that must be accepted. */
@@ -737,6 +743,8 @@ static const field_case k_good_fields[] = {
     {F_UP_ALL, 1e-9 / 1.5, ""},
     {F_SENSOR_HEIGHT, 0.0, ""},
     {F_SENSOR_HEIGHT, 1000.0, ""},
+    {F_MAX_REFINE_RMSE_GAIN, 1e-300, ""},
+    {F_MAX_REFINE_RMSE_GAIN, 100.0, ""},
 };
 
 static void test_config_fields(void) {

@@ -312,15 +312,17 @@ static void test_reason_strings(void) {
                                KISSM_REASON_UNCERTAIN_ROTATION,
                                KISSM_REASON_CLUSTERED_INLIERS,
                                KISSM_REASON_NOT_CONVERGED,
-                               KISSM_REASON_TILTED};
+                               KISSM_REASON_TILTED,
+                               KISSM_REASON_LOOSE_ALIGNMENT};
+    const int count = (int)(sizeof reasons / sizeof reasons[0]);
     const char *unknown = kissm_reason_string(12345);
     int i, j;
     REQUIRE(unknown != NULL && unknown[0] != '\0');
     CHECK(strstr(unknown, "unknown") != NULL);
     CHECK(kissm_reason_string(-1) != NULL && strcmp(kissm_reason_string(-1), unknown) == 0);
-    CHECK(kissm_reason_string(13) != NULL && strcmp(kissm_reason_string(13), unknown) == 0);
+    CHECK(kissm_reason_string(count) != NULL && strcmp(kissm_reason_string(count), unknown) == 0);
     CHECK(kissm_reason_string(INT32_MIN) != NULL && strcmp(kissm_reason_string(INT32_MIN), unknown) == 0);
-    for (i = 0; i < 13; ++i) {
+    for (i = 0; i < count; ++i) {
         const char *s = kissm_reason_string(reasons[i]);
         CHECK_EQ_INT(reasons[i], i);
         CHECK_MSG(s != NULL && s[0] != '\0', "reason %d", i);

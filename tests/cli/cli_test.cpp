@@ -235,20 +235,21 @@ void test_usage() {
     // The refinement options, with the defaults kissm_config_init gives.
     kissm_config defaults{};
     REQUIRE(kissm_config_init(&defaults, sizeof defaults) == KISSM_OK);
-    char expected[5][64];
+    char expected[6][64];
     std::snprintf(expected[0], sizeof expected[0], "(default %d)", defaults.refine_max_iterations);
     std::snprintf(expected[1], sizeof expected[1], "(default %g)", defaults.refine_max_distance_gain);
     std::snprintf(expected[2], sizeof expected[2], "(default %g)", defaults.min_overlap);
     std::snprintf(expected[3], sizeof expected[3], "(default %g)", defaults.min_refine_condition);
     std::snprintf(expected[4], sizeof expected[4], "(default %g)", defaults.refine_normal_radius_gain);
-    const char *options[5] = {"--refine-iterations", "--refine-distance", "--min-overlap", "--min-refine-condition",
-                              "--refine-normal-radius"};
+    std::snprintf(expected[5], sizeof expected[5], "(default %g)", defaults.max_refine_rmse_gain);
+    const char *options[6] = {"--refine-iterations",    "--refine-distance",      "--min-overlap",
+                              "--min-refine-condition", "--refine-normal-radius", "--max-refine-rmse"};
     for (const char *command : {"register --help", "refine --help", "help refine"}) {
         r = run(command);
         CHECK_EQ_INT(r.code, 0);
         CHECK(r.err.empty());
         CHECK(contains(r.out, "--refine MODE"));
-        for (int i = 0; i < 5; ++i) {
+        for (int i = 0; i < 6; ++i) {
             const std::string line = help_line(r.out, options[i]);
             CHECK_MSG(contains(line, expected[i]), "'kissm %s': [%s] lacks %s", command, line.c_str(), expected[i]);
         }
@@ -1115,6 +1116,11 @@ void test_refine_rule_options() {
             expect_usage_error(command + "--refine-normal-radius " + bad,
                                "--refine-normal-radius: config.refine_normal_radius_gain");
         }
+        for (const char *bad : {"abc", "nan", "inf", "''"})
+            expect_usage_error(command + "--max-refine-rmse " + bad, "--max-refine-rmse");
+        for (const char *bad : {"0", "-1", "100.5"}) {
+            expect_usage_error(command + "--max-refine-rmse " + bad, "--max-refine-rmse: config.max_refine_rmse_gain");
+        }
     }
 
     // The refined rule's condition: exactly the measured one is enough, one ulp more is not.
@@ -1135,6 +1141,14 @@ void test_refine_rule_options() {
     const double prior_condition = contract_json(prior, true, "refine").at("refine_condition").as_double();
     check_decision_flips(ref, "--min-refine-condition", "refine_condition", prior_condition, 2.0,
                          KISSM_REASON_UNCONSTRAINED, prior, true);
+    // The residual, for both: a gain of exactly the measured refine_rmse in voxels is enough (the voxel, 0.25, is a
+    // power of two, so the gain times it is the residual to the bit), one ulp less is not.
+    const double rmse = f.at("refine_rmse").as_double(),
+                 prior_rmse = contract_json(prior, true, "refine").at("refine_rmse").as_double();
+    CHECK_MSG(rmse > 0.0 && rmse <= defaults.max_refine_rmse_gain * 0.25, "refine_rmse %g", rmse);
+    check_decision_flips(reg, "--max-refine-rmse", "refine_rmse", rmse / 0.25, 0.0, KISSM_REASON_LOOSE_ALIGNMENT, fine);
+    check_decision_flips(ref, "--max-refine-rmse", "refine_rmse", prior_rmse / 0.25, 0.0, KISSM_REASON_LOOSE_ALIGNMENT,
+                         prior, true);
 
     // The refinement's planes: another radius, another refined pose from the same coarse one, as accurate.
     const double gain = 0.75 * defaults.refine_normal_radius_gain;

@@ -502,8 +502,9 @@ static void test_iteration_cap() {
 
 // The validity rules (validity.cpp) on evidence built by hand, each bound passing and the value next to it
 // failing. Without refinement: min_inliers, then the inliers' shape, then the rotation uncertainty. From a
-// prior: 6 correspondences and the overlap, the condition, convergence. With refinement: refine_min_inliers,
-// the shape, the overlap, then the inliers' coverage of it, then condition and convergence.
+// prior: 6 correspondences and the overlap, the condition, convergence, the residual. With refinement:
+// refine_min_inliers, the shape, the overlap, then the inliers' coverage of it, then condition, convergence and
+// the residual.
 static void test_validity_rules() {
     InlierEvidence spread;
     spread.rotation_uncertainty = 0.01;
@@ -520,13 +521,14 @@ static void test_validity_rules() {
     loose.rotation_uncertainty = std::numeric_limits<double>::infinity(); // all inliers on one point
     CHECK(coarse_validity(100, loose, coarse) == Reason::UncertainRotation);
 
-    const RefinedRule rule{10, 0.4, 1e-2, 0.25};
+    const RefinedRule rule{10, 0.4, 1e-2, 0.25, 0.1};
     RefinedEvidence good;
     good.num_correspondences = 6;
     good.overlap = 0.4;
     good.condition = 1e-2;
     good.inlier_coverage = 0.25;
     good.converged = true;
+    good.rmse = 0.1;
     CHECK(prior_validity(good, rule) == Reason::None);
     CHECK(refined_validity(10, spread, good, rule) == Reason::None);
     RefinedEvidence e = good;
@@ -562,6 +564,18 @@ static void test_validity_rules() {
     CHECK(refined_validity(100, spread, e, rule) == Reason::ClusteredInliers);
     e.inlier_coverage = 3.0; // inliers reaching beyond the overlap
     CHECK(refined_validity(100, spread, e, rule) == Reason::Unconstrained);
+    // The residual, last: a loose alignment that passes every other test, with or without the solver's inliers.
+    e = good;
+    e.rmse = std::nextafter(0.1, 1.0);
+    CHECK(prior_validity(e, rule) == Reason::LooseAlignment);
+    CHECK(refined_validity(10, spread, e, rule) == Reason::LooseAlignment);
+    e.rmse = std::numeric_limits<double>::quiet_NaN();
+    CHECK(prior_validity(e, rule) == Reason::LooseAlignment);
+    e.converged = false; // several fail: the others' reasons first
+    CHECK(prior_validity(e, rule) == Reason::NotConverged);
+    e = good;
+    e.rmse = 1.0, e.inlier_coverage = 0.0;
+    CHECK(refined_validity(10, spread, e, rule) == Reason::ClusteredInliers);
 }
 
 int main() {

@@ -41,9 +41,9 @@ inline void set_refinement(kissm_config &c, unsigned tens) {
     c.refine_mode = static_cast<int32_t>(tens % 3);
     switch ((tens / 3) % 9) {
     case 1: c.refine_max_iterations = 1; break;
-    case 2: c.refine_max_distance_gain = 100.0; break; // every voxel within reach
-    case 3: c.refine_kernel_gain = 1e-3; break;        // every residual an outlier
-    case 4:                                            // never converged by the test, only by the cap
+    case 2: c.refine_max_distance_gain = 100.0, c.max_refine_rmse_gain = 1e-3; break; // all in reach, none close
+    case 3: c.refine_kernel_gain = 1e-3; break;                                       // every residual an outlier
+    case 4: // never converged by the test, only by the cap
         c.refine_rotation_epsilon = 0.0, c.refine_translation_epsilon_gain = 0.0, c.refine_max_iterations = 50;
         break;
     case 5: c.min_overlap = 1.0; break;
@@ -51,7 +51,7 @@ inline void set_refinement(kissm_config &c, unsigned tens) {
     case 7: c.refine_max_iterations = 0; break;       // out of range: kissm_create refuses it
     case 8:                                           // the validity rules at their loosest
         c.max_rotation_uncertainty = 3.15, c.min_inlier_coverage = 0.0, c.refine_min_inliers = 3;
-        c.min_overlap = 0.0, c.min_refine_condition = 0.0;
+        c.min_overlap = 0.0, c.min_refine_condition = 0.0, c.max_refine_rmse_gain = 100.0;
         break;
     default: break;
     }
@@ -226,7 +226,8 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
     if (r.num_refine_correspondences > r.num_source_voxels) return false;
     // A valid refined pose passed the refined rule's dense part (docs/refinement.md).
     if (r.valid && (r.num_refine_correspondences < 6 || !(r.overlap >= c.min_overlap) ||
-                    !(r.refine_condition >= c.min_refine_condition) || r.refine_converged != 1))
+                    !(r.refine_condition >= c.min_refine_condition) || r.refine_converged != 1 ||
+                    !(r.refine_rmse <= c.max_refine_rmse_gain * c.voxel_size)))
         return false;
     return r.time_refine_ms >= 0.0 && r.time_total_ms >= r.time_refine_ms;
 }
@@ -235,7 +236,7 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
 // final inliers; an invalid one reports why; either way the refinement's fields are sane.
 inline bool result_sane(const kissm_result &r, const kissm_config &c) {
     if (!refine_fields_sane(r, c)) return false;
-    if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_NOT_CONVERGED;
+    if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_LOOSE_ALIGNMENT;
     if (!rigid_pose(r) || r.num_final_inliers < 3) return false;
     // Valid with refinement: its inliers' part of the rule too; without: the rotation pinned down.
     if (!std::isnan(r.overlap))
@@ -246,12 +247,12 @@ inline bool result_sane(const kissm_result &r, const kissm_config &c) {
 }
 
 // A refinement from the caller's pose (kissm_refine, kissm_refine_features) always ran: valid, or
-// LOW_OVERLAP / UNCONSTRAINED / NOT_CONVERGED, with a rigid pose either way and no solver numbers;
+// LOW_OVERLAP / UNCONSTRAINED / NOT_CONVERGED / LOOSE_ALIGNMENT, with a rigid pose either way and no solver numbers;
 // coarse_transform is the initial transform made rigid, so within 1e-3 of it.
 inline bool refine_result_sane(const kissm_result &r, const kissm_config &c, const double initial[16]) {
     if (!refine_fields_sane(r, c) || std::isnan(r.overlap) || !rigid_pose(r)) return false;
     if (!r.valid && r.reason != KISSM_REASON_LOW_OVERLAP && r.reason != KISSM_REASON_UNCONSTRAINED &&
-        r.reason != KISSM_REASON_NOT_CONVERGED)
+        r.reason != KISSM_REASON_NOT_CONVERGED && r.reason != KISSM_REASON_LOOSE_ALIGNMENT)
         return false;
     if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage)) return false;
     if (r.valid && r.reason != KISSM_REASON_NONE) return false;

@@ -76,6 +76,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         refine_min_inliers=25,
         min_refine_condition=0.05,
         refine_normal_radius_gain=1.5,
+        max_refine_rmse_gain=0.6,
     )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
@@ -88,7 +89,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
     assert (c.refine_max_distance_gain, c.refine_kernel_gain, c.refine_rotation_epsilon) == (2.5, 0.75, 2e-4)
     assert (c.refine_translation_epsilon_gain, c.min_overlap) == (5e-3, 0.4)
     assert (c.max_rotation_uncertainty, c.min_inlier_coverage, c.refine_min_inliers) == (0.05, 0.3, 25)
-    assert (c.min_refine_condition, c.refine_normal_radius_gain) == (0.05, 1.5)
+    assert (c.min_refine_condition, c.refine_normal_radius_gain, c.max_refine_rmse_gain) == (0.05, 1.5, 0.6)
     assert c.reserved1 == 0
     assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
     # what the matcher got is what was asked for
@@ -147,6 +148,9 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         ("refine_normal_radius_gain", 0.0, "config.refine_normal_radius_gain is 0; it must be in (0, 50]"),
         ("refine_normal_radius_gain", 50.5, "config.refine_normal_radius_gain is 50.5"),
         ("refine_normal_radius_gain", float("inf"), "config.refine_normal_radius_gain is inf"),
+        ("max_refine_rmse_gain", 0.0, "config.max_refine_rmse_gain is 0; it must be in (0, 100]"),
+        ("max_refine_rmse_gain", 100.5, "config.max_refine_rmse_gain is 100.5"),
+        ("max_refine_rmse_gain", float("nan"), "config.max_refine_rmse_gain is nan"),
     ],
 )
 def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:
@@ -185,6 +189,7 @@ def test_out_of_int32_range_is_a_valueerror() -> None:
         ("refine_min_inliers", 10.0),
         ("min_refine_condition", None),
         ("refine_normal_radius_gain", "2"),
+        ("max_refine_rmse_gain", "0.5"),
     ],
 )
 def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
@@ -282,6 +287,7 @@ def test_pickle_and_copy() -> None:
         refine_min_inliers=12,
         min_refine_condition=0.02,
         refine_normal_radius_gain=2.5,
+        max_refine_rmse_gain=0.5,
     )
     for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
         assert pickle.loads(pickle.dumps(config, protocol)) == config

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import kissm
+from kissm import _ffi
 
 import testdata
 
@@ -73,6 +74,7 @@ def run_case(case: dict[str, Any], threads: int) -> kissm.Result:
         viewpoint_mode=case["viewpoint"],
         suppression=case["suppression"],
         rotation_dof=case["rotation_dof"],
+        max_refine_rmse_gain=case["max_refine_rmse_gain"],
     )
     with kissm.Matcher(config) as matcher:
         if case["call"] == "refine":
@@ -89,6 +91,8 @@ def test_golden_file_lists_every_kind_of_case() -> None:
     assert {"fixed", "sign_free", "local"} <= {case["viewpoint"] for case in GOLDEN["cases"]}
     assert {"none", "ground"} <= {case["suppression"] for case in GOLDEN["cases"]}
     assert {3, 1} <= {case["rotation_dof"] for case in GOLDEN["cases"]}
+    # A refinement held to a tighter residual than its alignment leaves: KISSM_REASON_LOOSE_ALIGNMENT.
+    assert _ffi.lib.KISSM_REASON_LOOSE_ALIGNMENT in {case["reason"] for case in GOLDEN["cases"]}
     for case in GOLDEN["cases"]:
         assert case["call"] in ("register", "refine") and case["refine"] in kissm._config.REFINE_MODES
         assert case["viewpoint"] in kissm._config.VIEWPOINT_MODES

@@ -63,6 +63,8 @@ const char *kissm_last_error_message(void);
 
 #define KISSM_REASON_TILTED 12
 
+#define KISSM_REASON_LOOSE_ALIGNMENT 13
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0
@@ -184,6 +186,8 @@ typedef struct kissm_config {
     double up[3];
 
     double sensor_height;
+
+    double max_refine_rmse_gain;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);

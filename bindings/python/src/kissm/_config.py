@@ -64,6 +64,7 @@ _FLOAT_FIELDS = (
     "min_refine_condition",
     "refine_normal_radius_gain",
     "sensor_height",
+    "max_refine_rmse_gain",
 )
 _INT_FIELDS = (
     "num_threads",
@@ -223,6 +224,10 @@ class Config:
     sensor_height: float = _DEFAULTS["sensor_height"]
     """Height of the sensor (``viewpoint``) above the ground along ``up``, metres, for suppression; 0 = estimate;
     in [0, 1000]."""
+    max_refine_rmse_gain: float = _DEFAULTS["max_refine_rmse_gain"]
+    """With refinement (and :meth:`Matcher.refine`), ``Result.valid`` needs ``Result.refine_rmse`` <= gain *
+    ``voxel_size`` (else reason "the refined clouds stay apart": a local optimum beside the right pose, as a
+    refinement from a prior outside its convergence basin reaches); in (0, 100]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object

@@ -90,8 +90,9 @@ class Result:
     collinear or planar, and ``rotation_uncertainty`` <= ``Config.max_rotation_uncertainty``. With it: at least
     ``Config.refine_min_inliers``, not collinear or planar, ``overlap`` >= ``Config.min_overlap``,
     ``inlier_coverage`` >= ``Config.min_inlier_coverage``, ``refine_condition`` >= ``Config.min_refine_condition``
-    (a pose constrained in every direction) and a refinement that converged (``refine_converged``).
-    :meth:`Matcher.refine` checks only the overlap, the condition and the convergence.
+    (a pose constrained in every direction), a refinement that converged (``refine_converged``) and clouds it
+    left within ``Config.max_refine_rmse_gain`` voxels of each other (``refine_rmse``). :meth:`Matcher.refine`
+    checks only the overlap, the condition, the convergence and the residual.
     """
 
     valid: bool
@@ -175,7 +176,8 @@ class Result:
     target voxel, in [0, 1]; NaN when refinement did not run. ``Config.min_overlap`` is checked against it."""
     refine_rmse: float
     """Weighted RMS of refinement's residuals at its final pose (point-to-plane distance, the clouds' unit); NaN
-    when refinement did not run or found no correspondence."""
+    when refinement did not run or found no correspondence. ``Config.max_refine_rmse_gain`` is checked against
+    it."""
     refine_condition: float
     """Weakest over strongest direction of ``information`` (rotations as displacements at the matched points'
     radius), in [0, 1]: near 0 the pose slides along some direction (``Config.min_refine_condition`` is checked

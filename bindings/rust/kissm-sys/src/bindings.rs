@@ -36,6 +36,7 @@ pub const KISSM_REASON_UNCERTAIN_ROTATION: i32 = 9;
 pub const KISSM_REASON_CLUSTERED_INLIERS: i32 = 10;
 pub const KISSM_REASON_NOT_CONVERGED: i32 = 11;
 pub const KISSM_REASON_TILTED: i32 = 12;
+pub const KISSM_REASON_LOOSE_ALIGNMENT: i32 = 13;
 pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
@@ -235,10 +236,14 @@ pub struct kissm_config {
     /** Height of the sensor (kissm_config.viewpoint) above the ground along up, metres, for suppression; 0 =
  estimate it from the cloud; in [0, 1000]. Default 0.*/
     pub sensor_height: f64,
+    /** With refinement, valid needs kissm_result.refine_rmse <= gain * voxel_size: right alignments of
+ voxelised clouds stay within a fraction of a voxel, wrong local optima do not; in (0, 100].
+ Default 0.45.*/
+    pub max_refine_rmse_gain: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 280usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 288usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -354,6 +359,9 @@ const _: () = {
     [
         "Offset of field: kissm_config::sensor_height",
     ][::core::mem::offset_of!(kissm_config, sensor_height) - 272usize];
+    [
+        "Offset of field: kissm_config::max_refine_rmse_gain",
+    ][::core::mem::offset_of!(kissm_config, max_refine_rmse_gain) - 280usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
@@ -532,7 +540,8 @@ pub struct kissm_result {
  of a target voxel, in [0, 1]. NaN when refinement did not run.*/
     pub overlap: f64,
     /** Weighted (Cauchy) RMS distance of the final correspondences to the target's planes, metres. NaN when
- refinement did not run or found no correspondence.*/
+ refinement did not run or found no correspondence. A valid refined pose has it at most
+ kissm_config.max_refine_rmse_gain * voxel_size.*/
     pub refine_rmse: f64,
     /** Weakest over strongest direction of the information, with rotations as displacements at the matched
  points' radius, in [0, 1]: near 0 the pose slides. NaN when refinement did not run.*/

@@ -396,6 +396,9 @@ impl Config {
         /// Height of the sensor above the ground along [`up`](Config::up), metres, for
         /// [`Suppression::Ground`]; 0 = estimate it from the cloud.
         sensor_height: f64,
+        /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
+        /// [`Refinement::rmse`](crate::Refinement::rmse) at most this many voxel sizes.
+        max_refine_rmse_gain: f64,
     }
 }
 
@@ -439,6 +442,7 @@ impl fmt::Debug for Config {
             .field("rotation_dof", &self.raw.rotation_dof)
             .field("up", &self.raw.up)
             .field("sensor_height", &self.raw.sensor_height)
+            .field("max_refine_rmse_gain", &self.raw.max_refine_rmse_gain)
             .finish()
     }
 }
@@ -625,6 +629,12 @@ impl ConfigBuilder {
         /// [`up`](ConfigBuilder::up), metres, for [`Suppression::Ground`]; 0 (the default) = estimate it from the
         /// cloud; in [0, 1000]. Helps on clouds whose nearby ground is hidden.
         sensor_height: f64,
+        /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
+        /// [`Refinement::rmse`](crate::Refinement::rmse) at most this many voxel sizes (above it:
+        /// [`Reason::LooseAlignment`](crate::Reason::LooseAlignment)): right alignments of voxelised clouds stay
+        /// within a fraction of a voxel, the wrong local optima a refinement from a far prior reaches do not;
+        /// in (0, 100] (default 0.45).
+        max_refine_rmse_gain: f64,
     }
 
     /// Validates every field (`kissm_config_validate`) and returns the configuration, or an

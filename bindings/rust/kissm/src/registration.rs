@@ -53,6 +53,11 @@ pub enum Reason {
     /// ([`Registration::tilt`] above it): the clouds' relative roll or pitch is not zero, so the yaw-only
     /// pose would be off by at least that much.
     Tilted,
+    /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)): the refined clouds stay farther
+    /// apart than [`Config::max_refine_rmse_gain`](crate::Config::max_refine_rmse_gain) voxel sizes
+    /// ([`Refinement::rmse`] above it): a local optimum beside the right pose, as a refinement from a prior
+    /// outside its convergence basin reaches (a road shifted along itself, a scene turned onto its symmetry).
+    LooseAlignment,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -71,6 +76,7 @@ c_codes!(Reason, "KISSM_REASON_", "reason", Other {
     ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
     NotConverged => sys::KISSM_REASON_NOT_CONVERGED,
     Tilted => sys::KISSM_REASON_TILTED,
+    LooseAlignment => sys::KISSM_REASON_LOOSE_ALIGNMENT,
 });
 
 impl Reason {
@@ -170,7 +176,8 @@ pub struct Refinement {
     /// distance of a target voxel, in [0, 1].
     pub overlap: f64,
     /// Weighted RMS of the refinement's residuals at its final pose (point-to-plane distance, in the
-    /// clouds' unit); NaN when it found no correspondence.
+    /// clouds' unit); NaN when it found no correspondence. A valid refined pose has it at most
+    /// [`Config::max_refine_rmse_gain`](crate::Config::max_refine_rmse_gain) voxel sizes.
     pub rmse: f64,
     /// Weakest over strongest direction of the information, with rotations taken as displacements at the
     /// matched points' radius, in [0, 1]: near 0 the pose slides along some direction. A valid refined pose

@@ -110,10 +110,12 @@ fn validity_settings_are_the_library_ones() {
         assert_eq!(c.refine_min_inliers(), lib.refine_min_inliers as usize);
         assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
         assert_eq!(c.min_refine_condition().to_bits(), lib.min_refine_condition.to_bits());
+        assert_eq!(c.max_refine_rmse_gain().to_bits(), lib.max_refine_rmse_gain.to_bits());
         // Inside the documented ranges.
         assert!(c.max_rotation_uncertainty() > 0.0 && c.max_rotation_uncertainty() <= 3.15);
         assert!((0.0..=1.0).contains(&c.min_inlier_coverage()));
         assert!((0.0..=1.0).contains(&c.min_refine_condition()));
+        assert!(c.max_refine_rmse_gain() > 0.0 && c.max_refine_rmse_gain() <= 100.0);
         assert!((3..=100_000).contains(&c.refine_min_inliers()));
         // The reserved field is zero and not a setting.
         assert_eq!(c.as_raw().reserved1, 0);
@@ -129,8 +131,11 @@ fn builder_sets_every_validity_field() {
         .min_inlier_coverage(0.6)
         .refine_min_inliers(25)
         .min_refine_condition(0.05)
+        .max_refine_rmse_gain(0.7)
         .build();
     let c = c.unwrap();
+    assert_eq!(c.max_refine_rmse_gain(), 0.7);
+    assert_eq!(c.as_raw().max_refine_rmse_gain, 0.7);
     assert_eq!(c.max_rotation_uncertainty(), 0.01);
     assert_eq!(c.min_inlier_coverage(), 0.6);
     assert_eq!(c.refine_min_inliers(), 25);
@@ -145,6 +150,7 @@ fn builder_sets_every_validity_field() {
         "min_inlier_coverage: 0.6",
         "refine_min_inliers: 25",
         "min_refine_condition: 0.05",
+        "max_refine_rmse_gain: 0.7",
     ] {
         assert!(debug.contains(field), "{debug}");
     }
@@ -155,6 +161,7 @@ fn builder_sets_every_validity_field() {
         .min_inlier_coverage(Config::default().min_inlier_coverage())
         .refine_min_inliers(Config::default().refine_min_inliers())
         .min_refine_condition(Config::default().min_refine_condition())
+        .max_refine_rmse_gain(Config::default().max_refine_rmse_gain())
         .build()
         .unwrap();
     assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
@@ -167,6 +174,14 @@ fn builder_sets_every_validity_field() {
     let ends = ends.to_builder().max_rotation_uncertainty(1e-300).min_inlier_coverage(1.0).refine_min_inliers(100_000);
     let ends = ends.min_refine_condition(1.0).build().unwrap();
     assert_eq!((ends.refine_min_inliers(), ends.min_refine_condition()), (100_000, 1.0));
+    for gain in [1e-300, 100.0] {
+        assert_eq!(Config::builder().max_refine_rmse_gain(gain).build().unwrap().max_refine_rmse_gain(), gain);
+    }
+    for gain in [0.0, -1.0, 100.5, f64::NAN] {
+        let err = Config::builder().max_refine_rmse_gain(gain).build().unwrap_err();
+        assert_eq!(err.kind(), kissm::ErrorKind::InvalidArgument);
+        assert!(err.message().contains("config.max_refine_rmse_gain"), "{err}");
+    }
 }
 
 #[test]
@@ -401,7 +416,7 @@ fn error_kinds_map_every_code() {
 #[test]
 fn reasons_round_trip() {
     let mut descriptions = std::collections::HashSet::new();
-    for code in 0..=12 {
+    for code in 0..=13 {
         let reason = Reason::from_code(code);
         assert_eq!(reason.code(), code);
         assert!(!matches!(reason, Reason::Other(_)));
@@ -423,7 +438,13 @@ fn reasons_round_trip() {
     assert_eq!(Reason::from_code(sys::KISSM_REASON_TILTED), Reason::Tilted);
     assert_eq!(Reason::Tilted.code(), 12);
     assert_eq!(Reason::Tilted.to_string(), "the clouds' relative roll or pitch is not zero (rotation_dof = 1)");
-    assert_eq!(Reason::from_code(13), Reason::Other(13));
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_LOOSE_ALIGNMENT), Reason::LooseAlignment);
+    assert_eq!(Reason::LooseAlignment.code(), 13);
+    assert_eq!(
+        Reason::LooseAlignment.to_string(),
+        "the refined clouds stay apart (a local optimum beside the right pose)"
+    );
+    assert_eq!(Reason::from_code(14), Reason::Other(14));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);

@@ -9,7 +9,7 @@
 mod common;
 
 use common::Json;
-use kissm::{Config, Matcher, RefineMode, Registration, Suppression, Viewpoint};
+use kissm::{Config, Matcher, Reason, RefineMode, Registration, Suppression, Viewpoint};
 
 fn viewpoint(name: &str) -> Viewpoint {
     match name {
@@ -134,6 +134,7 @@ fn golden_file_matches_bit_for_bit() {
     let mut views = std::collections::BTreeSet::new();
     let mut suppressions = std::collections::BTreeSet::new();
     let mut dofs = std::collections::BTreeSet::new();
+    let mut reasons = std::collections::BTreeSet::new();
     for case in cases {
         let name = case.get("name").str();
         let mode = refine_mode(case.get("refine").str());
@@ -144,6 +145,8 @@ fn golden_file_matches_bit_for_bit() {
         suppressions.insert(format!("{suppress:?}"));
         let dof = case.get("rotation_dof").u64() as usize;
         dofs.insert(dof);
+        let rmse_gain = case.get("max_refine_rmse_gain").num();
+        reasons.insert(case.get("reason").u64());
         calls.insert(call.to_string());
         modes.insert(format!("{mode:?}"));
         let float32 = match case.get("scalar").str() {
@@ -159,6 +162,7 @@ fn golden_file_matches_bit_for_bit() {
                 .viewpoint(view)
                 .suppression(suppress)
                 .rotation_dof(dof)
+                .max_refine_rmse_gain(rmse_gain)
                 .build()
                 .unwrap();
             let mut matcher = Matcher::new(&config).unwrap();
@@ -191,4 +195,6 @@ fn golden_file_matches_bit_for_bit() {
     assert!(views.len() >= 3, "viewpoint modes {views:?}");
     assert_eq!(suppressions.len(), 2, "suppressions {suppressions:?}");
     assert!(dofs.contains(&1) && dofs.contains(&3), "rotation_dof {dofs:?}");
+    let loose = Reason::LooseAlignment.code() as u64;
+    assert!(reasons.contains(&loose), "no case ends LooseAlignment: reasons {reasons:?}");
 }
