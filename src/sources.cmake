@@ -2,6 +2,7 @@
 # The registration core: one pipeline stage per file (see docs/design/architecture.md).
 set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/run_context.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/simd_level.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/radix_sort.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/voxelize.cpp

@@ -3,11 +3,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include "simd_level.hpp"
 
 // SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_FPFH_SSE2 1
 #  include <emmintrin.h>
+#  include <immintrin.h>
 #else
 #  define KISSM_FPFH_SSE2 0
 #endif
@@ -16,19 +20,18 @@ KISSM_DETAIL_BEGIN
 
 namespace {
 
-// acc[c] += w * h[c] for the 33 bins of one neighbour per call, each bin its own running sum in neighbour order,
-// so the bits are those of the plain loop. The sums stay in registers across a keypoint's neighbours (the plain
-// loop over a 33-float array loads and stores them for every neighbour).
+// acc[c] += w * h[c] for the 33 bins of one neighbour per call, each bin its own running sum from 0 in neighbour
+// order, so the bits are those of the plain loop. The sums stay in registers across a keypoint's neighbours (the
+// plain loop over a 33-float array loads and stores them for every neighbour).
+static_assert(kDescriptorDim == 33, "32 bins in vectors, the last one alone");
 class WeightedSum {
 public:
-    WeightedSum() { clear(); }
-    void clear() {
+    WeightedSum() {
 #if KISSM_FPFH_SSE2
         for (__m128 &a : acc_) a = _mm_setzero_ps();
 #else
         std::fill(acc_, acc_ + 32, 0.0f);
 #endif
-        last_ = 0.0f;
     }
     void add(float w, const float *h) {
 #if KISSM_FPFH_SSE2
@@ -49,14 +52,32 @@ public:
     }
 
 private:
-    static_assert(kDescriptorDim == 33, "32 bins in vectors, the last one alone");
 #if KISSM_FPFH_SSE2
     __m128 acc_[8];
 #else
     float acc_[32];
 #endif
-    float last_;
+    float last_ = 0.0f;
 };
+
+// WeightedSum's sums over a keypoint's neighbours at eight lanes (simd_level.hpp), from the neighbours' rows in
+// spfh and their weights, gathered first (a helper of a target function cannot carry the target's width).
+#if KISSM_FPFH_SSE2 && KISSM_HAVE_AVX2_KERNELS
+KISSM_TARGET_AVX2 void weighted_sum_avx2(const float *spfh, const std::uint32_t *rows, const float *w,
+                                         std::size_t count, float *acc) {
+    __m256 sum[4];
+    for (__m256 &a : sum) a = _mm256_setzero_ps();
+    float last = 0.0f;
+    for (std::size_t k = 0; k < count; ++k) {
+        const float *h = spfh + static_cast<std::size_t>(rows[k]) * kDescriptorDim;
+        const __m256 vw = _mm256_set1_ps(w[k]);
+        for (int b = 0; b < 4; ++b) sum[b] = _mm256_add_ps(sum[b], _mm256_mul_ps(vw, _mm256_loadu_ps(h + 8 * b)));
+        last += w[k] * h[32];
+    }
+    for (int b = 0; b < 4; ++b) _mm256_storeu_ps(acc + 8 * b, sum[b]);
+    acc[32] = last;
+}
+#endif
 
 inline void add_code(float *h, std::uint16_t code) {
     h[code & 0xF] += 1.0f;
@@ -191,21 +212,40 @@ Descriptors compute_fpfh(const std::vector<Vec3f> &points, const Neighborhoods &
         // Single precision: at most a few hundred terms of size <= 100 with weights <= 1, summed in a fixed
         // order; the loop over the 33 bins vectorises.
         float acc[D];
-        WeightedSum sum_of;
+        std::vector<std::uint32_t> rows; // the wide path's gathered neighbours and weights
+        std::vector<float> weights;
+#if KISSM_FPFH_SSE2 && KISSM_HAVE_AVX2_KERNELS
+        const bool wide = use_avx2();
+#endif
         for (std::size_t q = b; q < e; ++q) {
             const std::uint32_t i = out.keypoint[q];
-            sum_of.clear();
-            int count = 0;
             const std::uint32_t *row = nb.row(i);
-            for (std::size_t t = 0, size = nb.count(i); t < size; ++t) {
-                const std::uint32_t j = row[t];
-                if (j == i || !normals.valid[j]) continue;
-                const float w2 = v2 / (points[j] - points[i]).squaredNorm();
-                const float w = weight_power == 2 ? w2 : std::sqrt(w2);
-                sum_of.add(w, &spfh[static_cast<std::size_t>(j) * D]);
-                ++count;
+            const std::size_t size = nb.count(i);
+            // Each neighbour with a normal, and its weight, in row order.
+            const auto for_each_neighbour = [&](auto &&visit) {
+                for (std::size_t t = 0; t < size; ++t) {
+                    const std::uint32_t j = row[t];
+                    if (j == i || !normals.valid[j]) continue;
+                    const float w2 = v2 / (points[j] - points[i]).squaredNorm();
+                    visit(j, weight_power == 2 ? w2 : std::sqrt(w2));
+                }
+            };
+            std::size_t count = 0;
+#if KISSM_FPFH_SSE2 && KISSM_HAVE_AVX2_KERNELS
+            if (wide) {
+                if (rows.size() < size) rows.resize(size), weights.resize(size);
+                for_each_neighbour([&](std::uint32_t j, float w) { rows[count] = j, weights[count++] = w; });
+                weighted_sum_avx2(spfh.data(), rows.data(), weights.data(), count, acc);
+            } else
+#endif
+            {
+                WeightedSum sum;
+                for_each_neighbour([&](std::uint32_t j, float w) {
+                    sum.add(w, &spfh[static_cast<std::size_t>(j) * D]);
+                    ++count;
+                });
+                sum.store(acc);
             }
-            sum_of.store(acc);
             const float *own = &spfh[static_cast<std::size_t>(i) * D];
             const float inv_count = count > 0 ? 1.0f / static_cast<float>(count) : 0.0f;
             float *dst = &out.values[q * D];

@@ -5,11 +5,16 @@
 
 #include <cmath>
 
+#include "simd_level.hpp"
+
 // SSE2 is part of every x86-64 target. (Not 32-bit x86: its scalar code may use x87 precision, and the
 // vector lanes must match the scalar pair feature bit for bit.)
 #if defined(__x86_64__) || defined(_M_X64)
 #  define KISSM_PAIR_FEATURES_SSE2 1
 #  include <emmintrin.h>
+#  if KISSM_HAVE_AVX2_KERNELS
+#    include <immintrin.h>
+#  endif
 #else
 #  define KISSM_PAIR_FEATURES_SSE2 0
 #endif
@@ -113,10 +118,140 @@ inline bool pair_bins(const Vec3f &p1, const Vec3f &n1, bool open1, const Vec3f 
 
 } // namespace
 
+#if KISSM_PAIR_FEATURES_SSE2 && KISSM_HAVE_AVX2_KERNELS
+namespace {
+
+// The SSE2 kernel below at eight lanes (simd_level.hpp): each operation is its 256-bit twin, so each lane's bits are
+// the SSE2 lane's. Helpers rather than lambdas, which would not inherit the target.
+KISSM_TARGET_AVX2 inline __m256 sel8(__m256 mask, __m256 a, __m256 b) {
+    return _mm256_or_ps(_mm256_and_ps(mask, a), _mm256_andnot_ps(mask, b));
+}
+KISSM_TARGET_AVX2 inline __m256 dot8(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+    return _mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_add_ps(_mm256_mul_ps(ay, by), _mm256_mul_ps(az, bz)));
+}
+KISSM_TARGET_AVX2 inline __m256i bin8(__m256 value, __m256 from, __m256 width, __m256 bins, __m256 top) {
+    __m256 t = _mm256_mul_ps(_mm256_div_ps(_mm256_sub_ps(value, from), width), bins);
+    t = _mm256_and_ps(_mm256_cmp_ps(t, _mm256_setzero_ps(), _CMP_GT_OS), t);
+    return _mm256_cvttps_epi32(_mm256_min_ps(t, top));
+}
+
+KISSM_TARGET_AVX2 void batch_pair_codes_avx2(const Vec3f &p, const Vec3f &n, bool open, NormalSigns signs,
+                                             PairBatch &batch) {
+    for (std::size_t m = batch.size; m < ((batch.size + 7) & ~std::size_t(7)); ++m) {
+        batch.x[m] = p.x(), batch.y[m] = p.y(), batch.z[m] = p.z();
+        batch.nx[m] = n.x(), batch.ny[m] = n.y(), batch.nz[m] = n.z();
+        batch.open[m] = 0;
+    }
+    const __m256 px = _mm256_set1_ps(p.x()), py = _mm256_set1_ps(p.y()), pz = _mm256_set1_ps(p.z());
+    const __m256 n1x = _mm256_set1_ps(n.x()), n1y = _mm256_set1_ps(n.y()), n1z = _mm256_set1_ps(n.z());
+    const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    __m256 cl[5], sl[5], cu[5], su[5];
+    const bool sign_free = signs == NormalSigns::Ignored, mixed = signs == NormalSigns::Mixed;
+    const __m256 all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    const __m256 open1 = sign_free || open ? all : zero;
+    const AngleBins &angle_bins = sign_free ? kHalfAngleBins : kAngleBins;
+    for (int k = 0; k < 5; ++k) {
+        cl[k] = _mm256_set1_ps(angle_bins.c[1 + k]), sl[k] = _mm256_set1_ps(angle_bins.s[1 + k]);
+        cu[k] = _mm256_set1_ps(angle_bins.c[6 + k]), su[k] = _mm256_set1_ps(angle_bins.s[6 + k]);
+    }
+    const __m256 lo = _mm256_set1_ps(-1.0f), range = _mm256_set1_ps(2.0f);
+    const __m256 bins = _mm256_set1_ps(static_cast<float>(kBinsPerFeature));
+    const __m256 top = _mm256_set1_ps(static_cast<float>(kBinsPerFeature) - 0.5f);
+    const __m256i five = _mm256_set1_epi32(kBinsPerFeature / 2);
+    const __m256i frame_bit = _mm256_set1_epi32(kLaneFrame), tie_bit = _mm256_set1_epi32(kLaneTie);
+    const __m256 lo3 = sign_free ? zero : lo, range3 = sign_free ? one : range;
+
+    for (std::size_t m = 0; m < batch.size; m += 8) {
+        __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(&batch.x[m]), px);
+        __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(&batch.y[m]), py);
+        __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(&batch.z[m]), pz);
+        const __m256 len2 = dot8(dx, dy, dz, dx, dy, dz);
+        const __m256 inv = _mm256_div_ps(one, _mm256_sqrt_ps(len2));
+        dx = _mm256_mul_ps(dx, inv), dy = _mm256_mul_ps(dy, inv), dz = _mm256_mul_ps(dz, inv);
+        const __m256 n2x = _mm256_loadu_ps(&batch.nx[m]), n2y = _mm256_loadu_ps(&batch.ny[m]);
+        const __m256 n2z = _mm256_loadu_ps(&batch.nz[m]);
+        const __m256 c1 = dot8(n1x, n1y, n1z, dx, dy, dz), c2 = dot8(n2x, n2y, n2z, dx, dy, dz);
+        const __m256 a1 = _mm256_andnot_ps(sign, c1), a2 = _mm256_andnot_ps(sign, c2);
+        const __m256 swap = _mm256_cmp_ps(a1, a2, _CMP_LT_OS);
+        const __m256 tie = _mm256_andnot_ps(swap, _mm256_cmp_ps(a2, a1, _CMP_NLT_US));
+        const __m256 ux = sel8(swap, n2x, n1x), uy = sel8(swap, n2y, n1y), uz = sel8(swap, n2z, n1z);
+        const __m256 bx = sel8(swap, n1x, n2x), by = sel8(swap, n1y, n2y), bz = sel8(swap, n1z, n2z);
+        const __m256 flip = _mm256_and_ps(swap, sign);
+        dx = _mm256_xor_ps(dx, flip), dy = _mm256_xor_ps(dy, flip), dz = _mm256_xor_ps(dz, flip);
+        __m256 f3 = sel8(swap, _mm256_xor_ps(c2, sign), c1);
+        __m256 vx = _mm256_sub_ps(_mm256_mul_ps(dy, uz), _mm256_mul_ps(dz, uy));
+        __m256 vy = _mm256_sub_ps(_mm256_mul_ps(dz, ux), _mm256_mul_ps(dx, uz));
+        __m256 vz = _mm256_sub_ps(_mm256_mul_ps(dx, uy), _mm256_mul_ps(dy, ux));
+        const __m256 vlen2 = dot8(vx, vy, vz, vx, vy, vz);
+        const __m256 vinv = _mm256_div_ps(one, _mm256_sqrt_ps(vlen2));
+        vx = _mm256_mul_ps(vx, vinv), vy = _mm256_mul_ps(vy, vinv), vz = _mm256_mul_ps(vz, vinv);
+        const __m256 wx = _mm256_sub_ps(_mm256_mul_ps(uy, vz), _mm256_mul_ps(uz, vy));
+        const __m256 wy = _mm256_sub_ps(_mm256_mul_ps(uz, vx), _mm256_mul_ps(ux, vz));
+        const __m256 wz = _mm256_sub_ps(_mm256_mul_ps(ux, vy), _mm256_mul_ps(uy, vx));
+        __m256 ay = dot8(wx, wy, wz, bx, by, bz), ax = dot8(ux, uy, uz, bx, by, bz);
+        __m256 f2 = dot8(vx, vy, vz, bx, by, bz);
+        if (sign_free || mixed) {
+            const __m256 open2 =
+                sign_free ? all
+                          : _mm256_castsi256_ps(_mm256_loadu_si256(reinterpret_cast<const __m256i *>(&batch.open[m])));
+            const __m256 free_u = sel8(swap, open2, open1), free_b = sel8(swap, open1, open2);
+            const __m256 turn_u = _mm256_and_ps(_mm256_and_ps(free_u, _mm256_cmp_ps(f3, zero, _CMP_LT_OS)), sign);
+            f3 = _mm256_xor_ps(f3, turn_u), ax = _mm256_xor_ps(ax, turn_u), f2 = _mm256_xor_ps(f2, turn_u);
+            const __m256 turn_b = _mm256_and_ps(_mm256_and_ps(free_b, _mm256_cmp_ps(ax, zero, _CMP_LT_OS)), sign);
+            ax = _mm256_xor_ps(ax, turn_b), ay = _mm256_xor_ps(ay, turn_b), f2 = _mm256_xor_ps(f2, turn_b);
+            const __m256 f3_zero = _mm256_and_ps(free_u, _mm256_cmp_ps(f3, zero, _CMP_EQ_OQ));
+            const __m256 b_zero = _mm256_and_ps(free_b, _mm256_cmp_ps(ax, zero, _CMP_EQ_OQ));
+            ay = sel8(_mm256_and_ps(f3_zero, free_b), _mm256_andnot_ps(sign, ay), ay);
+            const __m256 both = _mm256_and_ps(f3_zero, b_zero);
+            f2 = sel8(both, _mm256_andnot_ps(sign, f2), f2);
+            const __m256 negative_a =
+                _mm256_or_ps(_mm256_cmp_ps(ay, zero, _CMP_LT_OS),
+                             _mm256_and_ps(_mm256_cmp_ps(ay, zero, _CMP_EQ_OQ), _mm256_cmp_ps(f2, zero, _CMP_LT_OS)));
+            const __m256 turn_b0 = _mm256_and_ps(_mm256_andnot_ps(both, _mm256_and_ps(b_zero, negative_a)), sign);
+            ay = _mm256_xor_ps(ay, turn_b0), f2 = _mm256_xor_ps(f2, turn_b0);
+            const __m256 negative_b =
+                _mm256_or_ps(_mm256_cmp_ps(ax, zero, _CMP_LT_OS),
+                             _mm256_and_ps(_mm256_cmp_ps(ax, zero, _CMP_EQ_OQ), _mm256_cmp_ps(f2, zero, _CMP_LT_OS)));
+            const __m256 turn_u0 = _mm256_and_ps(_mm256_andnot_ps(free_b, _mm256_and_ps(f3_zero, negative_b)), sign);
+            ax = _mm256_xor_ps(ax, turn_u0), f2 = _mm256_xor_ps(f2, turn_u0);
+        }
+
+        const __m256 upper = _mm256_cmp_ps(ay, zero, _CMP_GE_OS);
+        __m256i b0 = _mm256_and_si256(_mm256_castps_si256(upper), five);
+        for (int k = 0; k < 5; ++k) {
+            const __m256 ck = sel8(upper, cu[k], cl[k]), sk = sel8(upper, su[k], sl[k]);
+            const __m256 ge =
+                _mm256_cmp_ps(_mm256_sub_ps(_mm256_mul_ps(ck, ay), _mm256_mul_ps(sk, ax)), zero, _CMP_GE_OS);
+            b0 = _mm256_sub_epi32(b0, _mm256_castps_si256(ge)); // true is -1
+        }
+        const __m256i at_origin = _mm256_castps_si256(
+            _mm256_and_ps(_mm256_cmp_ps(ay, zero, _CMP_EQ_OQ), _mm256_cmp_ps(ax, zero, _CMP_EQ_OQ)));
+        b0 = _mm256_or_si256(_mm256_and_si256(at_origin, five), _mm256_andnot_si256(at_origin, b0));
+        const __m256i b1 = bin8(f2, lo, range, bins, top), b2 = bin8(f3, lo3, range3, bins, top);
+        const __m256 has_len = _mm256_cmp_ps(len2, zero, _CMP_GT_OS);
+        const __m256i frame = _mm256_castps_si256(_mm256_and_ps(has_len, _mm256_cmp_ps(vlen2, zero, _CMP_GT_OS)));
+        const __m256i order_matters = _mm256_castps_si256(_mm256_and_ps(has_len, tie));
+        __m256i c = _mm256_or_si256(b0, _mm256_or_si256(_mm256_slli_epi32(b1, 4), _mm256_slli_epi32(b2, 8)));
+        c = _mm256_or_si256(
+            c, _mm256_or_si256(_mm256_and_si256(frame, frame_bit), _mm256_and_si256(order_matters, tie_bit)));
+        _mm256_storeu_si256(reinterpret_cast<__m256i *>(&batch.code[m]), c);
+    }
+}
+
+} // namespace
+#endif
+
 #if KISSM_PAIR_FEATURES_SSE2
 // Intrinsics because GCC does not vectorise the plain loop: under its default -ftrapping-math the selects
 // become branches around comparisons and products that may trap, which it will not if-convert.
 void batch_pair_codes(const Vec3f &p, const Vec3f &n, bool open, NormalSigns signs, PairBatch &batch) {
+#  if KISSM_HAVE_AVX2_KERNELS
+    if (use_avx2()) {
+        batch_pair_codes_avx2(p, n, open, signs, batch);
+        return;
+    }
+#  endif
     // Padding lanes (copies of p itself) only produce codes nobody reads; NaNs in them are harmless.
     for (std::size_t m = batch.size; m < ((batch.size + 3) & ~std::size_t(3)); ++m) {
         batch.x[m] = p.x(), batch.y[m] = p.y(), batch.z[m] = p.z();

@@ -51,9 +51,9 @@ inline std::uint16_t pack_bins(const int bins[3]) {
 }
 
 // The neighbours of one point that it pairs with, as structure of arrays, so that the pair features of a
-// whole row are computed four at a time. Each lane performs exactly the operations of pair_bins in the same
-// order (Eigen sums a 3-vector's terms as x + (y + z); no FMA), and nothing is reduced across lanes, so the
-// bins are bitwise those of the scalar code. The arrays are padded to a multiple of 4 lanes.
+// whole row are computed four (SSE2) or eight (AVX2) at a time. Each lane performs exactly the operations of
+// pair_bins in the same order (Eigen sums a 3-vector's terms as x + (y + z); no FMA), and nothing is reduced across
+// lanes, so the bins are bitwise those of the scalar code. The arrays are padded to a multiple of 8 lanes.
 struct PairBatch {
     std::vector<float> x, y, z, nx, ny, nz;
     std::vector<std::uint32_t> index; // the neighbour's point index
@@ -63,7 +63,7 @@ struct PairBatch {
     std::size_t size = 0;
 
     void reserve(std::size_t n) {
-        n = (n + 3) & ~std::size_t(3);
+        n = (n + 7) & ~std::size_t(7);
         if (x.size() >= n) return;
         for (auto *v : {&x, &y, &z, &nx, &ny, &nz}) v->resize(n);
         index.resize(n), slot.resize(n), code.resize(n), open.resize(n);
@@ -76,7 +76,7 @@ constexpr std::int32_t kLaneFrame = kCodeValid, kLaneTie = kCodeValid << 1;
 
 // Fills batch.code[0, batch.size) with the codes of the pairs (p, n) - (batch point m, its normal): exactly
 // the bins pair_feature_bins gives for that order, kLaneFrame when the pair has a frame, kLaneTie when the
-// other order must be evaluated separately. Uses (and may overwrite) the padding lanes up to a multiple of 4.
+// other order must be evaluated separately. Uses (and may overwrite) the padding lanes up to a multiple of 8.
 // Under NormalSigns::Mixed, open says whether n's sign is open and batch.open the neighbours'.
 void batch_pair_codes(const Vec3f &p, const Vec3f &n, bool open, NormalSigns signs, PairBatch &batch);
 

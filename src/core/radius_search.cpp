@@ -5,12 +5,14 @@
 #include <cmath>
 
 #include "radix_sort.hpp"
+#include "simd_level.hpp"
 #include "uninitialized.hpp"
 
 // SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_NEIGHBORS_SSE2 1
 #  include <emmintrin.h>
+#  include <immintrin.h>
 #else
 #  define KISSM_NEIGHBORS_SSE2 0
 #endif
@@ -28,8 +30,9 @@ std::uint64_t pack(std::uint64_t x, std::uint64_t y, std::uint64_t z) { return (
 // Appends the indices of the points within the run that are strictly closer than sqrt(r2) to q, in run
 // order; returns how many. The distance is evaluated as (dx^2 + dy^2) + dz^2 in every path, so the
 // vector and scalar tests agree bit for bit (and the lists stay symmetric: the same test both ways).
-std::size_t append_within(const float *px, const float *py, const float *pz, const std::uint32_t *index,
-                          std::size_t len, const Vec3f &q, float r2, std::uint32_t *out) {
+KISSM_ALWAYS_INLINE std::size_t append_within(const float *px, const float *py, const float *pz,
+                                              const std::uint32_t *index, std::size_t len, const Vec3f &q, float r2,
+                                              std::uint32_t *out) {
     const float qx = q.x(), qy = q.y(), qz = q.z();
     std::size_t count = 0, s = 0;
 #if KISSM_NEIGHBORS_SSE2
@@ -54,6 +57,54 @@ std::size_t append_within(const float *px, const float *py, const float *pz, con
     }
     return count;
 }
+
+// The runs of a point's cell neighbourhood: where its candidates lie in the sorted arrays.
+constexpr int kRuns = 9;
+struct SortedPoints {
+    const float *x, *y, *z;
+    const std::uint32_t *index;
+};
+
+// Appends the neighbours of q from its kRuns runs (r: pairs of sorted positions); returns how many.
+std::size_t append_neighbours(const SortedPoints &p, const std::uint32_t *r, const Vec3f &q, float r2,
+                              std::uint32_t *out) {
+    std::size_t used = 0;
+    for (int k = 0; k < kRuns; ++k) {
+        const std::uint32_t s0 = r[2 * k], s1 = r[2 * k + 1];
+        used += append_within(p.x + s0, p.y + s0, p.z + s0, p.index + s0, s1 - s0, q, r2, out + used);
+    }
+    return used;
+}
+
+#if KISSM_NEIGHBORS_SSE2 && KISSM_HAVE_AVX2_KERNELS
+// append_neighbours eight points at a time (simd_level.hpp): the same test lane by lane, then append_within for
+// each run's last few.
+KISSM_TARGET_AVX2 std::size_t append_neighbours_avx2(const SortedPoints &p, const std::uint32_t *r, const Vec3f &q,
+                                                     float r2, std::uint32_t *out) {
+    const __m256 vx = _mm256_set1_ps(q.x()), vy = _mm256_set1_ps(q.y()), vz = _mm256_set1_ps(q.z());
+    const __m256 vr2 = _mm256_set1_ps(r2);
+    std::size_t count = 0;
+    for (int k = 0; k < kRuns; ++k) {
+        std::size_t s = r[2 * k];
+        const std::size_t end = r[2 * k + 1];
+        for (; s + 8 <= end; s += 8) {
+            const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(p.x + s), vx);
+            const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(p.y + s), vy);
+            const __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(p.z + s), vz);
+            const __m256 d2 =
+                _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+            unsigned mask = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, vr2, _CMP_LT_OS)));
+            while (mask != 0) {
+                const unsigned lane = static_cast<unsigned>(__builtin_ctz(mask));
+                out[count++] = p.index[s + lane];
+                mask &= mask - 1;
+            }
+        }
+        count += append_within(p.x + s, p.y + s, p.z + s, p.index + s, end - s, q, r2, out + count);
+    }
+    return count;
+}
+#endif
 
 // Per thread: the scratch list of the chunk it runs, kept for its next chunk. A list per chunk (grown by
 // doubling) was the largest share of a description's page faults wherever freed memory goes straight back to
@@ -115,7 +166,6 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
 
     // The 9 runs of a cell's 3 x 3 x 3 neighbourhood (ranges of sorted positions), found once per occupied
     // cell rather than once per point: all points of a cell scan the same runs.
-    constexpr int kRuns = 9;
     std::vector<std::uint32_t> runs(num_cells * kRuns * 2);
     ctx.parallel_for(num_cells, 1024, [&](std::size_t b, std::size_t e) {
         for (std::size_t c = b; c < e; ++c) {
@@ -151,19 +201,21 @@ Neighborhoods radius_neighbors(const std::vector<Vec3f> &points, float radius, R
         // into the block at its exact size.
         UninitVector<std::uint32_t> &idx = t_chunk_scratch;
         std::size_t used = 0;
+        const SortedPoints sorted{sx.data(), sy.data(), sz.data(), sorted_index.data()};
+#if KISSM_NEIGHBORS_SSE2 && KISSM_HAVE_AVX2_KERNELS
+        const auto neighbours_of = use_avx2() ? append_neighbours_avx2 : append_neighbours;
+#else
+        const auto neighbours_of = append_neighbours;
+#endif
         for (std::size_t i = b; i < e; ++i) {
             const Vec3f &q = points[i];
             const std::uint32_t *r = &runs[static_cast<std::size_t>(cell_of_point[i]) * kRuns * 2];
             std::size_t candidates = 0;
             for (int k = 0; k < kRuns; ++k) candidates += r[2 * k + 1] - r[2 * k];
             if (idx.size() < used + candidates) idx.resize(std::max(2 * idx.size(), used + candidates));
-            const std::size_t before = used;
-            for (int k = 0; k < kRuns; ++k) {
-                const std::uint32_t s0 = r[2 * k], s1 = r[2 * k + 1];
-                used += append_within(sx.data() + s0, sy.data() + s0, sz.data() + s0, sorted_index.data() + s0, s1 - s0,
-                                      q, r2, idx.data() + used);
-            }
-            counts[i] = static_cast<std::uint32_t>(used - before);
+            const std::size_t found = neighbours_of(sorted, r, q, r2, idx.data() + used);
+            used += found;
+            counts[i] = static_cast<std::uint32_t>(found);
         }
         return std::vector<std::uint32_t>(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(used));
     });
