@@ -73,8 +73,10 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
             const std::size_t size = nb.count(i);
             if (size < tau) continue;
             // Covariance about the mean, in double: centred sums avoid cancellation.
-            near.clear();
-            near_d2.clear();
+            // Sized once per row, written by index: a push_back in the loop would make the compiler keep the sums
+            // below in memory around the call it may make.
+            if (near.size() < size) near.resize(size), near_d2.resize(size);
+            std::size_t count = 0;
             Eigen::Vector3d mean = Eigen::Vector3d::Zero();
             // AwayFromNeighbours: offsets of all the neighbours from the point, in double and in row order (no
             // cancellation, the same at any thread count), summed in the same pass.
@@ -86,19 +88,18 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
                 const float d2 = (points[j] - points[i]).squaredNorm();
                 if (away) to_centroid += points[j].cast<double>() - p;
                 if (d2 < rn2) {
-                    near.push_back(j);
-                    if (planes) near_d2.push_back(d2);
+                    near[count] = j;
+                    near_d2[count++] = d2;
                     mean += points[j].cast<double>();
                 }
             }
-            const std::uint64_t count = near.size();
             if (count < tau) continue;
             if (planes) {
                 // The smaller neighbourhood, summed about the point itself (a few voxels wide: no cancellation).
                 Eigen::Vector3d s = Eigen::Vector3d::Zero();
                 Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
                 std::uint64_t m = 0;
-                for (std::size_t t = 0; t < near.size(); ++t) {
+                for (std::size_t t = 0; t < count; ++t) {
                     if (!(near_d2[t] < rp2)) continue;
                     const Eigen::Vector3d d = points[near[t]].cast<double>() - p;
                     s += d;
@@ -118,7 +119,8 @@ NormalSets normal_pass(const std::vector<Vec3f> &points, const Neighborhoods &nb
             mean /= static_cast<double>(count);
             // The six distinct sums of d d^T (the other three are the same products, so the same bits).
             double sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
-            for (const std::uint32_t j : near) {
+            for (std::size_t t = 0; t < count; ++t) {
+                const std::uint32_t j = near[t];
                 const double dx = static_cast<double>(points[j].x()) - mean.x();
                 const double dy = static_cast<double>(points[j].y()) - mean.y();
                 const double dz = static_cast<double>(points[j].z()) - mean.z();
