@@ -10,11 +10,17 @@ The families:
     that is not the sensor. For the moved frames the translation error is taken at the source's centroid, where
     the data is: at the moved origin a 1 degree error alone would be a centimetre on the bunny;
   * KITTI 07 keyframes two to four apart (ground truth chained through the pairs), raw and turned;
+  * scan to map: each KITTI 07 keyframe, raw and turned, against a map of the other four (described once), and a
+    scan of another dataset against the same maps (no pose right);
   * pairs of unrelated scans (no overlap: every valid pose is wrong): LiDAR scans of three datasets against each
     other at 0.3 and 0.5 m, and the bunny against a scaled 3DMatch fragment and back;
   * the committed synthetic pair (tests/data) with its target turned about z every 15 degrees and moved;
   * with --priors, kissm.refine from the ground truth disturbed by 0-180 degrees and 0-30 voxels (the refine
-    rule: overlap, conditioning, convergence).
+    rule: overlap, conditioning, convergence, the residual).
+
+Every registration runs through both entry points: ``kissm.register`` on the points, and ``register_features`` on
+features computed apart (``Matcher.compute_features``), whose result must be the same bits (a mismatch is counted
+and listed); the priors run through ``Matcher.refine`` on the points and ``refine_features`` on the features alike.
 
     python3 bench/validity_study.py [--data ../shared/data] [--threads 2] [--rotations 6] [--priors] [--rows]
 
@@ -55,6 +61,7 @@ class Tally:
     def __init__(self) -> None:
         self.counts: dict[tuple[str, str], collections.Counter[str]] = collections.defaultdict(collections.Counter)
         self.wrong_valid: list[str] = []
+        self.entry_points_differ: list[str] = []  # register and register_features gave other bits
         # (field, family kind, right?) -> values, for the separation table
         self.values: dict[tuple[str, str, bool], list[float]] = collections.defaultdict(list)
 
@@ -79,17 +86,17 @@ class Tally:
                 self.values[(name, kind, right)].append(get(r))
 
     def print(self) -> None:
-        print(
-            "\nfamily                              mode            "
-            "right,valid  WRONG,VALID  right,invalid  wrong,invalid"
-        )
+        print(f"\n{'family':44s} {'mode':25s} right,valid  WRONG,VALID  right,invalid  wrong,invalid")
         for (family, mode), c in sorted(self.counts.items()):
             print(
-                f"{family:35s} {mode:15s} {c['right, valid']:11d} {c['WRONG, VALID']:12d} "
+                f"{family:44s} {mode:25s} {c['right, valid']:11d} {c['WRONG, VALID']:12d} "
                 f"{c['right, invalid']:14d} {c['wrong, invalid']:14d}"
             )
         print(f"\nwrong poses reported valid: {len(self.wrong_valid)}")
         for line in self.wrong_valid:
+            print("  " + line)
+        print(f"register and register_features disagreeing (bits): {len(self.entry_points_differ)}")
+        for line in self.entry_points_differ:
             print("  " + line)
         print("\nwhat the rules read, runs with at least 10 inliers: range over right poses | over wrong poses")
         for name, _, _ in RULE_FIELDS:
@@ -112,6 +119,15 @@ def fields(r: kissm.Result, voxel: float) -> str:
     )
 
 
+def same_result(a: kissm.Result, b: kissm.Result) -> bool:
+    """The same pose, validity and reason, bit for bit."""
+    return (
+        a.valid == b.valid
+        and a.reason_code == b.reason_code
+        and np.asarray(a.transform).tobytes() == np.asarray(b.transform).tobytes()
+    )
+
+
 def run(tally: Tally, family: str, t: Trial, args: argparse.Namespace) -> None:
     k = t.kind
     for mode in MODES:
@@ -124,6 +140,13 @@ def run(tally: Tally, family: str, t: Trial, args: argparse.Namespace) -> None:
         tally.add(family, mode, r.valid, right, line, r)
         if args.rows:
             print(line, flush=True)
+        # The same pair through features described apart: the same bits, or the difference is listed.
+        with kissm.Matcher(voxel_size=k.voxel, num_threads=args.threads, refine_mode=mode) as m:
+            f = m.register_features(m.compute_features(t.source), m.compute_features(t.target))
+        _, _, f_right = judge_at(f.transform, t.gt, k.max_rot_deg, k.max_trans_m, t.at)
+        tally.add(family, mode + " (features)", f.valid, f_right, line.replace(mode, mode + " (features)", 1), f)
+        if not same_result(r, f):
+            tally.entry_points_differ.append(f"{t.name} {mode}: register {r.reason}, register_features {f.reason}")
 
 
 def turned(points: np.ndarray, turn: np.ndarray, shift: np.ndarray | None = None) -> np.ndarray:
@@ -172,6 +195,38 @@ def far_keyframes(tally: Tally, args: argparse.Namespace, rng: np.random.Generat
             g2 = gt.copy()
             g2[:3, :3] = gt[:3, :3] @ turn.T
             run(tally, far, Trial(f"kitti07 {a}<-{b} rot", turned(cloud[b], turn), cloud[a], g2, KEYFRAME_KIND), args)
+
+
+def scan_to_map(tally: Tally, args: argparse.Namespace, rng: np.random.Generator) -> None:
+    """Each KITTI 07 keyframe against a map of the other four in keyframe 0's frame (the map described once), raw
+    and turned; and a scan of another dataset against the same maps, where no pose is right."""
+    kf = keyframes(args.data)
+    other = args.data / "small_gicp_lidar/source.ply"
+    if kf is None or not other.is_file():
+        return
+    chain, cloud = kf
+    stranger = kissm.read_points(other)
+    nowhere = np.eye(4)
+    nowhere[0, 3] = 1e6
+    for k in range(5):
+        world = np.concatenate([turned(cloud[m], chain[m][:3, :3], chain[m][:3, 3]) for m in range(5) if m != k])
+        for mode in MODES:
+            with kissm.Matcher(voxel_size=KEYFRAME_KIND.voxel, num_threads=args.threads, refine_mode=mode) as m:
+                the_map = m.compute_features(world)
+                turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
+                gt_turned = chain[k].copy()
+                gt_turned[:3, :3] = chain[k][:3, :3] @ turn.T
+                for name, scan, gt in (
+                    (f"keyframe {k} -> map of the others", cloud[k], chain[k]),
+                    (f"keyframe {k} turned -> map of the others", turned(cloud[k], turn), gt_turned),
+                    (f"small_gicp scan -> map without keyframe {k}", stranger, nowhere),
+                ):
+                    r = m.register_features(m.compute_features(scan), the_map)
+                    _, _, right = judge_at(r.transform, gt, KEYFRAME_KIND.max_rot_deg, KEYFRAME_KIND.max_trans_m)
+                    line = f"{name:48s} {mode:14s} valid={int(r.valid)} {'right' if right else 'wrong'}  {r.reason}"
+                    tally.add("scan to map (keyframes)", mode, r.valid, right, line, r)
+                    if args.rows:
+                        print(line, flush=True)
 
 
 def unrelated(tally: Tally, args: argparse.Namespace) -> None:
@@ -228,6 +283,7 @@ def synthetic(tally: Tally, args: argparse.Namespace) -> None:
 def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
     """kissm.refine from the ground truth disturbed by growing amounts: the basin, and what the refine rule says."""
     counts: dict[tuple[int, int], collections.Counter[str]] = collections.defaultdict(collections.Counter)
+    differ = 0  # refine on the points and refine_features on the features, other bits
     for p in load_pairs(args.data):
         src, tgt = p.read()
         k = p.kind
@@ -241,6 +297,7 @@ def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
                         step = rng.normal(size=3)
                         start[:3, 3] += step / np.linalg.norm(step) * vox * k.voxel
                         r = m.refine_features(fs, ft, start)
+                        differ += not same_result(r, m.refine(src, tgt, start))
                         _, _, right = judge_at(r.transform, p.gt, k.max_rot_deg, k.max_trans_m)
                         key = (
                             "right, valid"
@@ -252,6 +309,7 @@ def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
                             else "wrong, invalid"
                         )
                         counts[(deg, vox)][key] += 1
+    print(f"\nMatcher.refine and refine_features disagreeing (bits): {differ}")
     print("\nkissm.refine from the ground truth disturbed by (degrees, voxels), every real pair, GICP:")
     print("  start             right,valid  WRONG,VALID  right,invalid  wrong,invalid")
     for (deg, vox), c in sorted(counts.items()):
@@ -274,6 +332,7 @@ def main() -> int:
     if has_index(args.data):
         real_pairs(tally, args, rng)
         far_keyframes(tally, args, rng)
+        scan_to_map(tally, args, rng)
         unrelated(tally, args)
     else:
         print(f"(no real data at {args.data}: the synthetic pair only)")
