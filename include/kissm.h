@@ -155,8 +155,9 @@ KISSM_API const char *kissm_last_error_message(void);
 /** Refinement ran and its pose lays too little of the source onto the target (kissm_result.overlap below
  * kissm_config.min_overlap, or fewer than 6 correspondences). */
 #define KISSM_REASON_LOW_OVERLAP 7
-/** Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor): see
- * kissm_result.refine_condition and kissm_result.information. */
+/** Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor, a tunnel):
+ * kissm_result.degenerate = 1, the free directions in kissm_result.weak_directions; kissm_config.allow_degenerate
+ * = 1 accepts such a pose. */
 #define KISSM_REASON_UNCONSTRAINED 8
 /** Without refinement: the inliers pin the rotation down no better than kissm_config.max_rotation_uncertainty
  * (kissm_result.rotation_uncertainty): too few of them, or all on one compact object. */
@@ -391,6 +392,12 @@ typedef struct kissm_config {
      * voxelised clouds stay within a fraction of a voxel, wrong local optima do not; in (0, 100].
      * Default 0.45. */
     double max_refine_rmse_gain;
+    /** 1: a refined pose that leaves a direction free (kissm_result.degenerate: a corridor, a tunnel, a plane) may
+     * be valid, flagged, for callers who fuse its weak directions from elsewhere (odometry); 0: such a pose ends
+     * valid = 0 with #KISSM_REASON_UNCONSTRAINED; in [0, 1]. Default 0. */
+    int32_t allow_degenerate;
+    /** Reserved; must be 0. */
+    int32_t reserved2;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -597,6 +604,20 @@ typedef struct kissm_result {
     /** With rotation_dof = 1: the angle (radians) by which the best unconstrained rotation on the yaw
      * solution's inliers turns kissm_config.up, the evidence for #KISSM_REASON_TILTED. NaN otherwise. */
     double tilt;
+    /** 1 when refinement ran and the aligned clouds leave num_weak_directions directions of the pose free:
+     * their share of the information, with rotations as displacements at the matched points' radius, is below
+     * kissm_config.min_refine_condition of the strongest direction's (refine_condition is the weakest share).
+     * A corridor leaves one, a tunnel two, a plane three. Not valid (#KISSM_REASON_UNCONSTRAINED) unless
+     * kissm_config.allow_degenerate = 1. 0 when refinement did not run: without it no dense information
+     * exists to tell. */
+    int32_t degenerate;
+    /** Rows of weak_directions in use, 0 to 6 (0 unless degenerate). */
+    int32_t num_weak_directions;
+    /** The free directions, weakest first, row-major 6x6: row i < num_weak_directions is a unit 6-vector
+     * xi = (rotation [rad], translation [m]) in the order and frame of information (T exp(xi), source frame),
+     * its largest component positive; a pose moved along it changes the alignment by almost nothing. Rows
+     * beyond num_weak_directions are NaN. */
+    double weak_directions[36];
     /* New fields are only ever appended here. */
 } kissm_result;
 

@@ -45,7 +45,8 @@ namespace {
   X(refine_normal_radius_gain)                                                                                         \
   X(rotation_dof)                                                                                                      \
   X(sensor_height)                                                                                                     \
-  X(max_refine_rmse_gain)
+  X(max_refine_rmse_gain)                                                                                              \
+  X(allow_degenerate)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -198,6 +199,8 @@ kissm_config validated_config(const kissm_config *given) {
                                              number(c.up[2]) + "); it must have a length above 1e-9");
     KISSM_REQUIRE_IN_LIMITS(sensor_height);
     KISSM_REQUIRE_IN_LIMITS(max_refine_rmse_gain);
+    KISSM_REQUIRE_IN_LIMITS(allow_degenerate);
+    require_int(c.reserved2, 0, 0, "reserved2");
     return c;
 }
 

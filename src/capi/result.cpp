@@ -103,6 +103,7 @@ void reset_full(kissm_result *r) noexcept {
     r->rotation_uncertainty = nan;
     r->inlier_coverage = nan;
     r->tilt = nan;
+    for (double &v : r->weak_directions) v = nan;
 }
 
 } // namespace
@@ -138,6 +139,11 @@ void fill_result(const Registration &g, kissm_result *caller) {
         r->num_refine_correspondences = g.num_refine_correspondences;
         r->refine_iterations = g.refine_iterations;
         r->refine_converged = g.refine_converged ? 1 : 0;
+        r->degenerate = g.degenerate ? 1 : 0;
+        r->num_weak_directions = static_cast<int32_t>(g.weak_directions.size());
+        for (std::size_t i = 0; i < g.weak_directions.size(); ++i)
+            for (int j = 0; j < 6; ++j)
+                r->weak_directions[6 * i + static_cast<std::size_t>(j)] = g.weak_directions[i][j];
     }
 #define KISSM_COPY_FIELD(name) r->name = g.name;
     KISSM_RESULT_SAME_FIELDS(KISSM_COPY_FIELD)

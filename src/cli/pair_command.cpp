@@ -318,6 +318,7 @@ bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, Pa
         opt.out_topview = cur.value();
     } else if (!cur.take_flag("--drop-nonfinite", &opt.drop_nonfinite) &&
                !cur.take_flag("--viewpoint-center", &opt.viewpoint_center) &&
+               !cur.take_flag("--allow-degenerate", &opt.allow_degenerate) &&
                !(with_outputs && cur.take_flag("--json", &opt.json)) &&
                !cur.take_flag("--verbose", &opt.verbose, "-v")) {
         return false;
@@ -394,6 +395,7 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
     if (opt.have_min_overlap) config.min_overlap = opt.min_overlap;
     if (opt.have_min_refine_condition) config.min_refine_condition = opt.min_refine_condition;
     if (opt.have_max_refine_rmse) config.max_refine_rmse_gain = opt.max_refine_rmse_gain;
+    if (opt.allow_degenerate) config.allow_degenerate = 1;
     if (opt.have_refine_normal_radius) config.refine_normal_radius_gain = opt.refine_normal_radius_gain;
     if (opt.viewpoint_mode >= 0) config.viewpoint_mode = opt.viewpoint_mode;
     if (opt.viewpoint_center) config.viewpoint_mode = KISSM_VIEWPOINT_CLOUD_CENTER;
@@ -487,6 +489,9 @@ void print_refinement_help(std::FILE *out, PairCommand command, const kissm_conf
                  "                          largest residual of a valid refined pose = GAIN * voxel, in (0, 100]:\n"
                  "                          right alignments stay within a fraction of a voxel, the wrong optima\n"
                  "                          a far initial pose leads to do not\n"
+                 "  --allow-degenerate      a refined pose that leaves directions free (a corridor, a tunnel, a\n"
+                 "                          plane) may be valid, flagged (JSON degenerate, weak_directions);\n"
+                 "                          without it such a pose is not valid (reason_code 8)\n"
                  "  --refine-normal-radius GAIN (default %g)\n"
                  "                          refinement aligns planes fitted to the neighbours within GAIN * voxel\n"
                  "                          (at least 5 of them; at most the normals' radius), in (0, 50]\n",

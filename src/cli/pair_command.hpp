@@ -84,6 +84,7 @@ struct PairOptions {
     bool have_min_refine_condition = false;
     double min_refine_condition = 0.0;
     bool have_max_refine_rmse = false; // and the refined clouds' largest residual, in voxels
+    bool allow_degenerate = false;     // --allow-degenerate
     double max_refine_rmse_gain = 0.0;
     bool have_refine_normal_radius = false;
     double refine_normal_radius_gain = 0.0;

@@ -64,6 +64,14 @@ void print_refinement(std::FILE *out, const kissm_result &r, ResultKind kind) {
     if (kind == ResultKind::Global)
         std::fprintf(out, "inlier coverage %s, ", number_text(r.inlier_coverage, "%.4f").text);
     std::fprintf(out, "rmse %s, condition %.4g\n", number_text(r.refine_rmse, "%.4g").text, r.refine_condition);
+    if (r.degenerate) {
+        std::fprintf(out, "  degenerate: %d free direction%s (rotation [rad], translation [m], source frame)\n",
+                     r.num_weak_directions, r.num_weak_directions == 1 ? "" : "s");
+        for (int i = 0; i < r.num_weak_directions; ++i) {
+            const double *v = r.weak_directions + 6 * i;
+            std::fprintf(out, "    (%.3f %.3f %.3f | %.3f %.3f %.3f)\n", v[0], v[1], v[2], v[3], v[4], v[5]);
+        }
+    }
     if (matrix_is_finite(r.coarse_transform) && matrix_is_finite(r.transform)) {
         std::fprintf(out, "  moved the %s pose by %.4f deg, %.4g\n", kind == ResultKind::Global ? "coarse" : "initial",
                      rotation_error_deg(r.coarse_transform, r.transform),
@@ -141,6 +149,8 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field("overlap", r.overlap);
     json.field("refine_rmse", r.refine_rmse);
     json.field("refine_condition", r.refine_condition);
+    json.field("degenerate", r.degenerate != 0);
+    json.field_matrix("weak_directions", r.weak_directions, r.num_weak_directions, 6);
     json.field("inlier_coverage", r.inlier_coverage);
     json.field("refine_iterations", r.refine_iterations);
     json.field("refine_converged", r.refine_converged != 0);

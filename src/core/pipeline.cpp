@@ -271,8 +271,12 @@ RefinedEvidence refined_evidence(const Registration &r) {
 }
 
 RefinedRule refined_rule(const Params &params) {
-    return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers), params.min_overlap,
-                       params.min_refine_condition, params.min_inlier_coverage, params.max_refine_rmse()};
+    return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers),
+                       params.min_overlap,
+                       params.min_refine_condition,
+                       params.min_inlier_coverage,
+                       params.max_refine_rmse(),
+                       params.allow_degenerate != 0};
 }
 
 RefineParams refine_params(const Params &params) {
@@ -331,6 +335,8 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
     r.refine_converged = o.converged;
     r.num_refine_correspondences = o.num_correspondences;
     r.refine_condition = o.condition;
+    r.weak_directions = weak_directions_in_caller_frame(o, os, params.min_refine_condition);
+    r.degenerate = !r.weak_directions.empty();
     r.overlap_spread = o.overlap_spread;
     // The solver's inliers against the aligned overlap (principal standard deviations, both in the source frame).
     if (r.num_final_inliers > 0 && o.overlap_spread > 0.0) r.inlier_coverage = r.inlier_extent[0] / o.overlap_spread;

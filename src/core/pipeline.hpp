@@ -67,7 +67,11 @@ struct Registration {
     int refine_iterations = 0;
     bool refine_converged = false;
     std::uint64_t num_refine_correspondences = 0;
-    double refine_condition = std::numeric_limits<double>::quiet_NaN();     // see refine.hpp
+    double refine_condition = std::numeric_limits<double>::quiet_NaN(); // see refine.hpp
+    // Degeneracy: refine_condition below min_refine_condition; weak_directions as
+    // weak_directions_in_caller_frame gives them (empty unless degenerate; refinement only).
+    bool degenerate = false;
+    std::vector<Vector6d> weak_directions;
     double rotation_uncertainty = std::numeric_limits<double>::quiet_NaN(); // radians, see validity.hpp
     double inlier_coverage = std::numeric_limits<double>::quiet_NaN();      // see validity.hpp
     double overlap_spread = std::numeric_limits<double>::quiet_NaN();       // metres, of the refined overlap

@@ -285,22 +285,36 @@ private:
         cov /= static_cast<double>(pairs.size());
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov, Eigen::EigenvaluesOnly);
         out.overlap_spread = std::sqrt(std::max(0.0, es.eigenvalues()[2]));
-        out.condition = condition(c, std::sqrt(std::max(0.0, cov.trace())), out.hessian);
+        condition(c, cov, out);
     }
 
     // Moves the information's rotation centre to the matched source points' centroid c (xi_local =
-    // [[I, 0], [[c]x, I]] xi_c) and scales rotations by their RMS radius L, so that all six directions are
-    // displacements in metres; then the ratio of the extreme eigenvalues.
-    static double condition(const Eigen::Vector3d &c, double L, const Matrix6d &H) {
-        if (!(L > 0.0)) return 0.0;
+    // [[I, 0], [[c]x, I]] xi_c) and turns rotations into the displacements they cause there: a rotation omega
+    // moves the points by omega x (p - c), whose mean square is omega^T (tr(C) I - C) omega for their covariance C,
+    // so xi_s = (M omega, tau) with M = (tr(C) I - C)^(1/2) puts all six directions in metres (a corridor's roll,
+    // held by its cross-section, is not mistaken for free because the corridor is long). Then each eigenvalue
+    // over the largest (condition: the smallest ratio) and the eigenvectors taken back to xi_local.
+    static void condition(const Eigen::Vector3d &c, const Eigen::Matrix3d &cov, RefineOutput &out) {
+        out.condition = 0.0;
+        out.direction_ratio.setZero();
+        out.directions.setIdentity();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> arm(cov.trace() * Eigen::Matrix3d::Identity() - cov);
+        const Eigen::Vector3d arm2 = arm.eigenvalues();
+        if (!(arm2[0] > 0.0)) return; // the points on one line or one point: a rotation about it moves nothing
+        const Eigen::Matrix3d V = arm.eigenvectors();
+        const Eigen::Matrix3d M_inv = V * arm2.cwiseSqrt().cwiseInverse().asDiagonal() * V.transpose();
         Matrix6d Ad = Matrix6d::Identity();
         Ad.bottomLeftCorner<3, 3>() = skew(c);
-        Matrix6d Hc = Ad.transpose() * H * Ad;
-        Hc.topRows<3>() /= L;
-        Hc.leftCols<3>() /= L;
-        const Eigen::SelfAdjointEigenSolver<Matrix6d> es(0.5 * (Hc + Hc.transpose()), Eigen::EigenvaluesOnly);
-        const double hi = es.eigenvalues()[5], lo = es.eigenvalues()[0];
-        return hi > 0.0 ? std::max(lo, 0.0) / hi : 0.0;
+        Matrix6d S_inv = Matrix6d::Identity(); // xi_c = S^-1 xi_s
+        S_inv.topLeftCorner<3, 3>() = M_inv;
+        const Matrix6d T = Ad * S_inv; // xi_local = T xi_s
+        const Matrix6d Hs = T.transpose() * out.hessian * T;
+        const Eigen::SelfAdjointEigenSolver<Matrix6d> es(0.5 * (Hs + Hs.transpose()));
+        const double hi = es.eigenvalues()[5];
+        if (!(hi > 0.0)) return;
+        for (int i = 0; i < 6; ++i) out.direction_ratio[i] = std::max(es.eigenvalues()[i], 0.0) / hi;
+        out.condition = out.direction_ratio[0];
+        out.directions = T * es.eigenvectors();
     }
 
     const std::vector<Vec3f> &src_;
@@ -340,6 +354,26 @@ Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vecto
     variance = std::max(variance, 1e-6 * floor_length * floor_length);
     Matrix6d info = Ad.transpose() * out.hessian * Ad / variance;
     return 0.5 * (info + info.transpose());
+}
+
+std::vector<Vector6d> weak_directions_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
+                                                      double min_condition) {
+    // xi_caller = Ad^-1 xi_local, Ad^-1 = [[I, 0], [[o]x, I]] (information_in_caller_frame's Ad inverted).
+    Matrix6d Ad_inv = Matrix6d::Identity();
+    Ad_inv.bottomLeftCorner<3, 3>() = skew(source_origin);
+    std::vector<Vector6d> weak;
+    for (int i = 0; i < 6; ++i) {
+        if (out.direction_ratio[i] >= min_condition) break; // ascending
+        Vector6d v = Ad_inv * out.directions.col(i);
+        const double n = v.norm();
+        if (!(n > 0.0)) continue;
+        v /= n;
+        Eigen::Index k = 0;
+        v.cwiseAbs().maxCoeff(&k);
+        if (v[k] < 0.0) v = -v;
+        weak.push_back(v);
+    }
+    return weak;
 }
 
 KISSM_DETAIL_END

@@ -32,6 +32,7 @@
 KISSM_DETAIL_BEGIN
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 struct RefineParams {
     RefineMode mode = RefineMode::Gicp;
@@ -64,6 +65,11 @@ struct RefineOutput {
     // eigenvalue of the information with rotations turned into displacements at the matched points' RMS
     // radius about their centroid (1 = every direction alike, 0 = a direction the data leaves free).
     double condition = 0.0;
+    // The eigen-directions behind `condition`, weakest first: column i is a perturbation xi_local of the pose
+    // (rotation, translation; see `hessian`) whose scaled information is direction_ratio[i] times the strongest
+    // direction's. Ratios in [0, 1]; with no correspondence every ratio is 0 and the columns span everything.
+    Matrix6d directions = Matrix6d::Identity();
+    Vector6d direction_ratio = Vector6d::Zero();
     // Standard deviation of the matched source voxels along their principal axis (metres): how far the aligned
     // overlap extends, against which the solver's inliers are measured (validity.hpp, inlier coverage).
     double overlap_spread = 0.0;
@@ -85,5 +91,14 @@ RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, c
 // frame) and divided by the residual variance sum w r^2 / (sum w - 6), floored at (1e-3 * floor_length)^2.
 Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
                                      double floor_length);
+
+// The directions the data leave free (degeneracy): out.directions whose ratio is below min_condition, weakest
+// first, moved to the callers' frame as the information is (the perturbation xi = (rotation [rad], translation
+// [m]) of T exp(xi) in the source's frame) and scaled to unit length; each with its largest component positive,
+// so the sign is defined. Empty when every direction's ratio reaches min_condition. Ratios are of the
+// information with rotations as displacements at the matched points' RMS radius about their centroid, so the
+// threshold is one number for every scene size.
+std::vector<Vector6d> weak_directions_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
+                                                      double min_condition);
 
 KISSM_DETAIL_END

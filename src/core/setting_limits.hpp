@@ -51,7 +51,8 @@ struct IntLimits {
   REAL(min_refine_condition, 0.0, 1.0, false)                                                                          \
   REAL(refine_normal_radius_gain, 0.0, 50.0, true)                                                                     \
   REAL(sensor_height, 0.0, 1000.0, false)                                                                              \
-  REAL(max_refine_rmse_gain, 0.0, 100.0, true)
+  REAL(max_refine_rmse_gain, 0.0, 100.0, true)                                                                         \
+  INT(allow_degenerate, 0, 1)
 
 namespace limits {
 

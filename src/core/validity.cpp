@@ -52,7 +52,7 @@ Reason coarse_validity(std::uint64_t num_inliers, const InlierEvidence &inliers,
 
 Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule) {
     if (refined.num_correspondences < 6 || !(refined.overlap >= rule.min_overlap)) return Reason::LowOverlap;
-    if (!(refined.condition >= rule.min_condition)) return Reason::Unconstrained;
+    if (!rule.allow_degenerate && !(refined.condition >= rule.min_condition)) return Reason::Unconstrained;
     if (!refined.converged) return Reason::NotConverged;
     if (!(refined.rmse <= rule.max_rmse)) return Reason::LooseAlignment;
     return Reason::None;

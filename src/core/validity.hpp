@@ -87,15 +87,16 @@ struct RefinedRule {
     double min_overlap;
     double min_condition;
     double min_inlier_coverage;
-    double max_rmse; // metres: max_refine_rmse_gain * voxel_size
+    double max_rmse;       // metres: max_refine_rmse_gain * voxel_size
+    bool allow_degenerate; // skip min_condition: the caller takes the weak directions from elsewhere
 };
 
 // The rule with refinement, for a registration: the dense alignment decides the accuracy, so the inliers
 // only need to show that the refinement started in the right basin: at least refine_min_inliers, not
 // degenerate, and spread over at least min_inlier_coverage of the aligned overlap (inliers on one compact
 // object cover a small part of it, whatever the pose). Then the refined pose must overlap (min_overlap), be
-// constrained in every direction (min_condition) and have converged: a refinement still moving at its
-// iteration cap is crossing from one basin to another (most wrong local optima measured did), and leave the
+// constrained in every direction (min_condition, unless allow_degenerate) and have converged: a refinement still moving
+// at its iteration cap is crossing from one basin to another (most wrong local optima measured did), and leave the
 // clouds within max_rmse of each other (prior_validity).
 Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const RefinedEvidence &refined,
                         const RefinedRule &rule);

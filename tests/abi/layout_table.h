@@ -16,9 +16,9 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 288)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 296)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 952)
+  X(kissm_result, KISSM_STRUCT_RESULT, 1248)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -59,7 +59,9 @@
   X(kissm_config, rotation_dof, int32_t, 244, 4)                                                                       \
   X(kissm_config, up, double[3], 248, 24)                                                                              \
   X(kissm_config, sensor_height, double, 272, 8)                                                                       \
-  X(kissm_config, max_refine_rmse_gain, double, 280, 8)
+  X(kissm_config, max_refine_rmse_gain, double, 280, 8)                                                                \
+  X(kissm_config, allow_degenerate, int32_t, 288, 4)                                                                   \
+  X(kissm_config, reserved2, int32_t, 292, 4)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \
@@ -113,7 +115,10 @@
   X(kissm_result, num_source_suppressed, uint64_t, 920, 8)                                                             \
   X(kissm_result, num_target_suppressed, uint64_t, 928, 8)                                                             \
   X(kissm_result, time_suppression_ms, double, 936, 8)                                                                 \
-  X(kissm_result, tilt, double, 944, 8)
+  X(kissm_result, tilt, double, 944, 8)                                                                                \
+  X(kissm_result, degenerate, int32_t, 952, 4)                                                                         \
+  X(kissm_result, num_weak_directions, int32_t, 956, 4)                                                                \
+  X(kissm_result, weak_directions, double[36], 960, 288)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

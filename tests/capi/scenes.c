@@ -610,6 +610,10 @@ int scn_result_is_reset(const kissm_result *r) {
         SCN_FAIL("num_refine_correspondences %llu", (unsigned long long)r->num_refine_correspondences);
     if (r->refine_iterations != 0) SCN_FAIL("refine_iterations %d", (int)r->refine_iterations);
     if (r->refine_converged != 0) SCN_FAIL("refine_converged %d", (int)r->refine_converged);
+    if (r->degenerate != 0) SCN_FAIL("degenerate %d", (int)r->degenerate);
+    if (r->num_weak_directions != 0) SCN_FAIL("num_weak_directions %d", (int)r->num_weak_directions);
+    for (i = 0; i < 36; ++i)
+        if (!isnan(r->weak_directions[i])) SCN_FAIL("weak_directions[%d] = %g", i, r->weak_directions[i]);
     k = scn_result_poison_left(r);
     if (k != 0) SCN_FAIL("poison left at byte offset %lu", (unsigned long)(k - 1));
     return ok;

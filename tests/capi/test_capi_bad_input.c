@@ -510,7 +510,9 @@ enum {
     F_UP2,
     F_UP_ALL, /* all three components */
     F_SENSOR_HEIGHT,
-    F_MAX_REFINE_RMSE_GAIN
+    F_MAX_REFINE_RMSE_GAIN,
+    F_ALLOW_DEGENERATE,
+    F_RESERVED2
 };
 
 typedef struct field_case {
@@ -557,6 +559,8 @@ static void set_field(kissm_config *c, int field, double v) {
     case F_UP_ALL: c->up[0] = c->up[1] = c->up[2] = v; break;
     case F_SENSOR_HEIGHT: c->sensor_height = v; break;
     case F_MAX_REFINE_RMSE_GAIN: c->max_refine_rmse_gain = v; break;
+    case F_ALLOW_DEGENERATE: c->allow_degenerate = (int32_t)v; break;
+    case F_RESERVED2: c->reserved2 = (int32_t)v; break;
     default: break;
     }
 }
@@ -675,6 +679,10 @@ static const field_case k_bad_fields[] = {
     {F_MAX_REFINE_RMSE_GAIN, -1.0, "config.max_refine_rmse_gain"},
     {F_MAX_REFINE_RMSE_GAIN, 100.5, "config.max_refine_rmse_gain"},
     {F_MAX_REFINE_RMSE_GAIN, NAN, "config.max_refine_rmse_gain"},
+    {F_ALLOW_DEGENERATE, -1, "config.allow_degenerate"},
+    {F_ALLOW_DEGENERATE, 2, "config.allow_degenerate"},
+    {F_RESERVED2, 1, "config.reserved2"},
+    {F_RESERVED2, -1, "config.reserved2"},
 };
 
 /* Documented boundary values that must be accepted. */
@@ -745,6 +753,8 @@ static const field_case k_good_fields[] = {
     {F_SENSOR_HEIGHT, 1000.0, ""},
     {F_MAX_REFINE_RMSE_GAIN, 1e-300, ""},
     {F_MAX_REFINE_RMSE_GAIN, 100.0, ""},
+    {F_ALLOW_DEGENERATE, 0, ""},
+    {F_ALLOW_DEGENERATE, 1, ""},
 };
 
 static void test_config_fields(void) {

@@ -548,6 +548,72 @@ static void test_no_overlap_at_initial_pose(void) {
     scn_cloud_free(&far);
 }
 
+/* The angle (degrees) between v and the span of the first k rows of `rows` (6 numbers each), by Gram-Schmidt. */
+static double angle_to_span_deg(const double v[6], const double *rows, int k) {
+    double basis[6][6], proj = 0.0, norm = 0.0;
+    int i, j, l;
+    for (i = 0; i < k; ++i) {
+        double len = 0.0;
+        for (j = 0; j < 6; ++j) basis[i][j] = rows[6 * i + j];
+        for (l = 0; l < i; ++l) {
+            double d = 0.0;
+            for (j = 0; j < 6; ++j) d += basis[i][j] * basis[l][j];
+            for (j = 0; j < 6; ++j) basis[i][j] -= d * basis[l][j];
+        }
+        for (j = 0; j < 6; ++j) len += basis[i][j] * basis[i][j];
+        len = sqrt(len);
+        for (j = 0; j < 6; ++j) basis[i][j] /= len;
+    }
+    for (i = 0; i < k; ++i) {
+        double d = 0.0;
+        for (j = 0; j < 6; ++j) d += v[j] * basis[i][j];
+        proj += d * d;
+    }
+    for (j = 0; j < 6; ++j) norm += v[j] * v[j];
+    return acos(fmin(1.0, sqrt(proj / norm))) * 180.0 / 3.14159265358979323846;
+}
+
+/* Degeneracy as the result reports it: degenerate, `count` weak directions (unit rows, the rest NaN), each
+ * true free direction within 10 degrees of their span; then the same call with allow_degenerate = 1 is valid
+ * (the scenes converge and align well) with the same weak directions, bit for bit. */
+static void check_degenerate(const char *label, const kissm_result *r, const double (*free_dirs)[6], int count,
+                             int32_t refine_mode, double voxel, const kissm_points *s, const kissm_points *t,
+                             const double initial[16]) {
+    int i, j;
+    CHECK_MSG(r->degenerate == 1 && r->num_weak_directions == count, "%s: degenerate %d with %d weak directions", label,
+              (int)r->degenerate, (int)r->num_weak_directions);
+    if (r->num_weak_directions != count) return;
+    for (i = 0; i < 6; ++i) {
+        double n2 = 0.0;
+        for (j = 0; j < 6; ++j) n2 += r->weak_directions[6 * i + j] * r->weak_directions[6 * i + j];
+        if (i < count)
+            CHECK_MSG(fabs(n2 - 1.0) < 1e-12, "%s: weak direction %d has length^2 %g", label, i, n2);
+        else
+            CHECK_MSG(isnan(n2), "%s: row %d beyond the weak directions is not NaN", label, i);
+    }
+    for (i = 0; i < count; ++i) {
+        const double a = angle_to_span_deg(free_dirs[i], r->weak_directions, count);
+        fprintf(stderr, "  %s: free direction %d is %.3f deg off the reported ones\n", label, i, a);
+        CHECK_MSG(a < 10.0, "%s: free direction %d is %.2f deg off the reported ones", label, i, a);
+    }
+    {
+        kissm_config c = scn_config(voxel);
+        kissm_matcher *m = NULL;
+        kissm_result allowed;
+        c.refine_mode = refine_mode;
+        c.num_threads = 2;
+        c.allow_degenerate = 1;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        scn_result_poison(&allowed);
+        CHECK_EQ_INT(kissm_refine(m, s, t, initial, &allowed), KISSM_OK);
+        CHECK_MSG(allowed.valid == 1 && allowed.degenerate == 1, "%s, allowed: valid %d (reason %d), degenerate %d",
+                  label, (int)allowed.valid, (int)allowed.reason, (int)allowed.degenerate);
+        CHECK(memcmp(allowed.weak_directions, r->weak_directions, sizeof r->weak_directions) == 0);
+        CHECK(memcmp(allowed.transform, r->transform, sizeof r->transform) == 0);
+        kissm_destroy(m);
+    }
+}
+
 /* A corridor along the source's x axis: the pose slides along it. Refinement from the truth: valid 0,
  * UNCONSTRAINED, a small condition, and the information's free direction is the slide in the source frame,
  * (0, 0, 0, 1, 0, 0), not the target frame's (0, R x). */
@@ -582,7 +648,10 @@ static void test_corridor(void) {
                   r.refine_condition);
         {
             const kissm_config c = scn_config(0.25);
+            const double free_dirs[1][6] = {{0, 0, 0, 1, 0, 0}};
             check_prior_rule("corridor", &r, &c);
+            if (k_modes[mode] != KISSM_REFINE_NONE)
+                check_degenerate("corridor", &r, free_dirs, 1, k_modes[mode], 0.25, &s, &t, initial);
         }
         /* the weakest direction is the slide in the source frame: far less information than across the
          * corridor, or than the slide expressed in the target frame would have */
@@ -641,6 +710,8 @@ static void test_plane_and_pipe(void) {
         CHECK_EQ_INT(r.valid, 0);
         CHECK_MSG(r.reason == KISSM_REASON_UNCONSTRAINED, "plane, %s: reason %d", k_mode_names[mode], (int)r.reason);
         CHECK(r.refine_condition < scn_config(0.3).min_refine_condition);
+        CHECK_MSG(r.degenerate == 1 && r.num_weak_directions == 3, "plane, %s: degenerate %d, %d weak directions",
+                  k_mode_names[mode], (int)r.degenerate, (int)r.num_weak_directions);
         kissm_destroy(m);
     }
 
@@ -674,6 +745,12 @@ static void test_plane_and_pipe(void) {
             check_refined_fields("pipe", &r, 30);
             CHECK_EQ_INT(r.valid, 0);
             CHECK_MSG(r.reason == KISSM_REASON_UNCONSTRAINED, "pipe, %s: reason %d", k_mode_names[mode], (int)r.reason);
+            {
+                double free_dirs[2][6];
+                memcpy(free_dirs[0], slide, sizeof slide);
+                memcpy(free_dirs[1], turn, sizeof turn);
+                check_degenerate("pipe", &r, (const double(*)[6])free_dirs, 2, k_modes[mode], 0.25, &s, &t, initial);
+            }
             {
                 const double s_slide = information_share(r.information, slide);
                 const double s_turn = information_share(r.information, turn);

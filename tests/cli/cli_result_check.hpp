@@ -33,6 +33,8 @@ inline std::vector<std::string> contract_keys(bool refine_command) {
                           "overlap",
                           "refine_rmse",
                           "refine_condition",
+                          "degenerate",
+                          "weak_directions",
                           "inlier_coverage",
                           "refine_iterations",
                           "refine_converged",
@@ -84,7 +86,13 @@ inline void check_contract(const Json &j, bool refine_command, const char *what)
               joined(j.at("counts").keys()).c_str());
     CHECK_MSG(j.at("time_ms").keys() == contract_time_keys(), "%s: time_ms keys %s", what,
               joined(j.at("time_ms").keys()).c_str());
-    CHECK_MSG(j.at("valid").is(T::Bool) && j.at("refine_converged").is(T::Bool), "%s: valid/refine_converged", what);
+    CHECK_MSG(j.at("valid").is(T::Bool) && j.at("refine_converged").is(T::Bool) && j.at("degenerate").is(T::Bool),
+              "%s: valid/refine_converged/degenerate", what);
+    // One row of 6 numbers per free direction, none unless degenerate.
+    const Json &weak = j.at("weak_directions");
+    CHECK_MSG(weak.is(T::Array) && weak.items.size() <= 6 && weak.is_matrix(weak.items.size(), 6, false) &&
+                  (weak.items.empty() != j.at("degenerate").boolean),
+              "%s: weak_directions", what);
     CHECK_MSG(j.at("reason").is(T::String) && j.at("refine").is(T::String), "%s: reason/refine", what);
     CHECK_MSG(j.at("reason_code").is(T::Number) && j.at("refine_iterations").is(T::Number) &&
                   j.at("final_inliers").is(T::Number),
@@ -170,6 +178,9 @@ inline void check_matches_library(const Json &j, const kissm_result &r, const ch
                    {"tilt", r.tilt}};
     for (const auto &s : scalars) check_scalar(j.at(s.key), s.value, what, s.key);
     check_doubles(j.at("inlier_extent").flat(), r.inlier_extent, 3, what, "inlier_extent");
+    CHECK_MSG(j.at("degenerate").boolean == (r.degenerate != 0), "%s: degenerate", what);
+    check_doubles(j.at("weak_directions").flat(), r.weak_directions, static_cast<size_t>(6 * r.num_weak_directions),
+                  what, "weak_directions");
     check_count(j.at("refine_iterations"), static_cast<uint64_t>(r.refine_iterations), what, "refine_iterations");
     CHECK_MSG(j.at("refine_converged").boolean == (r.refine_converged != 0), "%s: refine_converged", what);
     check_count(j.at("final_inliers"), r.num_final_inliers, what, "final_inliers");

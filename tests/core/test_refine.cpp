@@ -80,6 +80,21 @@ Scene corridor(double step, double phase) {
     return s;
 }
 
+// A tunnel along x: a cylinder of radius 2 about the line through `axis_point` (slides along x and turns about
+// its axis).
+Scene tunnel(double step, double phase, const Vec3d &axis_point) {
+    Scene s;
+    const int around = static_cast<int>(std::lround(2.0 * kPi * 2.0 / step));
+    const int along = static_cast<int>(std::lround(20.0 / step));
+    for (int i = 0; i < along; ++i)
+        for (int j = 0; j < around; ++j) {
+            const double a = 2.0 * kPi * (j + 0.5 * phase) / around;
+            const Vec3d radial(0.0, std::cos(a), std::sin(a));
+            s.push(axis_point + Vec3d(-10.0 + step * (i + 0.25 + 0.5 * phase), 0, 0) + 2.0 * radial, -radial);
+        }
+    return s;
+}
+
 Scene plane(double step, double phase) {
     Scene s;
     rect(s, Vec3d(-8, -8, 0), Vec3d(16, 0, 0), Vec3d(0, 16, 0), step, phase);
@@ -404,6 +419,85 @@ static void test_corridor_and_plane_are_unconstrained() {
     }
 }
 
+// Degeneracy: the directions the refined pose leaves free, in the callers' frame (the source's local frame
+// moved by `origin`), against the true null directions of each scene: a corridor's slide, a tunnel's slide and
+// turn about its axis, a plane's two slides and its turn about the normal. Each true direction must lie within
+// 10 degrees of the span of the reported ones, and their count must be right; a closed room has none.
+static double angle_to_span_deg(const Vector6d &v, const std::vector<Vector6d> &span) {
+    Eigen::MatrixXd A(6, static_cast<Eigen::Index>(span.size()));
+    for (std::size_t i = 0; i < span.size(); ++i) A.col(static_cast<Eigen::Index>(i)) = span[i];
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+    const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(6, A.cols());
+    const double inside = (Q.transpose() * v).norm() / v.norm();
+    return std::acos(std::min(1.0, inside)) * 180.0 / kPi;
+}
+
+static void test_weak_directions() {
+    const Vec3d origin(3.0, -2.0, 1.0);
+    // A turn about the target-frame line (a, d) by theta, as a perturbation of T exp(xi) in the callers' source
+    // frame: omega = R^T d, tau_local = R^T (d x (t - a)), tau = tau_local + origin x omega.
+    const auto turn = [&](const Vec3d &a, const Vec3d &d) {
+        Vector6d v;
+        v.head<3>() = kRtrue.transpose() * d;
+        v.tail<3>() = kRtrue.transpose() * d.cross(kTtrue - a) + origin.cross(Vec3d(v.head<3>()));
+        return v;
+    };
+    const auto slide = [&](const Vec3d &d) {
+        Vector6d v = Vector6d::Zero();
+        v.tail<3>() = kRtrue.transpose() * d;
+        return v;
+    };
+    struct Case {
+        const char *name;
+        Scene target;
+        std::vector<Vector6d> free;
+    };
+    const Vec3d axis_point(0.0, 0.5, 1.0);
+    std::vector<Case> cases;
+    cases.push_back({"corridor", corridor(0.2, 0.0), {slide(Vec3d::UnitX())}});
+    cases.push_back(
+        {"tunnel", tunnel(0.2, 0.0, axis_point), {slide(Vec3d::UnitX()), turn(axis_point, Vec3d::UnitX())}});
+    cases.push_back({"plane",
+                     plane(0.25, 0.0),
+                     {slide(Vec3d::UnitX()), slide(Vec3d::UnitY()), turn(Vec3d::Zero(), Vec3d::UnitZ())}});
+    cases.push_back({"room", room(0.2, 0.0), {}});
+    for (const RefineMode mode : kModes) {
+        for (const Case &c : cases) {
+            const Scene source = to_source(c.target, kRtrue, kTtrue);
+            const RefineOutput o = run(source, c.target, kRtrue, kTtrue, params_for(mode), 2);
+            const std::vector<Vector6d> weak = weak_directions_in_caller_frame(o, origin, 0.01);
+            std::fprintf(stderr, "  %s %s: %zu weak, ratios %.2g %.2g %.2g %.2g\n", mode_name(mode), c.name,
+                         weak.size(), o.direction_ratio[0], o.direction_ratio[1], o.direction_ratio[2],
+                         o.direction_ratio[3]);
+            CHECK_MSG(weak.size() == c.free.size(), "%s %s: %zu weak directions, expected %zu", mode_name(mode), c.name,
+                      weak.size(), c.free.size());
+            if (weak.size() != c.free.size()) continue;
+            for (const Vector6d &w : weak) {
+                CHECK(std::abs(w.norm() - 1.0) < 1e-12);
+                Eigen::Index k = 0;
+                w.cwiseAbs().maxCoeff(&k);
+                CHECK(w[k] > 0.0);
+            }
+            for (std::size_t i = 0; i < c.free.size(); ++i) {
+                const double a = angle_to_span_deg(c.free[i], weak);
+                CHECK_MSG(a < 10.0, "%s %s: free direction %zu is %.2f deg off the reported ones", mode_name(mode),
+                          c.name, i, a);
+            }
+            // And the reported ones lie in the true span (none of them is a constrained direction).
+            for (std::size_t i = 0; i < weak.size(); ++i) {
+                const double a = angle_to_span_deg(weak[i], c.free);
+                CHECK_MSG(a < 10.0, "%s %s: reported direction %zu is %.2f deg off the free ones", mode_name(mode),
+                          c.name, i, a);
+            }
+        }
+    }
+    // With no correspondence at all every direction is free.
+    const RefineOutput none = run(to_source(room(0.2, 0.0), kRtrue, kTtrue), room(0.2, 0.0), kRtrue,
+                                  kTtrue + Vec3d(50, 0, 0), params_for(RefineMode::Gicp), 1);
+    CHECK(none.num_correspondences == 0);
+    CHECK(weak_directions_in_caller_frame(none, origin, 0.01).size() == 6);
+}
+
 // The overlap is the share of all source points (normals or not) within max_distance of a target point.
 static void test_overlap_against_brute_force() {
     const Scene full = room(0.2, 0.0);
@@ -521,7 +615,7 @@ static void test_validity_rules() {
     loose.rotation_uncertainty = std::numeric_limits<double>::infinity(); // all inliers on one point
     CHECK(coarse_validity(100, loose, coarse) == Reason::UncertainRotation);
 
-    const RefinedRule rule{10, 0.4, 1e-2, 0.25, 0.1};
+    const RefinedRule rule{10, 0.4, 1e-2, 0.25, 0.1, false};
     RefinedEvidence good;
     good.num_correspondences = 6;
     good.overlap = 0.4;
@@ -545,6 +639,17 @@ static void test_validity_rules() {
     CHECK(prior_validity(e, rule) == Reason::Unconstrained);
     e.converged = false;
     CHECK(prior_validity(e, rule) == Reason::Unconstrained);
+    // allow_degenerate: the condition is not asked for, every other test still is.
+    RefinedRule allowing = rule;
+    allowing.allow_degenerate = true;
+    CHECK(prior_validity(e, allowing) == Reason::NotConverged);
+    e.converged = true;
+    CHECK(prior_validity(e, allowing) == Reason::None);
+    CHECK(refined_validity(10, spread, e, allowing) == Reason::None);
+    e.condition = 0.0;
+    CHECK(prior_validity(e, allowing) == Reason::None);
+    e.overlap = std::nextafter(0.4, 0.0);
+    CHECK(prior_validity(e, allowing) == Reason::LowOverlap);
     e = good;
     e.converged = false;
     CHECK(prior_validity(e, rule) == Reason::NotConverged);
@@ -584,6 +689,7 @@ int main() {
     RUN_TEST(test_thread_counts_bitwise);
     RUN_TEST(test_information_matches_differences);
     RUN_TEST(test_corridor_and_plane_are_unconstrained);
+    RUN_TEST(test_weak_directions);
     RUN_TEST(test_overlap_against_brute_force);
     RUN_TEST(test_nothing_to_match);
     RUN_TEST(test_iteration_cap);

@@ -49,9 +49,10 @@ inline void set_refinement(kissm_config &c, unsigned tens) {
     case 5: c.min_overlap = 1.0; break;
     case 6: c.refine_max_distance_gain = 0.05; break; // hardly anything within reach
     case 7: c.refine_max_iterations = 0; break;       // out of range: kissm_create refuses it
-    case 8:                                           // the validity rules at their loosest
+    case 8: // the validity rules at their loosest: every direction but the strongest counts as weak (degenerate
+            // results with their weak directions), and such poses may be valid
         c.max_rotation_uncertainty = 3.15, c.min_inlier_coverage = 0.0, c.refine_min_inliers = 3;
-        c.min_overlap = 0.0, c.min_refine_condition = 0.0, c.max_refine_rmse_gain = 100.0;
+        c.min_overlap = 0.0, c.min_refine_condition = 1.0, c.allow_degenerate = 1, c.max_refine_rmse_gain = 100.0;
         break;
     default: break;
     }
@@ -208,8 +209,20 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
     if (std::isnan(r.overlap)) {
         for (double v : r.information)
             if (!std::isnan(v)) return false;
+        for (double v : r.weak_directions)
+            if (!std::isnan(v)) return false;
         return std::isnan(r.refine_rmse) && std::isnan(r.refine_condition) && r.time_refine_ms == 0.0 &&
-               r.num_refine_correspondences == 0 && r.refine_iterations == 0 && r.refine_converged == 0;
+               r.num_refine_correspondences == 0 && r.refine_iterations == 0 && r.refine_converged == 0 &&
+               r.degenerate == 0 && r.num_weak_directions == 0;
+    }
+    // Degenerate exactly when a direction is below the condition threshold; its rows unit vectors, the rest NaN.
+    if (r.degenerate != (r.num_weak_directions > 0 ? 1 : 0) || r.num_weak_directions < 0 || r.num_weak_directions > 6)
+        return false;
+    if ((r.degenerate != 0) != !(r.refine_condition >= c.min_refine_condition)) return false;
+    for (int i = 0; i < 6; ++i) {
+        double norm2 = 0.0;
+        for (int j = 0; j < 6; ++j) norm2 += r.weak_directions[6 * i + j] * r.weak_directions[6 * i + j];
+        if (i < r.num_weak_directions ? !(std::fabs(norm2 - 1.0) < 1e-9) : !std::isnan(norm2)) return false;
     }
     for (int i = 0; i < 6; ++i)
         for (int j = 0; j < 6; ++j)
@@ -226,8 +239,8 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
     if (r.num_refine_correspondences > r.num_source_voxels) return false;
     // A valid refined pose passed the refined rule's dense part (docs/refinement.md).
     if (r.valid && (r.num_refine_correspondences < 6 || !(r.overlap >= c.min_overlap) ||
-                    !(r.refine_condition >= c.min_refine_condition) || r.refine_converged != 1 ||
-                    !(r.refine_rmse <= c.max_refine_rmse_gain * c.voxel_size)))
+                    (!c.allow_degenerate && !(r.refine_condition >= c.min_refine_condition)) ||
+                    r.refine_converged != 1 || !(r.refine_rmse <= c.max_refine_rmse_gain * c.voxel_size)))
         return false;
     return r.time_refine_ms >= 0.0 && r.time_total_ms >= r.time_refine_ms;
 }

@@ -28,30 +28,36 @@ typedef struct {
     int32_t suppression;         /* KISSM_SUPPRESS_* */
     int32_t rotation_dof;        /* 3 or 1 */
     double max_refine_rmse_gain; /* 0: the default */
+    double min_refine_condition; /* 0: the default */
+    int32_t allow_degenerate;    /* kissm_config.allow_degenerate */
 } golden_case;
 
 static const golden_case kCases[] = {
     {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE,
-     3, 0.0},
+     3, 0.0, 0.0, 0},
     {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE,
-     3, 0.0},
+     3, 0.0, 0.0, 0},
     {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 3, 0.0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
     {"yard_float32_v0.3_point_to_plane", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_POINT_TO_PLANE, 0,
-     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0},
+     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
     {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 3, 0.0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
     {"yard_float64_v0.25_local", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_LOCAL,
-     KISSM_SUPPRESS_NONE, 3, 0.0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
     {"yard_float32_v0.3_sign_free_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_SIGN_FREE,
-     KISSM_SUPPRESS_NONE, 3, 0.0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
     {"yard_float64_v0.25_ground", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_GROUND, 3, 0.0},
+     KISSM_SUPPRESS_GROUND, 3, 0.0, 0.0, 0},
     {"yard_float32_v0.3_yaw_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 1, 0.0},
+     KISSM_SUPPRESS_NONE, 1, 0.0, 0.0, 0},
     /* kissm_refine held to a residual below what the yard's right alignment leaves: LOOSE_ALIGNMENT. */
     {"yard_float64_v0.25_refine_gicp_tight", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 3, 0.05},
+     KISSM_SUPPRESS_NONE, 3, 0.05, 0.0, 0},
+    /* A condition threshold above what the yard's directions reach: degenerate, with weak directions, and valid
+     * because the case allows it. */
+    {"yard_float64_v0.25_refine_gicp_allow_degenerate", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1,
+     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0, 0.5, 1},
 };
 
 static const char *viewpoint_name(int32_t mode) {
@@ -137,6 +143,8 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     config.suppression = gc->suppression;
     config.rotation_dof = gc->rotation_dof;
     if (gc->max_refine_rmse_gain > 0.0) config.max_refine_rmse_gain = gc->max_refine_rmse_gain;
+    if (gc->min_refine_condition > 0.0) config.min_refine_condition = gc->min_refine_condition;
+    config.allow_degenerate = gc->allow_degenerate;
     result->struct_size = sizeof *result;
     status = kissm_create(&config, &matcher);
     if (status == KISSM_OK && gc->is_refine_call) {
@@ -162,10 +170,10 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     X(num_source_keypoints) X(num_target_keypoints) X(num_initial_correspondences)                   \
     X(num_pruned_correspondences) X(num_rotation_inliers) X(num_final_inliers) X(max_core_number)    \
     X(num_refine_correspondences) X(refine_iterations) X(refine_converged) X(num_source_suppressed)     \
-    X(num_target_suppressed)
+    X(num_target_suppressed) X(degenerate) X(num_weak_directions)
 /* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
 #define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt)
-#define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36)
+#define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36) X(weak_directions, 36)
 /* clang-format on */
 
 static void print_double(double v) {
@@ -201,14 +209,21 @@ static double parse_double(const char **p) {
     return v;
 }
 
-/* Bit for bit, or both NaN. */
-/* kissm_config_init's max_refine_rmse_gain, written into every case so that the other languages set it. */
+/* kissm_config_init's max_refine_rmse_gain and min_refine_condition, written into every case so that the other
+ * languages set them. */
 static double default_rmse_gain(void) {
     kissm_config c;
     kissm_config_init(&c, sizeof c);
     return c.max_refine_rmse_gain;
 }
 
+static double default_min_condition(void) {
+    kissm_config c;
+    kissm_config_init(&c, sizeof c);
+    return c.min_refine_condition;
+}
+
+/* Bit for bit, or both NaN. */
 static int same_double(double a, double b) { return (a != a && b != b) || memcmp(&a, &b, sizeof a) == 0; }
 
 static void write_golden(void) {
@@ -228,6 +243,9 @@ static void write_golden(void) {
         printf("      \"rotation_dof\": %d,\n", (int)kCases[c].rotation_dof);
         printf("      \"max_refine_rmse_gain\": %.17g,\n",
                kCases[c].max_refine_rmse_gain > 0.0 ? kCases[c].max_refine_rmse_gain : default_rmse_gain());
+        printf("      \"min_refine_condition\": %.17g,\n",
+               kCases[c].min_refine_condition > 0.0 ? kCases[c].min_refine_condition : default_min_condition());
+        printf("      \"allow_degenerate\": %d,\n", (int)kCases[c].allow_degenerate);
         printf("      \"scalar\": \"%s\",\n", kCases[c].scalar_type == KISSM_SCALAR_FLOAT32 ? "float32" : "float64");
         printf("      \"voxel_size\": %.17g,\n", kCases[c].voxel_size);
         if (kCases[c].is_refine_call) {

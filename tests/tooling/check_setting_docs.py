@@ -89,7 +89,7 @@ def rust_builder(text: str) -> dict[str, str]:
     """The setters' docs: the entries of the `builder_setters! { ... }` blocks (the getters restate nothing)."""
     docs = {}
     for block in re.finditer(r"^\s*builder_setters! \{\n(.*?)^\s*\}\n", text, re.S | re.M):
-        for m in re.finditer(r"((?:[ \t]*///[^\n]*\n)+)[ \t]*(\w+): (?:count|f64),", block.group(1)):
+        for m in re.finditer(r"((?:[ \t]*///[^\n]*\n)+)[ \t]*(\w+): (?:count|f64|bool),", block.group(1)):
             docs[m.group(2)] = " ".join(line.strip()[3:].strip() for line in m.group(1).splitlines())
     return docs
 

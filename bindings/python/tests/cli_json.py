@@ -35,7 +35,7 @@ COUNTS = {
 REFINE_DOUBLES = ("overlap", "refine_rmse", "refine_condition")
 REFINE_INTS = ("refine_iterations",)
 #: The validity measures, each with the key the JSON prints it right after (numbers; null for NaN and inf).
-MEASURES = {"rotation_uncertainty": "inlier_extent", "inlier_coverage": "refine_condition"}
+MEASURES = {"rotation_uncertainty": "inlier_extent", "inlier_coverage": "weak_directions"}
 
 
 def _parse_int(text: str) -> Any:
@@ -118,10 +118,17 @@ def assert_matches_cli(result: kissm.Result, cli: dict[str, Any], refine_mode: s
     for name in REFINE_INTS:
         assert getattr(result, name) == cli[name], name
     assert result.refine_converged is cli["refine_converged"]
+    # the degeneracy right after refine_condition: a bool, and the k weak directions as k rows of 6 ([] when none)
+    assert result.degenerate is cli["degenerate"]
+    assert len(cli["weak_directions"]) == result.num_weak_directions == len(result.weak_directions)
+    assert all(len(row) == 6 for row in cli["weak_directions"]), cli["weak_directions"]
+    _assert_same_bits("weak_directions", result.weak_directions, cli["weak_directions"])
     assert result.num_refine_correspondences == cli["counts"]["refine_correspondences"]
     assert list(cli["counts"]).index("refine_correspondences") == list(cli["counts"]).index("final_inliers") + 1
     assert list(cli["time_ms"])[-2:] == ["refine", "total"]
     keys = list(cli)
+    assert keys.index("degenerate") == keys.index("refine_condition") + 1, keys
+    assert keys.index("weak_directions") == keys.index("degenerate") + 1, keys
     for name, after in MEASURES.items():
         _assert_same_number(name, getattr(result, name), cli[name])
         assert keys.index(name) == keys.index(after) + 1, (name, keys)

@@ -17,7 +17,7 @@ from kissm._errors import check
 C_FIELDS = [name for name, _ in _ffi.ffi.typeof("kissm_config").fields]
 PLUMBING = {"struct_size", "log_fn", "log_user_data", "progress_fn", "progress_user_data"}
 #: Fields the library requires to be 0: no setting, zeroed by the binding.
-RESERVED = {"reserved1"}
+RESERVED = {"reserved1", "reserved2"}
 
 
 def c_defaults():
@@ -40,6 +40,8 @@ def test_defaults_come_from_kissm_config_init() -> None:
             assert value == tuple(getattr(c, name)), name
         elif name in kissm._config._ENUMS:  # a KISSM_* code in C, its name here
             assert kissm._config._ENUMS[name][value] == getattr(c, name), name
+        elif name in kissm._config._BOOL_FIELDS:  # int32 0/1 in C, a bool here
+            assert type(value) is bool and value == bool(getattr(c, name)), name
         else:
             assert value == getattr(c, name), name
     # and the struct handed to the library is byte for byte kissm_config_init's
@@ -77,6 +79,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         min_refine_condition=0.05,
         refine_normal_radius_gain=1.5,
         max_refine_rmse_gain=0.6,
+        allow_degenerate=True,
     )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
@@ -90,7 +93,8 @@ def test_fields_round_trip_into_the_c_struct() -> None:
     assert (c.refine_translation_epsilon_gain, c.min_overlap) == (5e-3, 0.4)
     assert (c.max_rotation_uncertainty, c.min_inlier_coverage, c.refine_min_inliers) == (0.05, 0.3, 25)
     assert (c.min_refine_condition, c.refine_normal_radius_gain, c.max_refine_rmse_gain) == (0.05, 1.5, 0.6)
-    assert c.reserved1 == 0
+    assert c.allow_degenerate == 1
+    assert c.reserved1 == c.reserved2 == 0
     assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
     # what the matcher got is what was asked for
     with kissm.Matcher(config) as matcher:
@@ -151,6 +155,9 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         ("max_refine_rmse_gain", 0.0, "config.max_refine_rmse_gain is 0; it must be in (0, 100]"),
         ("max_refine_rmse_gain", 100.5, "config.max_refine_rmse_gain is 100.5"),
         ("max_refine_rmse_gain", float("nan"), "config.max_refine_rmse_gain is nan"),
+        # a bool here; an int other than 0 or 1 reaches the library, which names the field
+        ("allow_degenerate", 2, "config.allow_degenerate is 2; it must be in [0, 1]"),
+        ("allow_degenerate", -1, "config.allow_degenerate is -1; it must be in [0, 1]"),
     ],
 )
 def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:
@@ -190,6 +197,9 @@ def test_out_of_int32_range_is_a_valueerror() -> None:
         ("min_refine_condition", None),
         ("refine_normal_radius_gain", "2"),
         ("max_refine_rmse_gain", "0.5"),
+        ("allow_degenerate", "yes"),
+        ("allow_degenerate", 1.0),
+        ("allow_degenerate", None),
     ],
 )
 def test_wrong_types_raise_typeerror(field: str, value: object) -> None:
@@ -210,6 +220,28 @@ def test_reserved_fields_are_zeroed_and_not_settings() -> None:
         with pytest.raises(kissm.InvalidArgumentError, match=f"config.{name} is 1; it must be in \\[0, 0\\]"):
             check(_ffi.lib.kissm_config_validate(c))
         assert name not in kissm.Config().to_dict() and name not in repr(kissm.Config(voxel_size=0.3))
+
+
+def test_allow_degenerate_is_a_bool() -> None:
+    """Default False (kissm_config_init's 0); True, numpy bools and the C values 0 and 1 are accepted and kept
+    as a bool, handed to the library as 0 or 1."""
+    assert kissm.Config().allow_degenerate is False and c_defaults().allow_degenerate == 0
+    for value, expected in [(True, True), (False, False), (1, True), (0, False), (np.bool_(True), True)]:
+        config = kissm.Config(allow_degenerate=value)
+        assert config.allow_degenerate is expected, value
+        assert config._to_c().allow_degenerate == int(expected)
+    assert kissm.Config(allow_degenerate=np.int32(1)) == kissm.Config(allow_degenerate=True)
+    allowed = kissm.Config(allow_degenerate=True)
+    assert repr(allowed) == "kissm.Config(allow_degenerate=True)" and eval(repr(allowed), {"kissm": kissm}) == allowed
+    assert kissm.Config().replace(allow_degenerate=True) == allowed and allowed.to_dict()["allow_degenerate"] is True
+    with kissm.Matcher(allow_degenerate=True) as matcher:
+        assert matcher.config.allow_degenerate is True
+        out = _ffi.ffi.new("kissm_config *")
+        out.struct_size = _ffi.ffi.sizeof("kissm_config")
+        assert _ffi.lib.kissm_get_config(matcher._ptr, out) == 0 and out.allow_degenerate == 1
+    for name in kissm.PRESETS:
+        assert kissm.Config.preset(name).allow_degenerate is False
+        assert kissm.Config.preset(name, allow_degenerate=True).allow_degenerate is True
 
 
 def test_viewpoint_needs_three_coordinates() -> None:
@@ -288,6 +320,7 @@ def test_pickle_and_copy() -> None:
         min_refine_condition=0.02,
         refine_normal_radius_gain=2.5,
         max_refine_rmse_gain=0.5,
+        allow_degenerate=True,
     )
     for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
         assert pickle.loads(pickle.dumps(config, protocol)) == config

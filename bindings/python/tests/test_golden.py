@@ -2,8 +2,8 @@
 """Cross-language round trip, Python side: the clouds of tests/data registered (``"call": "register"``) or
 refined from the case's initial transform (``"call": "refine"``) as listed in tests/data/golden.json (written by
 the C library) give the same result bit for bit: validity, reason, every count, the transforms, the information
-matrix and every double (null in the file is NaN). The C suite (tests/roundtrip) and the Rust suite
-(kissm/tests/golden.rs) check the same file."""
+matrix, the degeneracy and its weak directions, and every double (null in the file is NaN). The C suite
+(tests/roundtrip) and the Rust suite (kissm/tests/golden.rs) check the same file."""
 
 from __future__ import annotations
 
@@ -40,6 +40,8 @@ COUNTS = [
     "num_refine_correspondences",
     "refine_iterations",
     "refine_converged",
+    "degenerate",
+    "num_weak_directions",
     "num_source_suppressed",
     "num_target_suppressed",
 ]
@@ -53,6 +55,9 @@ DOUBLES = [
     "tilt",
 ]
 ARRAYS = ["transform", "coarse_transform", "information"]
+#: The weak directions: 36 doubles in the file (row-major 6x6, the rows beyond num_weak_directions NaN), the
+#: rows in use in Python, shape (num_weak_directions, 6).
+WEAK = ["weak_directions"]
 
 
 def bits(x: float | None) -> bytes:
@@ -75,6 +80,8 @@ def run_case(case: dict[str, Any], threads: int) -> kissm.Result:
         suppression=case["suppression"],
         rotation_dof=case["rotation_dof"],
         max_refine_rmse_gain=case["max_refine_rmse_gain"],
+        min_refine_condition=case["min_refine_condition"],
+        allow_degenerate=bool(case["allow_degenerate"]),
     )
     with kissm.Matcher(config) as matcher:
         if case["call"] == "refine":
@@ -93,11 +100,16 @@ def test_golden_file_lists_every_kind_of_case() -> None:
     assert {3, 1} <= {case["rotation_dof"] for case in GOLDEN["cases"]}
     # A refinement held to a tighter residual than its alignment leaves: KISSM_REASON_LOOSE_ALIGNMENT.
     assert _ffi.lib.KISSM_REASON_LOOSE_ALIGNMENT in {case["reason"] for case in GOLDEN["cases"]}
+    # A degenerate refined pose, valid under allow_degenerate, with its weak directions.
+    assert any(case["valid"] and case["degenerate"] and case["allow_degenerate"] for case in GOLDEN["cases"])
     for case in GOLDEN["cases"]:
         assert case["call"] in ("register", "refine") and case["refine"] in kissm._config.REFINE_MODES
         assert case["viewpoint"] in kissm._config.VIEWPOINT_MODES
         assert ("initial_transform" in case) == (case["call"] == "refine")
-        assert all(name in case for name in COUNTS + DOUBLES + ARRAYS), case["name"]
+        assert all(name in case for name in COUNTS + DOUBLES + ARRAYS + WEAK), case["name"]
+        assert case["allow_degenerate"] in (0, 1) and 0.0 <= case["min_refine_condition"] <= 1.0, case["name"]
+        assert 0 <= case["num_weak_directions"] <= 6 and len(case["weak_directions"]) == 36, case["name"]
+        assert case["degenerate"] == (case["num_weak_directions"] > 0), case["name"]
 
 
 @pytest.mark.parametrize("case", GOLDEN["cases"], ids=lambda c: c["name"])
@@ -112,6 +124,13 @@ def test_golden(case: dict[str, Any], threads: int) -> None:
         assert got == expect, f"{name}: {getattr(result, name).ravel().tolist()} != {case[name]}"
     for name in COUNTS:
         assert int(getattr(result, name)) == case[name], name
+    k = case["num_weak_directions"]
+    weak = result.weak_directions
+    assert weak.shape == (k, 6) and weak.dtype == np.float64 and type(result.degenerate) is bool
+    got = [bits(v) for v in weak.ravel()]
+    expect = [bits(v) for v in case["weak_directions"][: 6 * k]]
+    assert got == expect, f"weak_directions: {weak.tolist()} != {case['weak_directions'][: 6 * k]}"
+    assert all(bits(v) == bits(math.nan) for v in case["weak_directions"][6 * k :])  # the unused rows, NaN in C
     for name in DOUBLES:
         assert bits(getattr(result, name)) == bits(case[name]), f"{name}: {getattr(result, name)!r} != {case[name]}"
     assert result.refined == (case["refine"] != "none" or case["call"] == "refine")

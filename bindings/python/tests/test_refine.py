@@ -446,6 +446,11 @@ def test_noisy_plane_against_itself_is_unconstrained_along_the_plane(mode: str) 
     assert along(1, 0, 0, 0, 0, 0) > 0.1 and along(0, 1, 0, 0, 0, 0) > 0.1  # and so is the tilt
     weakest = np.linalg.eigh(info)[1][:, 0]  # its near-null direction lies along the plane
     assert np.linalg.norm(weakest[[0, 1, 5]]) < 1e-2, weakest
+    # the library names the same three free directions: their span holds x, y and the turn about z
+    assert result.degenerate and result.weak_directions.shape == (3, 6), result.weak_directions
+    basis = np.linalg.qr(result.weak_directions.T)[0]
+    for free in np.eye(6)[[3, 4, 2]]:
+        assert np.linalg.norm(basis.T @ free) > math.cos(math.radians(1.0)), (free, result.weak_directions)
 
 
 # ---- Result plumbing --------------------------------------------------------------------------------------

@@ -188,6 +188,10 @@ typedef struct kissm_config {
     double sensor_height;
 
     double max_refine_rmse_gain;
+
+    int32_t allow_degenerate;
+
+    int32_t reserved2;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
@@ -303,6 +307,12 @@ typedef struct kissm_result {
     double time_suppression_ms;
 
     double tilt;
+
+    int32_t degenerate;
+
+    int32_t num_weak_directions;
+
+    double weak_directions[36];
 } kissm_result;
 
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);

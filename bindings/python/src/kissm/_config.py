@@ -8,6 +8,8 @@ import numbers
 from collections.abc import Mapping
 from typing import Any, Literal
 
+import numpy as np
+
 from ._errors import check
 from ._ffi import ffi, lib
 
@@ -76,6 +78,8 @@ _INT_FIELDS = (
     "refine_min_inliers",
     "rotation_dof",
 )
+#: int32 0/1 in C, bool here.
+_BOOL_FIELDS = ("allow_degenerate",)
 
 
 def _new_c_config() -> Any:
@@ -95,6 +99,7 @@ def _values_of(c: Any) -> dict[str, Any]:
     """The settings of a C ``kissm_config *`` as Config fields."""
     values: dict[str, Any] = {name: float(getattr(c, name)) for name in _FLOAT_FIELDS}
     values.update({name: int(getattr(c, name)) for name in _INT_FIELDS})
+    values.update({name: bool(getattr(c, name)) for name in _BOOL_FIELDS})
     for name in _VECTOR_FIELDS:
         values[name] = tuple(float(v) for v in getattr(c, name))
     for field in _ENUMS:
@@ -115,6 +120,15 @@ def _as_float(field: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"Config.{field} must be a real number, not {type(value).__name__}")
     return float(value)
+
+
+def _as_bool(field: str, value: Any) -> bool | int:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if not isinstance(value, numbers.Integral):
+        raise TypeError(f"Config.{field} must be a bool, not {type(value).__name__}")
+    # 0 and 1 are the C values; any other int is kept: the library rejects it with its own message.
+    return bool(value) if value in (0, 1) else int(value)
 
 
 def _as_enum(field: str, value: Any) -> str | int:
@@ -228,6 +242,14 @@ class Config:
     """With refinement (and :meth:`Matcher.refine`), ``Result.valid`` needs ``Result.refine_rmse`` <= gain *
     ``voxel_size`` (else reason "the refined clouds stay apart": a local optimum beside the right pose, as a
     refinement from a prior outside its convergence basin reaches); in (0, 100]."""
+    allow_degenerate: bool = _DEFAULTS["allow_degenerate"]
+    """With refinement (and :meth:`Matcher.refine`): whether a refined pose that leaves directions free
+    (``Result.degenerate``: a corridor leaves one, a tunnel two, a plane three; directions carrying less than
+    ``min_refine_condition`` of the strongest one's information) may be valid. False (the default): such a pose
+    ends ``valid`` False with reason "the refined pose is not constrained in every direction". True: it is judged
+    by the other rules and, if valid, flagged ``Result.degenerate`` with its free directions in
+    ``Result.weak_directions``, for callers who constrain those from elsewhere (odometry, a motion model). Stored
+    in [0, 1] as an integer: False or True."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object
@@ -235,6 +257,8 @@ class Config:
             set_field(self, name, _as_float(name, getattr(self, name)))
         for name in _INT_FIELDS:
             set_field(self, name, _as_int(name, getattr(self, name)))
+        for name in _BOOL_FIELDS:
+            set_field(self, name, _as_bool(name, getattr(self, name)))
         for name in _ENUMS:
             set_field(self, name, _as_enum(name, getattr(self, name)))
         for name in _VECTOR_FIELDS:
@@ -265,10 +289,12 @@ class Config:
         c = _new_c_config()
         for name in _FLOAT_FIELDS:
             setattr(c, name, getattr(self, name))
-        for name in _INT_FIELDS + tuple(_ENUMS):
+        for name in _INT_FIELDS + _BOOL_FIELDS + tuple(_ENUMS):
             value = getattr(self, name)
             if isinstance(value, str):
                 value = _ENUMS[name][value]
+            elif isinstance(value, bool):
+                value = int(value)
             try:
                 setattr(c, name, value)
             except OverflowError:
@@ -277,7 +303,8 @@ class Config:
             target = getattr(c, name)
             for i in range(3):
                 target[i] = getattr(self, name)[i]
-        c.reserved1 = 0  # not a setting: the library refuses anything else (kept for a future field)
+        c.reserved1 = 0  # not settings: the library refuses anything else (kept for future fields)
+        c.reserved2 = 0
         return c
 
     def replace(self, **changes: Any) -> Config:

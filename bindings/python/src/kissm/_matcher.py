@@ -297,8 +297,9 @@ class Matcher:
         Both clouds are voxelised, their normals estimated, and ``initial`` refined with ``config.refine_mode``
         ('gicp' when it is 'none'). The Result's ``coarse_transform`` is ``initial`` (made exactly rigid),
         ``transform`` the refined pose, ``information`` its information matrix; ``valid`` says whether the
-        refined pose overlaps the target enough, is constrained in every direction and refinement converged
-        (else ``reason``).
+        refined pose overlaps the target enough, is constrained in every direction (unless
+        ``config.allow_degenerate``; ``degenerate`` and ``weak_directions`` say which directions are free),
+        refinement converged and left the clouds close (else ``reason``).
 
         Raises:
             TypeError, ValueError: ``initial`` is not a (4, 4) array of real numbers, or the clouds are not

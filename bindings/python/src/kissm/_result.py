@@ -92,7 +92,8 @@ class Result:
     ``inlier_coverage`` >= ``Config.min_inlier_coverage``, ``refine_condition`` >= ``Config.min_refine_condition``
     (a pose constrained in every direction), a refinement that converged (``refine_converged``) and clouds it
     left within ``Config.max_refine_rmse_gain`` voxels of each other (``refine_rmse``). :meth:`Matcher.refine`
-    checks only the overlap, the condition, the convergence and the residual.
+    checks only the overlap, the condition, the convergence and the residual. With ``Config.allow_degenerate``
+    the condition is no rule: a pose that leaves directions free may be valid, flagged ``degenerate``.
     """
 
     valid: bool
@@ -216,12 +217,30 @@ class Result:
     """With ``Config.rotation_dof=1``: the angle (radians) by which the best unconstrained rotation on the yaw
     solution's inliers turns ``Config.up``; above what the noise allows, the pair is not valid (reason "the
     clouds' relative roll or pitch is not zero"). NaN otherwise."""
+    degenerate: bool
+    """Whether refinement ran and the aligned clouds leave directions of the pose free (a corridor leaves one, a
+    tunnel two, a plane three): ``weak_directions`` is not empty. A direction is free when its share of the
+    information, with rotations measured by the displacements they cause at the matched points, is below
+    ``Config.min_refine_condition`` of the strongest direction's (``refine_condition`` is the weakest share).
+    Such a pose is not valid (reason "the refined pose is not constrained in every direction") unless
+    ``Config.allow_degenerate``. False when refinement did not run: without it there is no dense information to
+    tell."""
+    num_weak_directions: int
+    """The free directions counted, 0 to 6: ``len(weak_directions)`` (0 unless ``degenerate``)."""
+    weak_directions: np.ndarray
+    """(k, 6) float64, k in 0..6: the free directions (see ``degenerate``), weakest first; shape (0, 6) when there
+    are none or refinement did not run. Each row is a unit 6-vector ``xi`` = (rotation in radians, translation in
+    the clouds' unit) in the order and frame of ``information`` (``transform @ expm(hat(xi))``: a perturbation
+    on the right, in the source's frame), its largest-magnitude component positive; the pose moved along it
+    changes the alignment by almost nothing. A slide along the target's unit direction ``d`` is the row
+    ``(0, 0, 0, *(rotation.T @ d))``, up to sign."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
         def array(field: Any, n: int, shape: tuple[int, ...]) -> np.ndarray:
             return np.frombuffer(ffi.buffer(field, 8 * n), dtype=np.float64).reshape(shape).copy()
 
+        weak = min(max(int(r.num_weak_directions), 0), 6)
         values: dict[str, Any] = {
             "valid": bool(r.valid),
             "reason": text(lib.kissm_reason_string(r.reason)),
@@ -233,6 +252,10 @@ class Result:
             "coarse_transform": array(r.coarse_transform, 16, (4, 4)),
             "information": array(r.information, 36, (6, 6)),
             "refine_converged": bool(r.refine_converged),
+            "degenerate": bool(r.degenerate),
+            "num_weak_directions": weak,
+            # rows beyond num_weak_directions are NaN in C and left out here
+            "weak_directions": array(r.weak_directions, 36, (6, 6))[:weak].copy(),
         }
         values.update({name: int(getattr(r, name)) for name in _COUNT_FIELDS})
         values.update({name: float(getattr(r, name)) for name in _FLOAT_FIELDS + _TIME_FIELDS})
@@ -289,6 +312,9 @@ class Result:
                 f"{pad}refine_condition {self.refine_condition:.3g}, 1-sigma {rotation_sigma:.3g} deg and "
                 f"{translation_sigma:.3g} (from information),",
             ]
+            if self.degenerate:
+                k = len(self.weak_directions)
+                lines.append(f"{pad}degenerate: {k} free direction{'' if k == 1 else 's'} (weak_directions),")
             turned = _angle_deg(self.coarse_transform, self.transform)
             shifted = float(np.linalg.norm(self.transform[:3, 3] - self.coarse_transform[:3, 3]))
             moved = f" (refinement moved it {turned:.3f} deg and {shifted:.4g})"

@@ -240,10 +240,16 @@ pub struct kissm_config {
  voxelised clouds stay within a fraction of a voxel, wrong local optima do not; in (0, 100].
  Default 0.45.*/
     pub max_refine_rmse_gain: f64,
+    /** 1: a refined pose that leaves a direction free (kissm_result.degenerate: a corridor, a tunnel, a plane) may
+ be valid, flagged, for callers who fuse its weak directions from elsewhere (odometry); 0: such a pose ends
+ valid = 0 with #KISSM_REASON_UNCONSTRAINED; in [0, 1]. Default 0.*/
+    pub allow_degenerate: i32,
+    /// Reserved; must be 0.
+    pub reserved2: i32,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 288usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 296usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -362,6 +368,12 @@ const _: () = {
     [
         "Offset of field: kissm_config::max_refine_rmse_gain",
     ][::core::mem::offset_of!(kissm_config, max_refine_rmse_gain) - 280usize];
+    [
+        "Offset of field: kissm_config::allow_degenerate",
+    ][::core::mem::offset_of!(kissm_config, allow_degenerate) - 288usize];
+    [
+        "Offset of field: kissm_config::reserved2",
+    ][::core::mem::offset_of!(kissm_config, reserved2) - 292usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
@@ -572,10 +584,24 @@ pub struct kissm_result {
     /** With rotation_dof = 1: the angle (radians) by which the best unconstrained rotation on the yaw
  solution's inliers turns kissm_config.up, the evidence for #KISSM_REASON_TILTED. NaN otherwise.*/
     pub tilt: f64,
+    /** 1 when refinement ran and the aligned clouds leave num_weak_directions directions of the pose free:
+ their share of the information, with rotations as displacements at the matched points' radius, is below
+ kissm_config.min_refine_condition of the strongest direction's (refine_condition is the weakest share).
+ A corridor leaves one, a tunnel two, a plane three. Not valid (#KISSM_REASON_UNCONSTRAINED) unless
+ kissm_config.allow_degenerate = 1. 0 when refinement did not run: without it no dense information
+ exists to tell.*/
+    pub degenerate: i32,
+    /// Rows of weak_directions in use, 0 to 6 (0 unless degenerate).
+    pub num_weak_directions: i32,
+    /** The free directions, weakest first, row-major 6x6: row i < num_weak_directions is a unit 6-vector
+ xi = (rotation [rad], translation [m]) in the order and frame of information (T exp(xi), source frame),
+ its largest component positive; a pose moved along it changes the alignment by almost nothing. Rows
+ beyond num_weak_directions are NaN.*/
+    pub weak_directions: [f64; 36usize],
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 952usize];
+    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 1248usize];
     ["Alignment of kissm_result"][::core::mem::align_of::<kissm_result>() - 8usize];
     [
         "Offset of field: kissm_result::struct_size",
@@ -712,6 +738,15 @@ const _: () = {
     [
         "Offset of field: kissm_result::tilt",
     ][::core::mem::offset_of!(kissm_result, tilt) - 944usize];
+    [
+        "Offset of field: kissm_result::degenerate",
+    ][::core::mem::offset_of!(kissm_result, degenerate) - 952usize];
+    [
+        "Offset of field: kissm_result::num_weak_directions",
+    ][::core::mem::offset_of!(kissm_result, num_weak_directions) - 956usize];
+    [
+        "Offset of field: kissm_result::weak_directions",
+    ][::core::mem::offset_of!(kissm_result, weak_directions) - 960usize];
 };
 impl Default for kissm_result {
     fn default() -> Self {

@@ -16,12 +16,13 @@
 //! for the times: the same keys in the same order (`version`, `source`, `target`, `voxel_size`,
 //! `threads`, `valid`, `reason`, `reason_code`, `initial_transform` with `--initial`, `transform`,
 //! `rotation`, `translation`, `coarse_transform`, `refine`, `information`, `overlap`, `refine_rmse`,
-//! `refine_condition`, `inlier_coverage`, `refine_iterations`, `refine_converged`, `final_inliers`,
-//! `counts` (with `source_suppressed`, `target_suppressed`), `inlier_ratio`, `residual_rms`, `noise_bound`,
-//! `inlier_extent`, `rotation_uncertainty`, `tilt`, `time_ms` (with `suppression`), `read_ms`), the same
-//! layout and the same number format: the shortest of `%.15g`, `%.16g` and `%.17g` that reads back to the
-//! exact double, `null` for NaN and infinities (and for `information` when refinement did not run). Exit
-//! status: 0 valid pose, 1 not valid, 2 usage or input error.
+//! `refine_condition`, `degenerate`, `weak_directions` (the rows in use: `[]` when none), `inlier_coverage`,
+//! `refine_iterations`, `refine_converged`, `final_inliers`, `counts` (with `source_suppressed`,
+//! `target_suppressed`), `inlier_ratio`, `residual_rms`, `noise_bound`, `inlier_extent`,
+//! `rotation_uncertainty`, `tilt`, `time_ms` (with `suppression`), `read_ms`), the same layout and the same
+//! number format: the shortest of `%.15g`, `%.16g` and `%.17g` that reads back to the exact double, `null`
+//! for NaN and infinities (and for `information` when refinement did not run). Exit status: 0 valid pose, 1
+//! not valid, 2 usage or input error.
 
 use std::fmt::Write as _;
 use std::process::ExitCode;
@@ -292,6 +293,8 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("overlap", json_number(fine.map_or(nan, |f| f.overlap))),
         ("refine_rmse", json_number(fine.map_or(nan, |f| f.rmse))),
         ("refine_condition", json_number(fine.map_or(nan, |f| f.condition))),
+        ("degenerate", reg.degenerate().to_string()),
+        ("weak_directions", json_matrix(reg.weak_directions())),
         ("inlier_coverage", json_number(fine.map_or(nan, |f| f.inlier_coverage))),
         ("refine_iterations", fine.map_or(0, |f| f.iterations).to_string()),
         ("refine_converged", fine.is_some_and(|f| f.converged).to_string()),
@@ -358,6 +361,17 @@ fn print_summary(opt: &Options, reg: &Registration, read_ms: f64) {
             fine.rmse,
             fine.condition
         );
+        let weak = fine.weak_directions();
+        if fine.degenerate {
+            let plural = if weak.len() == 1 { "" } else { "s" };
+            println!(
+                "  degenerate: {} free direction{plural} (rotation [rad], translation [m], source frame)",
+                weak.len()
+            );
+            for v in weak {
+                println!("    ({:.3} {:.3} {:.3} | {:.3} {:.3} {:.3})", v[0], v[1], v[2], v[3], v[4], v[5]);
+            }
+        }
     }
     println!("time: {:.1} ms", reg.timings.total_ms);
 }

@@ -191,7 +191,7 @@ fn raw_defaults() -> (sys::kissm_config, i32) {
 }
 
 /// `Config`'s read accessors that return one field of the raw struct: `f64` and `vec3` as stored, `count` (an `i32`
-/// in C) as a `usize`, negative as 0.
+/// in C) as a `usize`, negative as 0, `bool` (an `i32` flag in C) as whether it is not 0.
 macro_rules! config_getters {
     ($($(#[$doc:meta])* $name:ident: $kind:ident,)*) => { $(config_getter!($(#[$doc])* $name $kind);)* };
 }
@@ -214,10 +214,16 @@ macro_rules! config_getter {
             usize::try_from(self.raw.$name).unwrap_or(0)
         }
     };
+    ($(#[$doc:meta])* $name:ident bool) => {
+        $(#[$doc])*
+        pub fn $name(&self) -> bool {
+            self.raw.$name != 0
+        }
+    };
 }
 
 /// `ConfigBuilder`'s setters that store their argument in one field of the raw struct: `f64` and `vec3` as given,
-/// `count` as an `i32` (saturated; `build` then names the field out of range).
+/// `count` as an `i32` (saturated; `build` then names the field out of range), `bool` as the `i32` 1 or 0.
 macro_rules! builder_setters {
     ($($(#[$doc:meta])* $name:ident: $kind:ident,)*) => { $(builder_setter!($(#[$doc])* $name $kind);)* };
 }
@@ -240,6 +246,13 @@ macro_rules! builder_setter {
         $(#[$doc])*
         pub fn $name(mut self, value: usize) -> Self {
             self.raw.$name = to_i32(value);
+            self
+        }
+    };
+    ($(#[$doc:meta])* $name:ident bool) => {
+        $(#[$doc])*
+        pub fn $name(mut self, value: bool) -> Self {
+            self.raw.$name = i32::from(value);
             self
         }
     };
@@ -399,6 +412,12 @@ impl Config {
         /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)), a valid pose needs
         /// [`Refinement::rmse`](crate::Refinement::rmse) at most this many voxel sizes.
         max_refine_rmse_gain: f64,
+        /// Whether a refined pose that leaves directions free
+        /// ([`Refinement::degenerate`](crate::Refinement::degenerate): a corridor, a tunnel, a plane) may be
+        /// valid, flagged, instead of not valid with [`Reason::Unconstrained`](crate::Reason::Unconstrained).
+        /// A raw config (see [`Config::from_raw`]) holding anything but 0 reads as `true` here; creating a
+        /// matcher from one holding neither 0 nor 1 fails.
+        allow_degenerate: bool,
     }
 }
 
@@ -443,6 +462,7 @@ impl fmt::Debug for Config {
             .field("up", &self.raw.up)
             .field("sensor_height", &self.raw.sensor_height)
             .field("max_refine_rmse_gain", &self.raw.max_refine_rmse_gain)
+            .field("allow_degenerate", &self.allow_degenerate())
             .finish()
     }
 }
@@ -635,6 +655,14 @@ impl ConfigBuilder {
         /// within a fraction of a voxel, the wrong local optima a refinement from a far prior reaches do not;
         /// in (0, 100] (default 0.45).
         max_refine_rmse_gain: f64,
+        /// With refinement (and in [`Matcher::refine`](crate::Matcher::refine)): `true` lets a refined pose that
+        /// leaves directions free be valid, flagged by [`Registration::degenerate`](crate::Registration::degenerate),
+        /// for callers who take its [weak directions](crate::Registration::weak_directions) from elsewhere
+        /// (odometry, a motion model); every other rule still applies. `false` makes such a pose not valid
+        /// ([`Reason::Unconstrained`](crate::Reason::Unconstrained)). Which directions count as free is set by
+        /// [`min_refine_condition`](ConfigBuilder::min_refine_condition). The C field holds 1 or 0, `0..=1`
+        /// (default 0, `false`).
+        allow_degenerate: bool,
     }
 
     /// Validates every field (`kissm_config_validate`) and returns the configuration, or an

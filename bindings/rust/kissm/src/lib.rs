@@ -67,8 +67,9 @@
 //!   files ([`read_points`]), without copies; anything implementing [`AsPoints`].
 //! - **Refinement**: [`Config::refine_mode`] refines the global pose with GICP or point-to-plane ICP in
 //!   the same call, and [`Matcher::refine`] refines a known pose; [`Registration::refinement`] then holds
-//!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose, and how much of
-//!   the overlap the solver's inliers cover.
+//!   the overlap, residual, conditioning and 6 x 6 information matrix of the refined pose, the directions
+//!   it leaves free ([`Registration::degenerate`], [`Registration::weak_directions`]: a corridor's slide),
+//!   and how much of the overlap the solver's inliers cover.
 //! - **LiDAR on vehicles**: [`Config::preset`] with [`Preset::LidarVehicle`] sets the voxel size and
 //!   [`Suppression::Ground`] (ground voxels get no keypoint; [`Matcher::ground_mask`] shows them);
 //!   [`ConfigBuilder::rotation_dof`] 1 estimates the yaw about [`Config::up`] only, and a clearly tilted

@@ -30,9 +30,11 @@ pub enum Reason {
     /// [`Refinement::overlap`] below [`Config::min_overlap`](crate::Config::min_overlap), or fewer than 6
     /// correspondences.
     LowOverlap,
-    /// Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor):
-    /// [`Refinement::condition`] below [`Config::min_refine_condition`](crate::Config::min_refine_condition);
-    /// see also [`Refinement::information`].
+    /// Refinement ran and the aligned clouds leave a direction of the pose free (a plane, a corridor, a
+    /// tunnel): [`Refinement::condition`] below [`Config::min_refine_condition`](crate::Config::min_refine_condition),
+    /// so [`Refinement::degenerate`] is true and [`Refinement::weak_directions`] gives the free directions;
+    /// see also [`Refinement::information`]. [`Config::allow_degenerate`](crate::Config::allow_degenerate)
+    /// accepts such a pose.
     Unconstrained,
     /// Without refinement: the inliers pin the rotation down no better than
     /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)
@@ -158,7 +160,7 @@ pub struct Timings {
 /// What the fine registration found ([`Registration::refinement`]): present exactly when refinement ran,
 /// after the solver ([`Config::refine_mode`](crate::Config::refine_mode)) or in
 /// [`Matcher::refine`](crate::Matcher::refine).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct Refinement {
     /// The 6 x 6 information matrix of the refined pose, `information[row][col]`, symmetric: the inverse
@@ -197,6 +199,49 @@ pub struct Refinement {
     /// Whether refinement stopped on its convergence test rather than its iteration cap; a refined pose
     /// that did not is not valid ([`Reason::NotConverged`]).
     pub converged: bool,
+    /// Whether the aligned clouds leave directions of the pose free: directions whose share of the
+    /// information (rotations taken as displacements at the matched points' radius) is below
+    /// [`Config::min_refine_condition`](crate::Config::min_refine_condition) of the strongest direction's
+    /// ([`condition`](Refinement::condition) is the weakest share). A corridor leaves one, a tunnel two, a
+    /// plane three; [`weak_directions`](Refinement::weak_directions) gives them. Such a pose is not valid
+    /// ([`Reason::Unconstrained`]) unless [`Config::allow_degenerate`](crate::Config::allow_degenerate).
+    pub degenerate: bool,
+    /// The first `num_weak` rows are the weak directions (the C result's rows beyond them are NaN; here 0,
+    /// so that `==` compares what is in use).
+    weak: [[f64; 6]; 6],
+    /// Rows of `weak` in use, 0 to 6.
+    num_weak: usize,
+}
+
+impl Refinement {
+    /// The directions the aligned clouds leave free, weakest first: empty unless
+    /// [`degenerate`](Refinement::degenerate), at most 6. Each is a unit 6-vector
+    /// `xi = (rotation [rad], translation [clouds' unit])` in the order and frame of
+    /// [`information`](Refinement::information) (`T exp(xi)` with `T` the
+    /// [`Registration::transform`], `xi` in the source's frame), signed so that its largest-magnitude
+    /// component is positive (the opposite direction is as free). A pose moved along one changes the
+    /// alignment by almost nothing: along a corridor that runs along `d` in the target's frame, the
+    /// direction is about `(0, 0, 0, R^T d)`.
+    pub fn weak_directions(&self) -> &[[f64; 6]] {
+        &self.weak[..self.num_weak]
+    }
+}
+
+impl std::fmt::Debug for Refinement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Refinement")
+            .field("information", &self.information)
+            .field("overlap", &self.overlap)
+            .field("rmse", &self.rmse)
+            .field("condition", &self.condition)
+            .field("inlier_coverage", &self.inlier_coverage)
+            .field("correspondences", &self.correspondences)
+            .field("iterations", &self.iterations)
+            .field("converged", &self.converged)
+            .field("degenerate", &self.degenerate)
+            .field("weak_directions", &self.weak_directions())
+            .finish()
+    }
 }
 
 /// The result of a registration: the rigid transform mapping source points into the target frame
@@ -285,6 +330,9 @@ impl<const R: usize, const C: usize> AsFlat for [[f64; C]; R] {
 impl Registration {
     pub(crate) fn from_raw(r: &sys::kissm_result) -> Registration {
         // The library writes NaN into overlap exactly when refinement did not run.
+        let num_weak = usize::try_from(r.num_weak_directions).unwrap_or(0).min(6);
+        let mut weak = [[0.0; 6]; 6];
+        weak[..num_weak].copy_from_slice(&rows::<6, 6>(&r.weak_directions)[..num_weak]);
         let refinement = (!r.overlap.is_nan()).then(|| Refinement {
             information: rows(&r.information),
             overlap: r.overlap,
@@ -294,6 +342,9 @@ impl Registration {
             correspondences: r.num_refine_correspondences,
             iterations: u32::try_from(r.refine_iterations).unwrap_or(0),
             converged: r.refine_converged != 0,
+            degenerate: r.degenerate != 0,
+            weak,
+            num_weak,
         });
         Registration {
             valid: r.valid != 0,
@@ -349,6 +400,22 @@ impl Registration {
         self.refinement.is_some()
     }
 
+    /// Whether refinement ran and the aligned clouds leave directions of the pose free
+    /// ([`Refinement::degenerate`]; `false` when refinement did not run: without it no dense information
+    /// exists to tell). Such a pose is valid only with
+    /// [`Config::allow_degenerate`](crate::Config::allow_degenerate), and even then it is to be trusted
+    /// only across the directions [`weak_directions`](Registration::weak_directions) names, not along them.
+    pub fn degenerate(&self) -> bool {
+        self.refinement.is_some_and(|f| f.degenerate)
+    }
+
+    /// The directions the refined pose leaves free, weakest first ([`Refinement::weak_directions`]: unit
+    /// 6-vectors, rotation then translation, in the order and frame of [`Refinement::information`]); empty
+    /// when refinement did not run or the pose is not [`degenerate`](Registration::degenerate).
+    pub fn weak_directions(&self) -> &[[f64; 6]] {
+        self.refinement.as_ref().map_or(&[], Refinement::weak_directions)
+    }
+
     /// Whether a pose was estimated (the transform is finite), valid or not.
     pub fn has_pose(&self) -> bool {
         self.transform.iter().flatten().all(|v| v.is_finite())
@@ -374,7 +441,10 @@ impl Registration {
                 a.correspondences == b.correspondences
                     && a.iterations == b.iterations
                     && a.converged == b.converged
+                    && a.degenerate == b.degenerate
+                    && a.num_weak == b.num_weak
                     && bits(&a.information, &b.information)
+                    && bits(&a.weak, &b.weak)
                     && bits(
                         &[a.overlap, a.rmse, a.condition, a.inlier_coverage],
                         &[b.overlap, b.rmse, b.condition, b.inlier_coverage],

@@ -117,11 +117,16 @@ fn validity_settings_are_the_library_ones() {
         assert!((0.0..=1.0).contains(&c.min_refine_condition()));
         assert!(c.max_refine_rmse_gain() > 0.0 && c.max_refine_rmse_gain() <= 100.0);
         assert!((3..=100_000).contains(&c.refine_min_inliers()));
-        // The reserved field is zero and not a setting.
-        assert_eq!(c.as_raw().reserved1, 0);
+        // A degenerate refined pose is not valid unless asked for.
+        assert_eq!(c.allow_degenerate(), lib.allow_degenerate != 0);
+        assert!(!c.allow_degenerate());
+        assert_eq!(c.as_raw().allow_degenerate, 0);
+        // The reserved fields are zero and not settings.
+        assert_eq!((c.as_raw().reserved1, c.as_raw().reserved2), (0, 0));
         assert!(!format!("{c:?}").contains("reserved"), "{c:?}");
+        assert!(format!("{c:?}").contains("allow_degenerate: false"), "{c:?}");
     }
-    assert_eq!(lib.reserved1, 0);
+    assert_eq!((lib.reserved1, lib.reserved2, lib.allow_degenerate), (0, 0, 0));
 }
 
 #[test]
@@ -132,10 +137,13 @@ fn builder_sets_every_validity_field() {
         .refine_min_inliers(25)
         .min_refine_condition(0.05)
         .max_refine_rmse_gain(0.7)
+        .allow_degenerate(true)
         .build();
     let c = c.unwrap();
     assert_eq!(c.max_refine_rmse_gain(), 0.7);
     assert_eq!(c.as_raw().max_refine_rmse_gain, 0.7);
+    assert!(c.allow_degenerate());
+    assert_eq!((c.as_raw().allow_degenerate, c.as_raw().reserved2), (1, 0));
     assert_eq!(c.max_rotation_uncertainty(), 0.01);
     assert_eq!(c.min_inlier_coverage(), 0.6);
     assert_eq!(c.refine_min_inliers(), 25);
@@ -151,6 +159,7 @@ fn builder_sets_every_validity_field() {
         "refine_min_inliers: 25",
         "min_refine_condition: 0.05",
         "max_refine_rmse_gain: 0.7",
+        "allow_degenerate: true",
     ] {
         assert!(debug.contains(field), "{debug}");
     }
@@ -162,9 +171,11 @@ fn builder_sets_every_validity_field() {
         .refine_min_inliers(Config::default().refine_min_inliers())
         .min_refine_condition(Config::default().min_refine_condition())
         .max_refine_rmse_gain(Config::default().max_refine_rmse_gain())
+        .allow_degenerate(Config::default().allow_degenerate())
         .build()
         .unwrap();
     assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
+    assert_eq!(back.as_raw().allow_degenerate, 0);
     // A matcher keeps them.
     assert_eq!(format!("{:?}", Matcher::new(&c).unwrap().config()), debug);
     // The range ends are accepted.
@@ -364,6 +375,27 @@ fn invalid_config_values_are_errors_not_panics() {
     let err = Matcher::new(&Config::from_raw(raw)).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::InvalidArgument);
     assert!(err.message().contains("reserved1"), "{err}");
+    let mut raw = *Config::default().as_raw();
+    raw.reserved2 = 1;
+    let err = Matcher::new(&Config::from_raw(raw)).unwrap_err();
+    assert_eq!(err.kind(), ErrorKind::InvalidArgument);
+    assert!(err.message().contains("reserved2"), "{err}");
+    // allow_degenerate is a bool here; a raw config can hold any i32, and only 0 and 1 are valid.
+    for flag in [2, -1, i32::MAX] {
+        let mut raw = *Config::default().as_raw();
+        raw.allow_degenerate = flag;
+        let config = Config::from_raw(raw);
+        assert!(config.allow_degenerate(), "{flag} reads as true");
+        let err = config.validate().unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::InvalidArgument, "{err}");
+        assert!(err.message().contains("config.allow_degenerate"), "{err}");
+        let err = Matcher::new(&config).unwrap_err();
+        assert!(err.message().contains("config.allow_degenerate"), "{err}");
+        let err = config.to_builder().build().unwrap_err();
+        assert!(err.message().contains("config.allow_degenerate"), "{err}");
+        // The builder's setter writes a valid value over it.
+        assert_eq!(config.to_builder().allow_degenerate(false).build().unwrap().as_raw().allow_degenerate, 0);
+    }
     // refine_mode cannot be out of range through the enum; a raw config can hold any code.
     for code in [3, -1] {
         let mut raw = *Config::default().as_raw();

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 //! Cross-language round trip, Rust side: the clouds of `tests/data` (or `KISSM_TEST_DATA`) registered
 //! (`"call": "register"`) or refined from the case's `"initial_transform"` (`"call": "refine"`) with the
-//! case's refine mode, viewpoint mode, suppression and rotational degrees of freedom, as listed in
+//! case's refine mode, viewpoint mode, suppression, rotational degrees of freedom and validity settings
+//! (`max_refine_rmse_gain`, `min_refine_condition`, `allow_degenerate`), as listed in
 //! `tests/data/golden.json` (written by the C library), give the same result bit for bit (the file writes
 //! NaN as `null`; any NaN matches it). The C suite (`tests/roundtrip`) and the Python suite
 //! (`tests/test_golden.py`) check the same file.
@@ -111,6 +112,17 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
     for (key, got) in doubles {
         same(key.into(), case.get(key).num(), got);
     }
+    // The free directions: the flag, their count, and the rows in use bit for bit; the golden rows beyond
+    // them are NaN (null), as the C result's.
+    let weak = reg.weak_directions();
+    same("degenerate".into(), case.get("degenerate").num(), f64::from(u8::from(reg.degenerate())));
+    same("num_weak_directions".into(), case.get("num_weak_directions").num(), weak.len() as f64);
+    let expect = case.get("weak_directions").nums();
+    assert_eq!(expect.len(), 36, "weak_directions: length");
+    let got = weak.iter().flatten().copied().chain(std::iter::repeat(f64::NAN)).take(36);
+    for (i, (e, g)) in expect.into_iter().zip(got).enumerate() {
+        same(format!("weak_directions[{i}]"), e, g);
+    }
     failures
 }
 
@@ -135,6 +147,7 @@ fn golden_file_matches_bit_for_bit() {
     let mut suppressions = std::collections::BTreeSet::new();
     let mut dofs = std::collections::BTreeSet::new();
     let mut reasons = std::collections::BTreeSet::new();
+    let mut accepted_degenerate = std::collections::BTreeSet::new();
     for case in cases {
         let name = case.get("name").str();
         let mode = refine_mode(case.get("refine").str());
@@ -146,7 +159,16 @@ fn golden_file_matches_bit_for_bit() {
         let dof = case.get("rotation_dof").u64() as usize;
         dofs.insert(dof);
         let rmse_gain = case.get("max_refine_rmse_gain").num();
+        let min_condition = case.get("min_refine_condition").num();
+        let allow_degenerate = match case.get("allow_degenerate").u64() {
+            0 => false,
+            1 => true,
+            other => panic!("{name}: allow_degenerate {other}"),
+        };
         reasons.insert(case.get("reason").u64());
+        if case.get("degenerate").u64() == 1 && case.get("valid").u64() == 1 {
+            accepted_degenerate.insert(name.to_string());
+        }
         calls.insert(call.to_string());
         modes.insert(format!("{mode:?}"));
         let float32 = match case.get("scalar").str() {
@@ -163,6 +185,8 @@ fn golden_file_matches_bit_for_bit() {
                 .suppression(suppress)
                 .rotation_dof(dof)
                 .max_refine_rmse_gain(rmse_gain)
+                .min_refine_condition(min_condition)
+                .allow_degenerate(allow_degenerate)
                 .build()
                 .unwrap();
             let mut matcher = Matcher::new(&config).unwrap();
@@ -197,4 +221,5 @@ fn golden_file_matches_bit_for_bit() {
     assert!(dofs.contains(&1) && dofs.contains(&3), "rotation_dof {dofs:?}");
     let loose = Reason::LooseAlignment.code() as u64;
     assert!(reasons.contains(&loose), "no case ends LooseAlignment: reasons {reasons:?}");
+    assert!(!accepted_degenerate.is_empty(), "no case is a degenerate pose accepted by allow_degenerate");
 }

@@ -3,7 +3,8 @@
 //! refinement after the solver lands closer to the ground truth than the solver's pose and leaves the
 //! coarse result as it was; `Matcher::refine` from a perturbed ground truth converges; the information
 //! matrix is symmetric positive definite; `refine_features` equals `refine` and one thread equals two, bit
-//! for bit; the refined validity rule (overlap, conditioning); bad initial transforms are errors naming
+//! for bit; the refined validity rule (overlap, conditioning); the directions a plane and a corridor leave
+//! free (`degenerate`, `weak_directions`) and `allow_degenerate`; bad initial transforms are errors naming
 //! `initial_transform`.
 // Matrices are indexed by row and column, as in their formulas.
 #![allow(clippy::needless_range_loop)]
@@ -64,6 +65,8 @@ fn refinement_after_the_solver_improves_the_pose() {
     let coarse = Matcher::new(&config(RefineMode::None, 2)).unwrap().register(&pair.source, &pair.target).unwrap();
     assert!(coarse.valid, "{}", coarse.reason);
     assert!(coarse.refinement.is_none() && !coarse.is_refined());
+    // Without refinement there is no dense information to tell degeneracy by.
+    assert!(!coarse.degenerate() && coarse.weak_directions().is_empty());
     assert_eq!(coarse.timings.refine_ms, 0.0);
     // Without refinement the coarse pose is the pose.
     assert!(common::same_bits_matrix(&coarse.coarse_transform, &coarse.transform));
@@ -95,6 +98,9 @@ fn refinement_after_the_solver_improves_the_pose() {
         assert!(fine.correspondences >= 6 && fine.correspondences <= reg.counts.source_voxels);
         assert!(fine.iterations >= 1 && fine.iterations <= config(mode, 2).refine_max_iterations() as u32);
         assert!(fine.converged, "{mode:?}");
+        // The scene constrains every direction.
+        assert!(!fine.degenerate && fine.weak_directions().is_empty(), "{mode:?}: {fine:?}");
+        assert!(!reg.degenerate() && reg.weak_directions().is_empty());
         check_information(&reg);
         assert!(reg.timings.refine_ms > 0.0);
         assert!(reg.timings.total_ms >= reg.timings.refine_ms);
@@ -238,6 +244,126 @@ fn a_plane_leaves_the_refined_pose_unconstrained() {
     assert_eq!(reg.reason, Reason::Unconstrained);
     let fine = reg.refinement.expect("refinement ran");
     assert!(fine.condition < 1e-3, "condition {}", fine.condition);
+    // Three free directions: the two slides in the plane and the turn about its normal.
+    assert!(fine.degenerate && reg.degenerate());
+    let weak = reg.weak_directions();
+    assert_eq!(weak.len(), 3, "{weak:?}");
+    assert_eq!(weak, fine.weak_directions());
+    for w in weak {
+        check_unit_and_sign(w);
+    }
+    // They span the free directions (a turn about the normal through any point of the plane is a turn
+    // about the origin plus a slide), and each of them is free.
+    let free = [[0.0, 0.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0, 0.0]];
+    for v in &free {
+        let off = degrees_to_span(v, weak);
+        assert!(off < 10.0, "the free direction {v:?} is {off} deg off the weak directions {weak:?}");
+    }
+    for w in weak {
+        let off = degrees_to_span(w, &free);
+        assert!(off < 10.0, "the weak direction {w:?} is {off} deg off the free directions");
+    }
+}
+
+/// A weak direction is a unit 6-vector whose largest-magnitude component is positive.
+fn check_unit_and_sign(w: &[f64; 6]) {
+    let norm = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!((norm - 1.0).abs() < 1e-12, "|w| = {norm}: {w:?}");
+    let largest = w.iter().copied().fold(0.0f64, |a, v| if v.abs() > a.abs() { v } else { a });
+    assert!(largest > 0.0, "the largest component of {w:?} is negative");
+}
+
+fn dot6(a: &[f64; 6], b: &[f64; 6]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The angle (degrees) between `v` and the span of the rows `span` (linearly independent; weak directions
+/// need not be orthogonal to each other in the source's frame).
+fn degrees_to_span(v: &[f64; 6], span: &[[f64; 6]]) -> f64 {
+    // Gram-Schmidt, then the length of v's projection.
+    let mut basis: Vec<[f64; 6]> = Vec::new();
+    for row in span {
+        let mut u = *row;
+        for b in &basis {
+            let d = dot6(&u, b);
+            u.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+        }
+        let n = dot6(&u, &u).sqrt();
+        assert!(n > 1e-9, "dependent rows {span:?}");
+        basis.push(u.map(|x| x / n));
+    }
+    let inside = basis.iter().map(|b| dot6(v, b).powi(2)).sum::<f64>().sqrt() / dot6(v, v).sqrt();
+    inside.min(1.0).acos().to_degrees()
+}
+
+/// A corridor along x: a floor and two side walls, 20 long, 3 wide and 2.5 high, open at both ends, sampled on
+/// a 0.1 grid (the points off the edges, so that none lies on two surfaces).
+fn corridor() -> Vec<[f64; 3]> {
+    const STEP: f64 = 0.1;
+    let at = |i: usize| STEP * (i as f64 + 0.5);
+    let mut points = Vec::new();
+    for i in 0..200 {
+        let x = -10.0 + at(i);
+        points.extend((0..30).map(|j| [x, -1.5 + at(j), 0.0]));
+        for k in 0..25 {
+            points.push([x, -1.5, at(k)]);
+            points.push([x, 1.5, at(k)]);
+        }
+    }
+    points
+}
+
+#[test]
+fn a_corridor_leaves_its_slide_free() {
+    // The target is the corridor; the source the same surfaces seen from a pose turned by 7 degrees and
+    // moved: target = R source + t.
+    let truth = Pose::axis_angle([0.3, -1.0, 0.6], 7.0, [0.6, -0.4, 0.25]);
+    let target = corridor();
+    let source = common::moved(&target, &truth.inverse());
+    // The free direction: a slide along the corridor (x in the target's frame) is, in the source's frame
+    // of T exp(xi), no rotation and the translation R^T x.
+    let r = &truth.r;
+    let slide = [0.0, 0.0, 0.0, r[0][0], r[0][1], r[0][2]];
+    let builder = Config::builder().voxel_size(0.2).num_threads(2).refine_mode(RefineMode::Gicp);
+    let refine = |config: &Config| Matcher::new(config).unwrap().refine(&source, &target, &truth.to_matrix()).unwrap();
+
+    // By default: not valid, Unconstrained, one weak direction, the slide.
+    let default = builder.clone().build().unwrap();
+    let reg = refine(&default);
+    let fine = reg.refinement.expect("refinement ran");
+    assert!(!reg.valid);
+    assert_eq!(reg.reason, Reason::Unconstrained);
+    assert!(fine.condition < default.min_refine_condition(), "condition {}", fine.condition);
+    assert!(fine.converged && fine.overlap > 0.9, "{fine:?}");
+    assert!(reg.degenerate() && fine.degenerate);
+    let weak = reg.weak_directions();
+    assert_eq!(weak.len(), 1, "{weak:?}");
+    check_unit_and_sign(&weak[0]);
+    let off = dot6(&weak[0], &slide).abs().min(1.0).acos().to_degrees();
+    assert!(off < 10.0, "the weak direction {:?} is {off} deg off the slide {slide:?}", weak[0]);
+    let rotation = weak[0][..3].iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!(rotation < 0.01, "the slide turns by {rotation} rad per unit: {:?}", weak[0]);
+    // The pose itself is right: refinement from the truth stays there (along the slide the data cannot say).
+    let (deg, dist) = truth.errors(&Pose::from_matrix(&reg.transform));
+    assert!(deg < 0.2 && dist < 0.2, "{deg} deg, {dist} from the truth");
+
+    // allow_degenerate: the same refinement, now valid and still flagged, with the same direction bit for bit.
+    let allowing = builder.allow_degenerate(true).build().unwrap();
+    let accepted = refine(&allowing);
+    assert!(accepted.valid, "{}", accepted.reason);
+    assert_eq!(accepted.reason, Reason::None);
+    assert!(accepted.degenerate());
+    assert_eq!(accepted.weak_directions().len(), 1);
+    assert!(common::same_bits_matrix(&[accepted.weak_directions()[0]], &[weak[0]]));
+    let mut decided = accepted;
+    decided.valid = reg.valid;
+    decided.reason = reg.reason;
+    assert!(decided.same_result(&reg), "more than the decision changed:\n{accepted:?}\nvs\n{reg:?}");
+    // The other rules still apply: clouds asked to lie closer than they do are refused.
+    let strict = allowing.to_builder().max_refine_rmse_gain(0.5 * fine.rmse / 0.2).build().unwrap();
+    let refused = refine(&strict);
+    assert!(!refused.valid && refused.degenerate());
+    assert_eq!(refused.reason, Reason::LooseAlignment);
 }
 
 #[test]

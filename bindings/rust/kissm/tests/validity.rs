@@ -4,8 +4,9 @@
 //! own rule, never the pose. Without refinement `max_rotation_uncertainty` against
 //! `Registration::rotation_uncertainty`; with refinement `refine_min_inliers` against the final inliers,
 //! `min_inlier_coverage` against `Refinement::inlier_coverage` and `min_refine_condition` against
-//! `Refinement::condition` (also in `Matcher::refine`'s rule); and a refinement stopped by its iteration cap
-//! (`Reason::NotConverged`).
+//! `Refinement::condition` (also in `Matcher::refine`'s rule; beyond it the pose is also `degenerate`, its
+//! weakest direction reported, and `allow_degenerate` accepts it); and a refinement stopped by its iteration
+//! cap (`Reason::NotConverged`).
 
 mod common;
 
@@ -43,6 +44,38 @@ fn decision_flips(base: &Registration, at: &Registration, beyond: &Registration,
     assert!(!beyond.valid, "{what}: just beyond the measured value, still valid");
     assert_eq!(beyond.reason, reason, "{what}");
     same_but_decision(beyond, base, what);
+}
+
+/// `reg` is `base` but for the decision and the degeneracy that `min_refine_condition` also sets
+/// ([`Refinement::degenerate`](kissm::Refinement::degenerate) and its weak directions): every other bit is
+/// `base`'s.
+fn same_but_degeneracy(reg: &Registration, base: &Registration, what: &str) {
+    let mut decided = *reg;
+    decided.valid = base.valid;
+    decided.reason = base.reason;
+    decided.refinement = base.refinement;
+    assert!(decided.same_result(base), "{what}: more than the decision and the degeneracy changed");
+    let (a, b) = (reg.refinement.expect("refined"), base.refinement.expect("refined"));
+    assert!(common::same_bits_matrix(&a.information, &b.information), "{what}: information");
+    let numbers = |f: &kissm::Refinement| [f.overlap, f.rmse, f.condition, f.inlier_coverage];
+    assert!(common::same_bits_matrix(&[numbers(&a)], &[numbers(&b)]), "{what}: {a:?}\nvs\n{b:?}");
+    assert_eq!((a.correspondences, a.iterations, a.converged), (b.correspondences, b.iterations, b.converged));
+}
+
+/// `min_refine_condition` exactly at the measured condition gives `base` itself; just above it the same pose,
+/// not valid (`Unconstrained`) and degenerate, with the weakest direction alone reported; and that with
+/// `allow_degenerate` (`allowed`) valid again, all else the same bit for bit.
+fn condition_flips(base: &Registration, at: &Registration, beyond: &Registration, allowed: &Registration, what: &str) {
+    assert!(at.same_result(base), "{what}: at the measured value: {}", at.reason);
+    assert!(!base.degenerate() && base.weak_directions().is_empty(), "{what}: {base:?}");
+    assert!(!beyond.valid, "{what}: just beyond the measured value, still valid");
+    assert_eq!(beyond.reason, Reason::Unconstrained, "{what}");
+    assert!(beyond.degenerate(), "{what}");
+    assert_eq!(beyond.weak_directions().len(), 1, "{what}: {:?}", beyond.weak_directions());
+    same_but_degeneracy(beyond, base, what);
+    assert!(allowed.valid, "{what}: allow_degenerate: {}", allowed.reason);
+    assert!(allowed.degenerate(), "{what}: allow_degenerate");
+    same_but_decision(allowed, beyond, what);
 }
 
 /// The scene's pose is close to its ground truth, so the correct decision is "valid".
@@ -130,7 +163,9 @@ fn the_refined_rules_need_a_conditioned_pose() {
     // The measured condition is enough, one ulp more is not.
     let at = register(builder(RefineMode::Gicp).min_refine_condition(condition), pair);
     let above = register(builder(RefineMode::Gicp).min_refine_condition(just_above(condition)), pair);
-    decision_flips(&base, &at, &above, Reason::Unconstrained, "min_refine_condition");
+    let allowed =
+        register(builder(RefineMode::Gicp).min_refine_condition(just_above(condition)).allow_degenerate(true), pair);
+    condition_flips(&base, &at, &above, &allowed, "min_refine_condition");
     assert_eq!(above.reason.code(), kissm_sys::KISSM_REASON_UNCONSTRAINED);
 
     // Without refinement there is no condition to judge.
@@ -147,7 +182,8 @@ fn the_refined_rules_need_a_conditioned_pose() {
     let condition = from_truth.refinement.expect("refined").condition;
     let at = refine(builder(RefineMode::Gicp).min_refine_condition(condition));
     let above = refine(builder(RefineMode::Gicp).min_refine_condition(just_above(condition)));
-    decision_flips(&from_truth, &at, &above, Reason::Unconstrained, "min_refine_condition, refine");
+    let allowed = refine(builder(RefineMode::Gicp).min_refine_condition(just_above(condition)).allow_degenerate(true));
+    condition_flips(&from_truth, &at, &above, &allowed, "min_refine_condition, refine");
 }
 
 #[test]
