@@ -488,6 +488,18 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         refine_registration(source, target, r.coarse_rotation, r.coarse_translation, params, r, ctx);
         r.reason = refined_validity(r.num_final_inliers, inliers, refined_evidence(r), refined_rule(params));
         if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
+    } else if (r.reason == Reason::UncertainRotation && !tilted) {
+        // Few inliers on a compact object leave the rotation uncertain by a few degrees whether the pose is right
+        // or wrong, so the coarse evidence cannot decide; the dense alignment can. Refined with GICP, the pose is
+        // reported when the refined rule accepts it, and the coarse result stands otherwise
+        // (docs/design/accuracy.md, "Verifying uncertain rotations").
+        Params verify = params;
+        verify.refine_mode = RefineMode::Gicp;
+        Registration refined = r;
+        refine_registration(source, target, r.coarse_rotation, r.coarse_translation, verify, refined, ctx);
+        refined.reason =
+            refined_validity(refined.num_final_inliers, inliers, refined_evidence(refined), refined_rule(verify));
+        if (refined.reason == Reason::None) r = std::move(refined);
     }
     return r;
 }

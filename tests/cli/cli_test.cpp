@@ -867,8 +867,20 @@ void test_validity_options() {
     const uint64_t inliers = static_cast<uint64_t>(b.at("final_inliers").number);
     CHECK_MSG(std::isfinite(u) && u > 0.0, "rotation_uncertainty %s", b.at("rotation_uncertainty").text.c_str());
     CHECK(b.at("inlier_coverage").is(Json::Type::Null));
-    check_decision_flips(plain, "--max-rotation-uncertainty", "rotation_uncertainty", u, 0.0,
-                         KISSM_REASON_UNCERTAIN_ROTATION, base);
+    // One ulp past it the coarse rule declines, and the pose is verified by refinement (GICP) under the refined
+    // rule: held to a coverage no inlier set reaches, the verification fails and the coarse decision stands.
+    check_decision_flips(plain + "--min-inlier-coverage 1 ", "--max-rotation-uncertainty", "rotation_uncertainty", u,
+                         0.0, KISSM_REASON_UNCERTAIN_ROTATION, base);
+    {
+        // Under the default refined rule the verification accepts it: the refined pose, valid, the solver's pose kept
+        // as coarse_transform, the refinement's numbers reported.
+        const Run verified = run(plain + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json");
+        CHECK_EQ_INT(reason_of(verified, "verified by refinement"), KISSM_REASON_NONE);
+        const Json v = contract_json(verified, false, "verified by refinement");
+        CHECK(v.at("refine_iterations").number > 0 && v.at("information").is_matrix(6, 6, false));
+        CHECK(json_line_value(verified.out, "coarse_transform") == json_line_value(base.out, "transform"));
+        CHECK(json_line_value(verified.out, "transform") != json_line_value(base.out, "transform"));
+    }
     // Each rule ignores the other's settings.
     CHECK_EQ_INT(reason_of(run(reg + "--max-rotation-uncertainty " + exact(std::nextafter(u, 0.0)) + " --json"),
                            "refined, strict rotation"),

@@ -42,9 +42,14 @@ def test_real_pair_against_ground_truth(real_pairs: dict[str, RealPair], name: s
     rre = rotation_error_deg(result.rotation, pair.gt[:3, :3]) if result.valid else math.nan
     rte = float(np.linalg.norm(result.translation - pair.gt[:3, 3])) if result.valid else math.nan
     success = result.valid and rre < pair.kind.max_rot_deg and rte < pair.kind.max_trans_m
-    if result.valid:  # the rule without refinement, on the measure the Result reports
+    if result.valid and result.refine_iterations == 0:  # the rule without refinement, on the measure reported
         assert 0.0 < result.rotation_uncertainty <= kissm.Config().max_rotation_uncertainty, name
-    assert math.isnan(result.inlier_coverage)
+        assert math.isnan(result.inlier_coverage)
+    elif result.valid:  # declined for its rotation's uncertainty, then verified by refinement (GICP)
+        assert result.rotation_uncertainty > kissm.Config().max_rotation_uncertainty, name
+        assert result.inlier_coverage >= kissm.Config().min_inlier_coverage, name
+    else:
+        assert math.isnan(result.inlier_coverage)
     if pair.kind.must_succeed:
         assert success, f"{name}: {result!r}\nRRE {rre:.3f} deg, RTE {rte:.4f} m"
     else:  # object scans: may give up, must not be confidently wrong

@@ -83,10 +83,23 @@ def test_max_rotation_uncertainty_decides_without_refinement(pair, coarse) -> No
     measured = coarse.rotation_uncertainty
     at = kissm.register(pair.source, pair.target, VOXEL, max_rotation_uncertainty=measured)
     assert at.valid  # the rule is <=
-    below = kissm.register(pair.source, pair.target, VOXEL, max_rotation_uncertainty=np.nextafter(measured, 0.0))
+    # One ulp tighter the coarse rule declines, and the pose is verified by refinement (GICP): held to a coverage
+    # no inlier set reaches, the verification fails and the coarse result stands.
+    below = kissm.register(
+        pair.source,
+        pair.target,
+        VOXEL,
+        max_rotation_uncertainty=np.nextafter(measured, 0.0),
+        min_inlier_coverage=1.0,
+    )
     assert not below.valid and below.reason_code == _ffi.lib.KISSM_REASON_UNCERTAIN_ROTATION
     assert below.reason == UNCERTAIN_ROTATION and f"reason={UNCERTAIN_ROTATION!r}" in repr(below)
     assert_same_result(below, coarse, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})  # pose kept
+    # Under the default refined rule the verification accepts it: refined, valid, the solver's pose kept.
+    verified = kissm.register(pair.source, pair.target, VOXEL, max_rotation_uncertainty=np.nextafter(measured, 0.0))
+    assert verified.valid and verified.refine_iterations > 0
+    assert np.array_equal(verified.coarse_transform, coarse.transform)
+    assert not np.array_equal(verified.transform, coarse.transform)
     # with refinement it is not a rule
     tight = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=measured / 100)
     assert tight.valid and tight.rotation_uncertainty == measured

@@ -108,11 +108,18 @@ fn rotation_uncertainty_decides_an_unrefined_pose() {
     let (deg, _) = pair.truth.errors(&Pose::from_matrix(&base.coarse_transform));
     assert!(deg.to_radians() <= 3.0 * u, "coarse rotation error {deg} deg, uncertainty {} deg", u.to_degrees());
 
-    // Exactly the measured uncertainty is allowed; one ulp less is not.
+    // Exactly the measured uncertainty is allowed; one ulp less is not, once the verification by refinement
+    // that such a pose gets is held to a coverage no inlier set reaches.
     let at = register(builder(RefineMode::None).max_rotation_uncertainty(u), pair);
-    let below = register(builder(RefineMode::None).max_rotation_uncertainty(just_below(u)), pair);
+    let below =
+        register(builder(RefineMode::None).max_rotation_uncertainty(just_below(u)).min_inlier_coverage(1.0), pair);
     decision_flips(&base, &at, &below, Reason::UncertainRotation, "max_rotation_uncertainty");
     assert_eq!(below.reason.code(), kissm_sys::KISSM_REASON_UNCERTAIN_ROTATION);
+    // Under the default refined rule the verification accepts it: the refined pose, valid, the solver's pose kept.
+    let verified = register(builder(RefineMode::None).max_rotation_uncertainty(just_below(u)), pair);
+    assert!(verified.valid && verified.is_refined(), "verified: {}", verified.reason);
+    assert!(common::same_bits_matrix(&verified.coarse_transform, &base.coarse_transform), "verified: coarse pose");
+    accurate(pair, &verified, "verified by refinement");
 
     // With refinement the solver's uncertainty is still reported, but the refined rule decides.
     let refined = register(builder(RefineMode::Gicp).max_rotation_uncertainty(just_below(u)), pair);
