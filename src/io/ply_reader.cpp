@@ -74,6 +74,19 @@ bool ply_scalar(std::string_view name, Scalar &out) {
     return false;
 }
 
+namespace {
+
+// A keyword as the PLY header writes them: a letter, then letters, digits and underscores.
+bool is_identifier(std::string_view w) {
+    const auto letter = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); };
+    if (w.empty() || !letter(w[0])) return false;
+    for (char c : w)
+        if (!letter(c) && !(c >= '0' && c <= '9') && c != '_') return false;
+    return true;
+}
+
+} // namespace
+
 PlyHeader parse_header(const std::string &path, std::string_view bytes) {
     LineCursor lines(bytes.data(), bytes.data() + bytes.size());
     const char *lb = nullptr;
@@ -131,6 +144,11 @@ PlyHeader parse_header(const std::string &path, std::string_view bytes) {
                 prop.name = std::string(w[2]);
             }
             header.elements.back().properties.push_back(std::move(prop));
+        } else if (header.elements.empty() && is_identifier(key)) {
+            // Before the first element a line of an unknown keyword describes no data: some writers put their own
+            // lines there (Stanford's Cyberware scans end their obj_info block with three "bye" lines). After it,
+            // an unknown keyword may change what the elements mean, so it stays an error.
+            continue;
         } else {
             bad_line("unknown keyword " + quote_token(key));
         }

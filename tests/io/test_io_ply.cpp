@@ -48,6 +48,20 @@ void test_ascii() {
     EXPECT_POINTS(dir.write("a_auto.ply", kAscii), FileFormat::Auto, kAsciiPoints);
 }
 
+// Stanford's happyStandRight_{0,48,72,96}.ply end their obj_info block with three "bye" lines before the first
+// element (as the origin wrote them); such lines describe no data and are skipped.
+void test_keyword_lines_before_the_elements() {
+    TempDir dir;
+    const std::string text = kAscii;
+    const std::size_t at = text.find("element");
+    REQUIRE(at != std::string::npos);
+    const std::string with_bye = text.substr(0, at) + "obj_info is_mesh 0\nbye\nbye\nbye\n" + text.substr(at);
+    EXPECT_POINTS(dir.write("bye.ply", with_bye), FileFormat::Ply, kAsciiPoints);
+    EXPECT_POINTS(dir.write("bye_crlf.ply", crlf(with_bye)), FileFormat::Ply, kAsciiPoints);
+    const std::string words = text.substr(0, at) + "scanner_name cyberware 3030\n" + text.substr(at);
+    EXPECT_POINTS(dir.write("words.ply", words), FileFormat::Ply, kAsciiPoints);
+}
+
 // Shaped like the Stanford scans: obj_info lines, CRLF, a trailing space on every vertex line and a
 // range_grid list element after the vertices.
 void test_bunny_like() {
@@ -275,6 +289,10 @@ void test_malformed() {
     parse_error(ascii_with("property float x\n" + v1), "property before any element", __LINE__);
     parse_error(ascii_with(v1 + kXyz + "frobnicate 1\n"), "unknown keyword 'frobnicate'", __LINE__);
     parse_error(ascii_with(v1 + kXyz + "\x01\x02garbage\xff\n"), "unknown keyword", __LINE__);
+    // Before the first element an unknown keyword line is skipped only when it reads like a keyword.
+    parse_error(ascii_with("\x01\x02garbage\xff\n" + v1 + kXyz), "unknown keyword", __LINE__);
+    parse_error(ascii_with("2bye\n" + v1 + kXyz), "unknown keyword '2bye'", __LINE__);
+    parse_error(ascii_with("b-ye\n" + v1 + kXyz), "unknown keyword 'b-ye'", __LINE__);
     parse_error(ascii_with(v1 + kXyz + v1 + kXyz), "two 'vertex' elements", __LINE__);
     parse_error(ascii_with("element face 1\nproperty list uchar int idx\n"), "no 'vertex' element", __LINE__);
     parse_error("ply\nformat ascii 1.0\n" + v1 + kXyz, "no end_header", __LINE__);
@@ -354,6 +372,7 @@ void test_mutations() {
 
 int main() {
     RUN_TEST(test_ascii);
+    RUN_TEST(test_keyword_lines_before_the_elements);
     RUN_TEST(test_bunny_like);
     RUN_TEST(test_binary);
     RUN_TEST(test_all_types);

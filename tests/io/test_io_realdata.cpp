@@ -48,6 +48,10 @@ void test_real_files() {
     check_file(dir, "stanford_bunny_scans/bun045.ply", FileFormat::Ply, 40097, __LINE__);
     check_file(dir, "stanford_bunny_scans/bun090.ply", FileFormat::Auto, 30379, __LINE__);
     check_file(dir, "stanford_bunny_scans/bun315.ply", FileFormat::Auto, 35336, __LINE__);
+    // Three "bye" lines before the first element (_0, _48, _72, _96), and a plain header (_24).
+    check_file(dir, "stanford_happy_stand_scans/happyStandRight_0.ply", FileFormat::Auto, 78056, __LINE__);
+    check_file(dir, "stanford_happy_stand_scans/happyStandRight_48.ply", FileFormat::Ply, 69158, __LINE__);
+    check_file(dir, "stanford_happy_stand_scans/happyStandRight_24.ply", FileFormat::Auto, 75582, __LINE__);
     check_file(dir, "small_gicp_lidar/target.ply", FileFormat::Auto, 69088, __LINE__);
     check_file(dir, "small_gicp_lidar/source.ply", FileFormat::Auto, 69792, __LINE__);
     check_file(dir, "kitti_demo_scans_unverified/000000.bin", FileFormat::KittiBin, 124668, __LINE__);
