@@ -42,6 +42,7 @@ import numpy as np
 from .common import REPO, SHARED_DATA
 from .data import KEYFRAME_KIND, KINDS, Kind, Trial, has_index, keyframes, load_pairs  # the real-data tests' pairs
 from .geometry import axis_angle, judge_at
+from .nees_study import SCAN_SETS, read_scan_set
 
 SYNTHETIC_KIND = Kind("synthetic", 0.25, 5.0, 0.3)  # the committed synthetic pair (tests/data): a yard in metres
 RefineMode = Literal["none", "gicp", "point_to_plane"]
@@ -229,6 +230,32 @@ def scan_to_map(tally: Tally, args: argparse.Namespace, rng: np.random.Generator
                         print(line, flush=True)
 
 
+def scan_sets(tally: Tally, args: argparse.Namespace, rng: np.random.Generator) -> None:
+    """The object multi-scan sets: every neighbouring pair of the bunny's turntable ring (45-90 degrees apart) and of
+    the happy Buddha's (24 degrees apart, a closed loop), raw and turned; the truth from the set's own poses."""
+    for s in SCAN_SETS:
+        if s.label == "kitti07":  # the same keyframes as kitti07_keyframes_gtsam_points above
+            continue
+        folder = args.data / s.folder
+        if not (folder / "scans.tsv").is_file():
+            continue
+        names, files, formats, poses = read_scan_set(folder)
+        ring = list(s.order) or names
+        index = {n: i for i, n in enumerate(names)}
+        kind = Kind("object", s.voxel, 5.0, s.max_trans)
+        family = f"{s.label} multi-scan set, neighbours"
+        for i in range(len(ring) if s.closed else len(ring) - 1):
+            a, b = ring[i], ring[(i + 1) % len(ring)]
+            target = kissm.read_points(files[index[a]], format=formats[index[a]])
+            source = kissm.read_points(files[index[b]], format=formats[index[b]])
+            gt = np.linalg.inv(poses[a]) @ poses[b]
+            run(tally, family, Trial(f"{s.label} {a}<-{b} raw", source, target, gt, kind), args)
+            turn = axis_angle(rng.normal(size=3), rng.uniform(54, 180))
+            g2 = gt.copy()
+            g2[:3, :3] = gt[:3, :3] @ turn.T
+            run(tally, family, Trial(f"{s.label} {a}<-{b} rot", turned(source, turn), target, g2, kind), args)
+
+
 def unrelated(tally: Tally, args: argparse.Namespace) -> None:
     d = args.data
     lidar = [
@@ -333,6 +360,7 @@ def main() -> int:
         real_pairs(tally, args, rng)
         far_keyframes(tally, args, rng)
         scan_to_map(tally, args, rng)
+        scan_sets(tally, args, np.random.default_rng(33))  # its own draws: the others keep theirs
         unrelated(tally, args)
     else:
         print(f"(no real data at {args.data}: the synthetic pair only)")
