@@ -161,7 +161,9 @@ KISSM_API const char *kissm_last_error_message(void);
 #define KISSM_REASON_UNCONSTRAINED 8
 /** Without refinement: the inliers pin the rotation down no better than kissm_config.max_rotation_uncertainty
  * (kissm_result.rotation_uncertainty): too few of them, or all on one compact object; and the pose, refined with
- * GICP to verify it, did not pass the refined rule either (when it does, the refined pose is returned valid). */
+ * GICP to verify it, did not pass the refined rule either (when it does, the refined pose is returned valid).
+ * With refinement: 4 times the rotation's 1-sigma that kissm_result.information states (the square root of the
+ * largest eigenvalue of the inverse's rotation block) exceeds kissm_config.max_rotation_uncertainty. */
 #define KISSM_REASON_UNCERTAIN_ROTATION 9
 /** With refinement: the inliers cover less than kissm_config.min_inlier_coverage of the aligned overlap
  * (kissm_result.inlier_coverage): one object may match itself in several poses. */

@@ -55,7 +55,22 @@ RULE_FIELDS = (
     ("inlier coverage", "gicp", lambda r: r.inlier_coverage),
     ("overlap", "gicp", lambda r: r.overlap),
     ("refine condition", "gicp", lambda r: r.refine_condition),
+    ("information's rotation sigma (deg), GICP", "gicp", lambda r: information_rotation_sigma_deg(r)),
+    (
+        "information's rotation sigma (deg), point-to-plane",
+        "point_to_plane",
+        lambda r: information_rotation_sigma_deg(r),
+    ),
 )
+
+
+def information_rotation_sigma_deg(r: kissm.Result) -> float:
+    """The 1-sigma rotation error about the worst axis that the refined information states (NaN unrefined)."""
+    info = np.asarray(r.information)
+    if not np.isfinite(info).all():
+        return math.nan
+    cov = np.linalg.pinv(info)
+    return math.degrees(math.sqrt(max(0.0, float(np.linalg.eigvalsh(cov[:3, :3]).max()))))
 
 
 class Tally:

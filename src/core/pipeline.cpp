@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "pipeline.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <sstream>
@@ -259,6 +261,18 @@ void require_same_settings(const CloudFeatures &source, const CloudFeatures &tar
     }
 }
 
+// sqrt of the largest eigenvalue of inv(information)'s rotation block; infinite for a singular information.
+double rotation_sigma(const Matrix6d &information) {
+    if (!information.allFinite()) return std::numeric_limits<double>::infinity();
+    const Eigen::LDLT<Matrix6d> ldlt(information);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(ldlt.vectorD().minCoeff() > 0.0))
+        return std::numeric_limits<double>::infinity();
+    const Matrix6d cov = ldlt.solve(Matrix6d::Identity());
+    const Eigen::Matrix3d rot = 0.5 * (cov.topLeftCorner<3, 3>() + cov.topLeftCorner<3, 3>().transpose());
+    const double worst = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(rot, Eigen::EigenvaluesOnly).eigenvalues()[2];
+    return worst >= 0.0 ? std::sqrt(worst) : std::numeric_limits<double>::infinity();
+}
+
 RefinedEvidence refined_evidence(const Registration &r) {
     RefinedEvidence e;
     e.num_correspondences = r.num_refine_correspondences;
@@ -267,11 +281,14 @@ RefinedEvidence refined_evidence(const Registration &r) {
     e.inlier_coverage = r.inlier_coverage;
     e.converged = r.refine_converged;
     e.rmse = r.refine_rmse;
+    e.degenerate = r.degenerate;
+    e.rotation_sigma = rotation_sigma(r.information);
     return e;
 }
 
 RefinedRule refined_rule(const Params &params) {
     return RefinedRule{static_cast<std::uint64_t>(params.refine_min_inliers),
+                       params.max_rotation_uncertainty,
                        params.min_overlap,
                        params.min_refine_condition,
                        params.min_inlier_coverage,

@@ -55,6 +55,10 @@ Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule) {
     if (!rule.allow_degenerate && !(refined.condition >= rule.min_condition)) return Reason::Unconstrained;
     if (!refined.converged) return Reason::NotConverged;
     if (!(refined.rmse <= rule.max_rmse)) return Reason::LooseAlignment;
+    // A degenerate pose the caller accepts is uncertain along its weak directions by definition.
+    if (!(rule.allow_degenerate && refined.degenerate) &&
+        !(kRefinedRotationSigmas * refined.rotation_sigma <= rule.max_rotation_uncertainty))
+        return Reason::UncertainRotation;
     return Reason::None;
 }
 

@@ -80,10 +80,21 @@ struct RefinedEvidence {
     double inlier_coverage = 0.0;          // solver inliers' spread over the aligned overlap's (NaN: no solver)
     bool converged = false;                // stopped on its convergence test, not its iteration cap
     double rmse = 0.0;                     // the aligned clouds' residual (RefineOutput::rmse), metres
+    // The refined rotation's 1-sigma uncertainty about its worst axis as the information states it (radians):
+    // the square root of the largest eigenvalue of inv(information)'s rotation block; infinite when the
+    // information is singular.
+    double rotation_sigma = 0.0;
+    bool degenerate = false; // RefineOutput's weak directions exist (and allow_degenerate may accept them)
 };
 
+// The refined information is over-confident on real scans: their errors run 3 to 10 times the sigma it states
+// (docs/design/accuracy.md, "The information matrix against the truth"). The refined rotation is held to the
+// coarse rule's bound (max_rotation_uncertainty) at this many of its stated sigmas.
+constexpr double kRefinedRotationSigmas = 4.0;
+
 struct RefinedRule {
-    std::uint64_t min_inliers; // refine_min_inliers
+    std::uint64_t min_inliers;       // refine_min_inliers
+    double max_rotation_uncertainty; // radians: kRefinedRotationSigmas * rotation_sigma at most this
     double min_overlap;
     double min_condition;
     double min_inlier_coverage;
@@ -97,7 +108,8 @@ struct RefinedRule {
 // object cover a small part of it, whatever the pose). Then the refined pose must overlap (min_overlap), be
 // constrained in every direction (min_condition, unless allow_degenerate) and have converged: a refinement still moving
 // at its iteration cap is crossing from one basin to another (most wrong local optima measured did), and leave the
-// clouds within max_rmse of each other (prior_validity).
+// clouds within max_rmse of each other, and its rotation known to within max_rotation_uncertainty at
+// kRefinedRotationSigmas of the information's sigma (prior_validity).
 Reason refined_validity(std::uint64_t num_inliers, const InlierEvidence &inliers, const RefinedEvidence &refined,
                         const RefinedRule &rule);
 

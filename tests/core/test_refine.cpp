@@ -615,7 +615,7 @@ static void test_validity_rules() {
     loose.rotation_uncertainty = std::numeric_limits<double>::infinity(); // all inliers on one point
     CHECK(coarse_validity(100, loose, coarse) == Reason::UncertainRotation);
 
-    const RefinedRule rule{10, 0.4, 1e-2, 0.25, 0.1, false};
+    const RefinedRule rule{10, 0.1, 0.4, 1e-2, 0.25, 0.1, false};
     RefinedEvidence good;
     good.num_correspondences = 6;
     good.overlap = 0.4;
@@ -639,6 +639,32 @@ static void test_validity_rules() {
     CHECK(prior_validity(e, rule) == Reason::Unconstrained);
     e.converged = false;
     CHECK(prior_validity(e, rule) == Reason::Unconstrained);
+    // The refined rotation: known to within max_rotation_uncertainty (0.1) at kRefinedRotationSigmas of its sigma,
+    // tested after the residual; a degenerate pose the caller accepts is not asked.
+    e = good;
+    e.rotation_sigma = 0.1 / kRefinedRotationSigmas;
+    CHECK(prior_validity(e, rule) == Reason::None);
+    CHECK(refined_validity(10, spread, e, rule) == Reason::None);
+    e.rotation_sigma = std::nextafter(0.1 / kRefinedRotationSigmas, 1.0);
+    CHECK(prior_validity(e, rule) == Reason::UncertainRotation);
+    CHECK(refined_validity(10, spread, e, rule) == Reason::UncertainRotation);
+    e.rotation_sigma = std::numeric_limits<double>::infinity();
+    CHECK(prior_validity(e, rule) == Reason::UncertainRotation);
+    e.rmse = std::nextafter(0.1, 1.0);
+    CHECK(prior_validity(e, rule) == Reason::LooseAlignment);
+    e = good;
+    e.rotation_sigma = std::numeric_limits<double>::infinity();
+    e.degenerate = true;
+    CHECK(prior_validity(e, rule) == Reason::UncertainRotation);
+    {
+        RefinedRule accepting = rule;
+        accepting.allow_degenerate = true;
+        CHECK(prior_validity(e, accepting) == Reason::None);
+        e.degenerate = false;
+        CHECK(prior_validity(e, accepting) == Reason::UncertainRotation);
+    }
+    e = good;
+    e.condition = std::nextafter(1e-2, 0.0), e.converged = false;
     // allow_degenerate: the condition is not asked for, every other test still is.
     RefinedRule allowing = rule;
     allowing.allow_degenerate = true;

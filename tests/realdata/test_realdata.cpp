@@ -177,7 +177,9 @@ int main() {
     for (int mode = 0; mode < kNumModes; ++mode)
         CHECK_MSG(3 * object_successes[mode] >= 2 * object_runs, "object scans, %s: %d/%d", kModeNames[mode],
                   object_successes[mode], object_runs);
-    CHECK_MSG(object_successes[1] > object_successes[0], "GICP registered %d object runs, the coarse pose %d",
+    // The coarse path verifies the poses its rule declines for an uncertain rotation by GICP, so it registers as
+    // many object runs as GICP does at most; GICP never fewer.
+    CHECK_MSG(object_successes[1] >= object_successes[0], "GICP registered %d object runs, the coarse pose %d",
               object_successes[1], object_successes[0]);
     for (int mode = 1; mode < kNumModes; ++mode) {
         CHECK_MSG(median(lidar_rre[mode]) < median(lidar_rre[0]), "%s: LiDAR median rotation error %.3f vs coarse %.3f",

@@ -100,9 +100,21 @@ def test_max_rotation_uncertainty_decides_without_refinement(pair, coarse) -> No
     assert verified.valid and verified.refine_iterations > 0
     assert np.array_equal(verified.coarse_transform, coarse.transform)
     assert not np.array_equal(verified.transform, coarse.transform)
-    # with refinement it is not a rule
-    tight = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=measured / 100)
-    assert tight.valid and tight.rotation_uncertainty == measured
+    # With refinement it bounds 4 times the rotation sigma the information states, not the solver's uncertainty.
+    refined = kissm.register(pair.source, pair.target, VOXEL, refine="gicp")
+    sigma = information_rotation_sigma(refined.information)
+    assert 0.0 < 4.0 * sigma < measured
+    loose = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=4.04 * sigma)
+    assert loose.valid and loose.rotation_uncertainty == measured
+    tight = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=3.96 * sigma)
+    assert not tight.valid and tight.reason_code == _ffi.lib.KISSM_REASON_UNCERTAIN_ROTATION
+    assert_same_result(tight, refined, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})  # pose kept
+
+
+def information_rotation_sigma(information: np.ndarray) -> float:
+    """The rotation's 1-sigma about its worst axis that a refined information states (radians)."""
+    covariance = np.linalg.inv(information)
+    return math.sqrt(float(np.linalg.eigvalsh(covariance[:3, :3]).max()))
 
 
 def test_min_inlier_coverage_decides_with_refinement(pair, coarse, refined) -> None:
@@ -181,11 +193,15 @@ def test_refinement_from_a_prior_has_no_solver_measures(pair) -> None:
         pair.target,
         pair.transform,
         VOXEL,
-        max_rotation_uncertainty=1e-9,
         min_inlier_coverage=1.0,
         refine_min_inliers=100000,
     )
     assert_same_result(strict, result)
+    # max_rotation_uncertainty bounds the refined rotation's stated sigma (4 of them) here too.
+    sigma = information_rotation_sigma(result.information)
+    unsure = kissm.refine(pair.source, pair.target, pair.transform, VOXEL, max_rotation_uncertainty=3.96 * sigma)
+    assert not unsure.valid and unsure.reason_code == _ffi.lib.KISSM_REASON_UNCERTAIN_ROTATION
+    assert_same_result(unsure, result, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})
     assert "rotation_uncertainty" not in repr(result)
 
 
