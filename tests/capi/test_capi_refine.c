@@ -142,20 +142,55 @@ static void check_refined_fields(const char *label, const kissm_result *r, int32
     CHECK_EQ_INT(r->reserved0, 0);
 }
 
+/* The refined rotation's 1-sigma about its worst axis that an information states (radians): the largest
+ * eigenvalue of the rotation block of its inverse (Gauss-Jordan, then power iteration on the 3x3 block), square
+ * rooted; infinite when the information is not positive definite. */
+static double information_rotation_sigma(const double info[36]) {
+    double a[6][12], v[3] = {1.0, 0.7, 0.3}, lambda = 0.0;
+    int i, j, k, it;
+    if (!positive_definite6(info)) return INFINITY;
+    for (i = 0; i < 6; ++i)
+        for (j = 0; j < 12; ++j) a[i][j] = j < 6 ? info[6 * i + j] : (j - 6 == i ? 1.0 : 0.0);
+    for (i = 0; i < 6; ++i) { /* no pivoting needed: positive definite */
+        const double d = a[i][i];
+        for (j = 0; j < 12; ++j) a[i][j] /= d;
+        for (k = 0; k < 6; ++k) {
+            const double f = a[k][i];
+            if (k == i) continue;
+            for (j = 0; j < 12; ++j) a[k][j] -= f * a[i][j];
+        }
+    }
+    for (it = 0; it < 500; ++it) {
+        double w[3] = {0.0, 0.0, 0.0}, n = 0.0;
+        for (i = 0; i < 3; ++i)
+            for (j = 0; j < 3; ++j) w[i] += 0.5 * (a[i][6 + j] + a[j][6 + i]) * v[j];
+        for (i = 0; i < 3; ++i) n += w[i] * w[i];
+        n = sqrt(n);
+        if (!(n > 0.0)) return 0.0;
+        for (i = 0; i < 3; ++i) v[i] = w[i] / n;
+        lambda = n;
+    }
+    return sqrt(lambda);
+}
+
 /* kissm_refine's rule, from the numbers it reports (docs/refinement.md): at least 6 correspondences and
  * overlap >= min_overlap, else LOW_OVERLAP; refine_condition >= min_refine_condition, else UNCONSTRAINED;
- * converged, else NOT_CONVERGED; refine_rmse <= max_refine_rmse_gain * voxel_size, else LOOSE_ALIGNMENT; the
- * config's values, whatever the defaults are. */
+ * converged, else NOT_CONVERGED; refine_rmse <= max_refine_rmse_gain * voxel_size, else LOOSE_ALIGNMENT; 4 times
+ * the information's rotation sigma <= max_rotation_uncertainty, else UNCERTAIN_ROTATION; the config's values,
+ * whatever the defaults are. */
 static void check_prior_rule(const char *label, const kissm_result *r, const kissm_config *c) {
     int32_t expected = KISSM_REASON_NONE;
     if (r->num_refine_correspondences < 6 || !(r->overlap >= c->min_overlap))
         expected = KISSM_REASON_LOW_OVERLAP;
-    else if (!(r->refine_condition >= c->min_refine_condition))
+    else if (!c->allow_degenerate && !(r->refine_condition >= c->min_refine_condition))
         expected = KISSM_REASON_UNCONSTRAINED;
     else if (!r->refine_converged)
         expected = KISSM_REASON_NOT_CONVERGED;
     else if (!(r->refine_rmse <= c->max_refine_rmse_gain * c->voxel_size))
         expected = KISSM_REASON_LOOSE_ALIGNMENT;
+    else if (!(c->allow_degenerate && r->degenerate) &&
+             !(4.0 * information_rotation_sigma(r->information) <= c->max_rotation_uncertainty))
+        expected = KISSM_REASON_UNCERTAIN_ROTATION;
     CHECK_MSG(r->reason == expected && r->valid == (expected == KISSM_REASON_NONE),
               "%s: valid %d reason %d, the rule gives reason %d", label, (int)r->valid, (int)r->reason, (int)expected);
     CHECK(isnan(r->rotation_uncertainty) && isnan(r->inlier_coverage)); /* no solver ran */
@@ -774,6 +809,37 @@ static void test_plane_and_pipe(void) {
     scn_cloud_free(&b);
 }
 
+/* The refined rotation rule: 4 times the rotation sigma the information states, against max_rotation_uncertainty.
+ * A bound 4 % above it keeps the pose valid, 4 % below refuses it (UNCERTAIN_ROTATION) with the same pose. */
+static void test_refined_rotation_rule(void) {
+    const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
+    double initial[16], sigma;
+    kissm_result base, r;
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    int k;
+    scn_pose_to_matrix(&g_pair.truth, initial);
+    c.refine_mode = KISSM_REFINE_GICP;
+    REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+    scn_result_poison(&base);
+    CHECK_EQ_INT(kissm_refine(m, &s, &t, initial, &base), KISSM_OK);
+    kissm_destroy(m);
+    CHECK_MSG(base.valid == 1, "reason %d", (int)base.reason);
+    sigma = information_rotation_sigma(base.information);
+    CHECK_MSG(sigma > 0.0 && 4.0 * sigma < c.max_rotation_uncertainty, "sigma %g", sigma);
+    for (k = 0; k < 2; ++k) {
+        c.max_rotation_uncertainty = (k == 0 ? 4.16 : 3.84) * sigma;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_refine(m, &s, &t, initial, &r), KISSM_OK);
+        check_prior_rule(k == 0 ? "rotation bound above 4 sigma" : "rotation bound below 4 sigma", &r, &c);
+        CHECK_EQ_INT(r.valid, k == 0);
+        if (k == 1) CHECK_EQ_INT(r.reason, KISSM_REASON_UNCERTAIN_ROTATION);
+        CHECK(memcmp(r.transform, base.transform, sizeof r.transform) == 0);
+        kissm_destroy(m);
+    }
+}
+
 /* Priors within 10 degrees and 3 voxels of the truth (docs/refinement.md: kissm_refine converges to the right
  * pose from these): every one valid and right, in both costs. */
 static void test_near_priors_valid_and_right(void) {
@@ -996,6 +1062,7 @@ int main(void) {
     RUN_TEST(test_plane_and_pipe);
     RUN_TEST(test_near_priors_valid_and_right);
     RUN_TEST(test_far_priors);
+    RUN_TEST(test_refined_rotation_rule);
     RUN_TEST(test_older_callers);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();
