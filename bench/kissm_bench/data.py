@@ -139,3 +139,68 @@ def keyframes(root: Path) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
         chain.append(chain[-1] @ step)
     cloud = [kissm.read_points(folder / f"{k:06d}" / "points.bin", format="bin_xyz") for k in range(5)]
     return chain, cloud
+
+
+# ---- multi-scan sets (../shared/data README, "Multi-scan sets") ----
+
+
+@dataclass(frozen=True)
+class ScanSet:
+    label: str
+    folder: str  #: holds scans.tsv and gt_poses.txt
+    voxel: float
+    max_trans: float
+    closed: bool  #: a loop: the consecutive triplets wrap around
+    order: tuple[str, ...] = ()  #: the scans in neighbour order (empty: scans.tsv's)
+    extra: tuple[tuple[str, str, str], ...] = ()  #: more triplets (a, b, c) whose three pairs overlap
+    every_triplet: bool = False  #: every a < b < c in the order, not only consecutive ones
+    note: str = ""
+
+
+SCAN_SETS = (
+    ScanSet(
+        "kitti07",
+        "kitti07_keyframes_gtsam_points/multiway",
+        0.5,
+        2.0,
+        closed=False,
+        every_triplet=True,
+        note="a short drive: every triplet a < b < c (each pair overlaps), the 3 consecutive ones among them",
+    ),
+    ScanSet(
+        "bunny",
+        "stanford_bunny_scans/multiway",
+        0.006,
+        0.01,
+        closed=True,
+        order=("bun000", "bun045", "bun090", "bun180", "bun270", "bun315"),
+        # the README's best partners of the views from above and behind, with a neighbour of theirs
+        extra=(("bun180", "top2", "ear_back"), ("bun000", "bun045", "top3"), ("bun045", "bun090", "top3")),
+        note="the README's turntable ring (closed) and 3 triplets through top2, top3, ear_back's best partners",
+    ),
+    ScanSet(
+        "happy",
+        "stanford_happy_stand_scans",
+        0.004,
+        0.01,
+        closed=True,
+        note="15 turntable scans 24 degrees apart, a closed loop",
+    ),
+)
+
+
+def read_scan_set(folder: Path) -> tuple[list[str], list[Path], list[str], dict[str, np.ndarray]]:
+    """A set's scan names, files and formats (scans.tsv order) and each scan's world pose (gt_poses.txt)."""
+    import numpy as np
+
+    with open(folder / "scans.tsv", newline="") as f:
+        rows = list(csv.DictReader(f, delimiter="\t"))
+    poses = {}
+    for line in (folder / "gt_poses.txt").read_text().splitlines():
+        if line.strip():
+            name, *numbers = line.split()
+            t = np.eye(4)
+            t[:3, :] = np.array([float(x) for x in numbers]).reshape(3, 4)
+            poses[name] = t
+    names = [r["scan"] for r in rows]
+    return names, [folder / r["file"] for r in rows], [r["format"] for r in rows], poses

@@ -43,7 +43,6 @@ Needs the kissm Python package and numpy; the street needs the CLI (build/kissm)
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import statistics
@@ -59,7 +58,7 @@ import kissm
 import numpy as np
 
 from .common import REPO, default_data
-from .data import has_index, load_pairs
+from .data import SCAN_SETS, ScanSet, has_index, load_pairs, read_scan_set
 from .geometry import axis_angle, rotation_error_deg
 
 Model = tuple[float, float]  # (k, c); (1, 0) is M0
@@ -392,51 +391,6 @@ def real_pairs(study: Study, args: argparse.Namespace, rng: np.random.Generator)
             register(study, family, f"{p.pair} rot{i}", s2, tgt, k.voxel, args.threads, g2, k.max_trans_m, args.rows)
 
 
-@dataclass(frozen=True)
-class ScanSet:
-    label: str
-    folder: str  #: holds scans.tsv and gt_poses.txt
-    voxel: float
-    max_trans: float
-    closed: bool  #: a loop: the consecutive triplets wrap around
-    order: tuple[str, ...] = ()  #: the scans in neighbour order (empty: scans.tsv's)
-    extra: tuple[tuple[str, str, str], ...] = ()  #: more triplets (a, b, c) whose three pairs overlap
-    every_triplet: bool = False  #: every a < b < c in the order, not only consecutive ones
-    note: str = ""
-
-
-SCAN_SETS = (
-    ScanSet(
-        "kitti07",
-        "kitti07_keyframes_gtsam_points/multiway",
-        0.5,
-        2.0,
-        closed=False,
-        every_triplet=True,
-        note="a short drive: every triplet a < b < c (each pair overlaps), the 3 consecutive ones among them",
-    ),
-    ScanSet(
-        "bunny",
-        "stanford_bunny_scans/multiway",
-        0.006,
-        0.01,
-        closed=True,
-        order=("bun000", "bun045", "bun090", "bun180", "bun270", "bun315"),
-        # the README's best partners of the views from above and behind, with a neighbour of theirs
-        extra=(("bun180", "top2", "ear_back"), ("bun000", "bun045", "top3"), ("bun045", "bun090", "top3")),
-        note="the README's turntable ring (closed) and 3 triplets through top2, top3, ear_back's best partners",
-    ),
-    ScanSet(
-        "happy",
-        "stanford_happy_stand_scans",
-        0.004,
-        0.01,
-        closed=True,
-        note="15 turntable scans 24 degrees apart, a closed loop",
-    ),
-)
-
-
 def triplets(s: ScanSet, names: list[str]) -> tuple[list[tuple[str, str, str]], list[tuple[str, str, str]]]:
     """The consecutive triplets (a, b, c) of a set's order (wrapped when it is a loop), and the others chosen."""
     ring = list(s.order) or names
@@ -447,26 +401,6 @@ def triplets(s: ScanSet, names: list[str]) -> tuple[list[tuple[str, str, str]], 
         every = [(ring[a], ring[b], ring[c]) for a in range(n) for b in range(a + 1, n) for c in range(b + 1, n)]
         others += [t for t in every if t not in consecutive]
     return consecutive, others
-
-
-def read_scan_set(folder: Path) -> tuple[list[str], list[Path], list[str], dict[str, np.ndarray]]:
-    with open(folder / "scans.tsv", newline="") as f:
-        rows = list(csv.DictReader(f, delimiter="\t"))
-    poses = {}
-    for line in (folder / "gt_poses.txt").read_text().splitlines():
-        if line.strip():
-            name, *numbers = line.split()
-            t = np.eye(4)
-            t[:3, :] = np.array([float(x) for x in numbers]).reshape(3, 4)
-            poses[name] = t
-    names = [r["scan"] for r in rows]
-    return names, [folder / r["file"] for r in rows], [r["format"] for r in rows], poses
-
-
-def read_scan(path: Path, fmt: str, study: Study) -> np.ndarray:
-    """``kissm.read_points`` (it reads the Happy Buddha's extra ``bye`` header lines since they were reported)."""
-    del study
-    return kissm.read_points(path, format=fmt)
 
 
 def scan_set(study: Study, args: argparse.Namespace, s: ScanSet) -> None:
@@ -482,7 +416,7 @@ def scan_set(study: Study, args: argparse.Namespace, s: ScanSet) -> None:
 
     def cloud(n: str) -> np.ndarray:
         if n not in clouds:
-            clouds[n] = read_scan(files[index[n]], formats[index[n]], study)
+            clouds[n] = kissm.read_points(files[index[n]], format=formats[index[n]])
         return clouds[n]
 
     def edge(target: str, source: str) -> Run:

@@ -40,9 +40,18 @@ import kissm
 import numpy as np
 
 from .common import REPO, SHARED_DATA
-from .data import KEYFRAME_KIND, KINDS, Kind, Trial, has_index, keyframes, load_pairs  # the real-data tests' pairs
+from .data import (  # the real-data tests' pairs and the multi-scan sets
+    KEYFRAME_KIND,
+    KINDS,
+    SCAN_SETS,
+    Kind,
+    Trial,
+    has_index,
+    keyframes,
+    load_pairs,
+    read_scan_set,
+)
 from .geometry import axis_angle, judge_at
-from .nees_study import SCAN_SETS, read_scan_set
 
 SYNTHETIC_KIND = Kind("synthetic", 0.25, 5.0, 0.3)  # the committed synthetic pair (tests/data): a yard in metres
 RefineMode = Literal["none", "gicp", "point_to_plane"]
