@@ -181,6 +181,11 @@ KISSM_API const char *kissm_last_error_message(void);
  * (kissm_result.refine_rmse): a local optimum beside the right pose, as refinements from a prior outside the
  * convergence basin reach (a road shifted along itself, a scene turned onto its own symmetry). */
 #define KISSM_REASON_LOOSE_ALIGNMENT 13
+/** The scene holds a second pose, distinct from the one returned, with nearly as much support
+ * (kissm_result.ambiguity above kissm_config.max_ambiguity): a repetitive or symmetric scene (a street of identical
+ * facades, pillars at a regular spacing, a symmetric object) that matches as well one period along or turned onto
+ * its own symmetry. The pose returned is one of them; a prior or a check from elsewhere must choose. */
+#define KISSM_REASON_AMBIGUOUS 14
 
 /**
  * @brief Describes a reason code.
@@ -401,6 +406,10 @@ typedef struct kissm_config {
     int32_t allow_degenerate;
     /** Reserved; must be 0. */
     int32_t reserved2;
+    /** A solved pose whose best distinct competitor reaches more than this share of its support
+     * (kissm_result.ambiguity) ends valid = 0 with #KISSM_REASON_AMBIGUOUS; 1 never refuses a pose for it; in
+     * [0, 1]. Default 0.7. */
+    double max_ambiguity;
     /* New fields are only ever appended here. */
 } kissm_config;
 
@@ -621,6 +630,13 @@ typedef struct kissm_result {
      * its largest component positive; a pose moved along it changes the alignment by almost nothing. Rows
      * beyond num_weak_directions are NaN. */
     double weak_directions[36];
+    /** When the robust solver found a pose: the support of the best competing pose, distinct from it (moving the
+     * matched points by more than 8 noise bounds), over its own, in [0, 1]. Support is the inliers among every
+     * match after the same polish, and from one half on the smaller of that ratio and the dense one (source
+     * voxels landing beside target voxels). Near 0 in a scene with one answer; near 1 in a repetitive or
+     * symmetric one. Above kissm_config.max_ambiguity: #KISSM_REASON_AMBIGUOUS. NaN when the solver did not run
+     * (and from kissm_refine()). */
+    double ambiguity;
     /* New fields are only ever appended here. */
 } kissm_result;
 

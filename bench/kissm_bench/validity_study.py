@@ -15,6 +15,8 @@ The families:
   * pairs of unrelated scans (no overlap: every valid pose is wrong): LiDAR scans of three datasets against each
     other at 0.3 and 0.5 m, and the bunny against a scaled 3DMatch fragment and back;
   * the committed synthetic pair (tests/data) with its target turned about z every 15 degrees and moved;
+  * scenes with a second right-looking pose (kissm_bench.repetitive): a street of identical buildings, a pillar
+    grid, a symmetric table, each beside a control with the repetition broken;
   * with --priors, kissm.refine from the ground truth disturbed by 0-180 degrees and 0-30 voxels (the refine
     rule: overlap, conditioning, convergence, the residual).
 
@@ -52,6 +54,7 @@ from .data import (  # the real-data tests' pairs and the multi-scan sets
     read_scan_set,
 )
 from .geometry import axis_angle, judge_at
+from .repetitive import FAMILIES
 
 SYNTHETIC_KIND = Kind("synthetic", 0.25, 5.0, 0.3)  # the committed synthetic pair (tests/data): a yard in metres
 RefineMode = Literal["none", "gicp", "point_to_plane"]
@@ -61,6 +64,7 @@ MODES: tuple[RefineMode, ...] = ("none", "gicp", "point_to_plane")
 # The fields the rules read, with the mode whose rule reads them.
 RULE_FIELDS = (
     ("rotation uncertainty (deg)", "none", lambda r: math.degrees(r.rotation_uncertainty)),
+    ("ambiguity", "none", lambda r: r.ambiguity),
     ("inlier coverage", "gicp", lambda r: r.inlier_coverage),
     ("overlap", "gicp", lambda r: r.overlap),
     ("refine condition", "gicp", lambda r: r.refine_condition),
@@ -105,7 +109,15 @@ class Tally:
             self.wrong_valid.append(line)
         if r is None or not np.isfinite(np.asarray(r.transform)).all():
             return
-        kind = family if family in ("unrelated scans", "synthetic pair") else "real pairs"
+        kind = (
+            family
+            if family in ("unrelated scans", "synthetic pair")
+            else "repetitive scenes"
+            if "(repetitive)" in family
+            else "their controls"
+            if "(control)" in family
+            else "real pairs"
+        )
         for name, rule_mode, get in RULE_FIELDS:
             if mode == rule_mode and r.num_final_inliers >= 10 and math.isfinite(get(r)):
                 self.values[(name, kind, right)].append(get(r))
@@ -125,7 +137,7 @@ class Tally:
             print("  " + line)
         print("\nwhat the rules read, runs with at least 10 inliers: range over right poses | over wrong poses")
         for name, _, _ in RULE_FIELDS:
-            for kind in ("real pairs", "synthetic pair", "unrelated scans"):
+            for kind in ("real pairs", "synthetic pair", "unrelated scans", "repetitive scenes", "their controls"):
                 right = self.values.get((name, kind, True), [])
                 wrong = self.values.get((name, kind, False), [])
                 print(f"  {name:28s} {kind:16s} {span(right)} | {span(wrong)}")
@@ -138,6 +150,7 @@ def span(values: list[float]) -> str:
 def fields(r: kissm.Result, voxel: float) -> str:
     return (
         f"inliers {r.num_final_inliers:4d} sigma {math.degrees(r.rotation_uncertainty):6.2f} deg "
+        f"ambiguity {r.ambiguity:5.3f} "
         f"coverage {r.inlier_coverage:5.2f} overlap {r.overlap:5.3f} condition {r.refine_condition:7.4f} "
         f"rmse/v {r.refine_rmse / voxel:5.3f} it {r.refine_iterations:2d}{'' if r.refine_converged else '!'} "
         f"reason {r.reason}"
@@ -331,6 +344,14 @@ def synthetic(tally: Tally, args: argparse.Namespace) -> None:
         run(tally, "synthetic pair", Trial(f"synthetic, target yaw {yaw}", src, moved, gt, SYNTHETIC_KIND), args)
 
 
+def repetitive_scenes(tally: Tally, args: argparse.Namespace) -> None:
+    """Scenes with a second right-looking pose (a street of identical buildings, a pillar grid, a symmetric table)
+    and their controls with the repetition broken: right or refused, never wrong and valid."""
+    for family in FAMILIES:
+        for t in family.trials():
+            run(tally, family.name, t, args)
+
+
 def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
     """kissm.refine from the ground truth disturbed by growing amounts: the basin, and what the refine rule says."""
     counts: dict[tuple[int, int], collections.Counter[str]] = collections.defaultdict(collections.Counter)
@@ -389,6 +410,7 @@ def main() -> int:
     else:
         print(f"(no real data at {args.data}: the synthetic pair only)")
     synthetic(tally, args)
+    repetitive_scenes(tally, args)
     tally.print()
     if args.priors and has_index(args.data):
         priors(args, rng)

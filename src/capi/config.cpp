@@ -46,7 +46,8 @@ namespace {
   X(rotation_dof)                                                                                                      \
   X(sensor_height)                                                                                                     \
   X(max_refine_rmse_gain)                                                                                              \
-  X(allow_degenerate)
+  X(allow_degenerate)                                                                                                  \
+  X(max_ambiguity)
 
 // Log levels of the core and of kissm.h; no default, so a new LogLevel without a code fails the build.
 constexpr int32_t log_code(LogLevel level) {
@@ -200,6 +201,7 @@ kissm_config validated_config(const kissm_config *given) {
     KISSM_REQUIRE_IN_LIMITS(sensor_height);
     KISSM_REQUIRE_IN_LIMITS(max_refine_rmse_gain);
     KISSM_REQUIRE_IN_LIMITS(allow_degenerate);
+    KISSM_REQUIRE_IN_LIMITS(max_ambiguity);
     require_int(c.reserved2, 0, 0, "reserved2");
     return c;
 }

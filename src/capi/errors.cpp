@@ -135,6 +135,8 @@ const char *kissm_reason_string(int32_t reason) {
     case KISSM_REASON_NOT_CONVERGED: return "refinement did not converge";
     case KISSM_REASON_TILTED: return "the clouds' relative roll or pitch is not zero (rotation_dof = 1)";
     case KISSM_REASON_LOOSE_ALIGNMENT: return "the refined clouds stay apart (a local optimum beside the right pose)";
+    case KISSM_REASON_AMBIGUOUS:
+        return "a second, distinct pose has nearly as much support (a repetitive or symmetric scene)";
     default: return "unknown reason";
     }
 }

@@ -60,6 +60,7 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::NotConverged: return KISSM_REASON_NOT_CONVERGED;
     case Reason::Tilted: return KISSM_REASON_TILTED;
     case Reason::LooseAlignment: return KISSM_REASON_LOOSE_ALIGNMENT;
+    case Reason::Ambiguous: return KISSM_REASON_AMBIGUOUS;
     }
     return KISSM_REASON_NONE;
 }
@@ -104,6 +105,7 @@ void reset_full(kissm_result *r) noexcept {
     r->inlier_coverage = nan;
     r->tilt = nan;
     for (double &v : r->weak_directions) v = nan;
+    r->ambiguity = nan;
 }
 
 } // namespace
@@ -129,6 +131,7 @@ void fill_result(const Registration &g, kissm_result *caller) {
         write_transform(g.coarse_rotation, g.coarse_translation, r->coarse_transform);
         r->rotation_uncertainty = g.rotation_uncertainty;
         r->inlier_coverage = g.inlier_coverage;
+        r->ambiguity = g.ambiguity;
     }
     if (g.refined) {
         for (int i = 0; i < 6; ++i)

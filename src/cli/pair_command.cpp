@@ -40,6 +40,7 @@ constexpr FieldOption kFieldOptions[] = {
     {"config.refine_max_distance_gain ", "--refine-distance"},
     {"config.min_overlap ", "--min-overlap"},
     {"config.max_rotation_uncertainty ", "--max-rotation-uncertainty"},
+    {"config.max_ambiguity ", "--max-ambiguity"},
     {"config.min_inlier_coverage ", "--min-inlier-coverage"},
     {"config.refine_min_inliers ", "--refine-min-inliers"},
     {"config.min_refine_condition ", "--min-refine-condition"},
@@ -269,6 +270,9 @@ bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, Pa
     } else if (is_register && name == "--max-rotation-uncertainty") {
         opt.max_rotation_uncertainty = parse_double(name, cur.value());
         opt.have_max_rotation_uncertainty = true;
+    } else if (is_register && name == "--max-ambiguity") {
+        opt.max_ambiguity = parse_double(name, cur.value());
+        opt.have_max_ambiguity = true;
     } else if (is_register && name == "--min-inlier-coverage") {
         opt.min_inlier_coverage = parse_double(name, cur.value());
         opt.have_min_inlier_coverage = true;
@@ -386,6 +390,7 @@ kissm_config pair_config(PairCommand command, const PairOptions &opt) {
         if (opt.min_inliers >= 0) config.min_inliers = opt.min_inliers;
         if (opt.max_correspondences >= 0) config.max_correspondences = opt.max_correspondences;
         if (opt.have_max_rotation_uncertainty) config.max_rotation_uncertainty = opt.max_rotation_uncertainty;
+        if (opt.have_max_ambiguity) config.max_ambiguity = opt.max_ambiguity;
         if (opt.have_min_inlier_coverage) config.min_inlier_coverage = opt.min_inlier_coverage;
         if (opt.have_refine_min_inliers) config.refine_min_inliers = opt.refine_min_inliers;
     }

@@ -61,6 +61,8 @@ struct PairOptions {
     // keep kissm_config_init's values and the library checks the ranges.
     bool have_max_rotation_uncertainty = false;
     double max_rotation_uncertainty = 0.0; // radians
+    bool have_max_ambiguity = false;
+    double max_ambiguity = 0.0;
     bool have_min_inlier_coverage = false;
     double min_inlier_coverage = 0.0;
     bool have_refine_min_inliers = false;

@@ -44,6 +44,9 @@ void print_register_settings(std::FILE *out, const kissm_config &d) {
                  "                          down to RAD radians (rotation_uncertainty), in (0, 3.15]: few inliers,\n"
                  "                          or all on one compact object, do not; with refinement it bounds 4\n"
                  "                          times the rotation sigma of the refined information\n"
+                 "  --max-ambiguity X       largest ambiguity of a valid pose (default %g; 1 = never refused), in\n"
+                 "                          [0, 1]: the best distinct competing pose's support over this one's;\n"
+                 "                          repetitive or symmetric scenes match as well elsewhere (reason_code 14)\n"
                  "  --viewpoint MODE        how normals are oriented: local (the default) or sign-free (no\n"
                  "                          viewpoint: features that depend on no cloud's frame;\n"
                  "                          docs/design/frames.md), fixed (toward the sensor at the frame origin:\n"
@@ -61,8 +64,9 @@ void print_register_settings(std::FILE *out, const kissm_config &d) {
                  "                          [0, 1000]; 0 = estimate it from the cloud\n"
                  "\n",
                  d.min_inliers, d.max_correspondences, d.max_rotation_uncertainty,
-                 rad_to_deg(d.max_rotation_uncertainty), d.suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none",
-                 d.rotation_dof, d.up[0], d.up[1], d.up[2], d.sensor_height);
+                 rad_to_deg(d.max_rotation_uncertainty), d.max_ambiguity,
+                 d.suppression == KISSM_SUPPRESS_GROUND ? "ground" : "none", d.rotation_dof, d.up[0], d.up[1], d.up[2],
+                 d.sensor_height);
 }
 
 } // namespace

@@ -113,6 +113,8 @@ void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind
         // How well the inliers pin the solver's rotation down (radians in the JSON, degrees for people).
         std::fprintf(out, "rotation uncertainty: %s\n",
                      number_text(rad_to_deg(r.rotation_uncertainty), "%.4g deg").text);
+        // The best distinct competing pose's support over this one's (0: one answer; 1: a repetitive scene).
+        std::fprintf(out, "ambiguity: %s\n", number_text(r.ambiguity, "%.3f").text);
         // Only measured with rotation_dof = 1: how far the best free rotation on the inliers turns `up`.
         if (!std::isnan(r.tilt)) std::fprintf(out, "tilt: %s\n", number_text(rad_to_deg(r.tilt), "%.4g deg").text);
     }
@@ -180,6 +182,7 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field_vector("inlier_extent", r.inlier_extent, 3);
     json.field("rotation_uncertainty", r.rotation_uncertainty);
     json.field("tilt", r.tilt);
+    json.field("ambiguity", r.ambiguity);
     if (!with_times) return;
     json.key("time_ms");
     json.begin_object();

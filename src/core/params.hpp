@@ -56,6 +56,7 @@ struct Params {
     std::array<double, 3> up{{0.0, 0.0, 1.0}}; // in each cloud's own frame; normalised at the boundary
     double sensor_height = 0.0;                // metres above the ground; 0 = estimate
     double max_refine_rmse_gain = 0.45;        // validity with refinement: refine_rmse <= gain * voxel_size
+    double max_ambiguity = 0.7;                // validity: the best distinct competitor's share of the support
     int allow_degenerate = 0;                  // 1: a degenerate refined pose may be valid (flagged)
 
     double normal_radius() const { return normal_radius_gain * voxel_size; }

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "pipeline.hpp"
+#include "ambiguity.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -402,9 +403,9 @@ std::vector<Eigen::Vector3d> as_double(const std::vector<Vec3f> &points, const s
 // The solver's pose, polished over all initial correspondences (pruning is conservative: matches it dropped
 // but that agree with the pose both confirm it and sharpen the least squares), in the callers' frames, with the
 // final inliers' residual and evidence.
-InlierEvidence final_inliers(const MatchedPoints &matched, const PoseSolver &solver, SolverOutput &sol,
-                             const CloudFeatures &source, const CloudFeatures &target, Registration &r) {
-    const std::vector<Eigen::Vector3d> a = as_double(matched.source), b = as_double(matched.target);
+InlierEvidence final_inliers(const std::vector<Eigen::Vector3d> &a, const std::vector<Eigen::Vector3d> &b,
+                             const PoseSolver &solver, SolverOutput &sol, const CloudFeatures &source,
+                             const CloudFeatures &target, Registration &r) {
     std::vector<std::uint8_t> inlier;
     r.num_final_inliers = solver.polish(a, b, sol.rotation, sol.translation, inlier);
     r.inlier_ratio = static_cast<double>(r.num_final_inliers) / static_cast<double>(r.num_initial_correspondences);
@@ -448,8 +449,8 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     // 3. Matching.
     ctx.checkpoint(Stage::Matching, 0.0);
     const MatchParams mp{params.ratio_test, params.max_correspondences};
-    const MatchedPoints matched =
-        matched_points(indexed(source), indexed(target), match_descriptors(indexed(source), indexed(target), mp, ctx));
+    const std::vector<Correspondence> matches = match_descriptors(indexed(source), indexed(target), mp, ctx);
+    const MatchedPoints matched = matched_points(indexed(source), indexed(target), matches);
     r.num_initial_correspondences = matched.source.size();
     r.time_matching_ms = clock.lap();
     if (matched.source.size() < 3) {
@@ -473,7 +474,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     // 5. Solver, on the max core; then the final inliers over every match.
     ctx.checkpoint(Stage::Solver, 0.0);
     PoseSolution pose = solver.solve(as_double(matched.source, pruned.core), as_double(matched.target, pruned.core),
-                                     std::move(pruned.measurements), ctx);
+                                     pruned.measurements, ctx);
     r.tilt = pose.tilt;
     r.num_rotation_inliers = pose.solver.num_rotation_inliers;
     if (!pose.solver.solved) {
@@ -481,7 +482,15 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         r.time_solver_ms = clock.lap();
         return r;
     }
-    const InlierEvidence inliers = final_inliers(matched, solver, pose.solver, source, target, r);
+    const std::vector<Eigen::Vector3d> match_source = as_double(matched.source),
+                                       match_target = as_double(matched.target);
+    const InlierEvidence inliers = final_inliers(match_source, match_target, solver, pose.solver, source, target, r);
+
+    // 5c. Ambiguity: the best competing pose's support (ambiguity.hpp).
+    const AmbiguityInput competition{&match_source,         &match_target,       &pruned.core,
+                                     &pruned.measurements,  r.num_final_inliers, &source.voxels.points,
+                                     &target.voxels.points, &source.normals,     params.voxel_size};
+    r.ambiguity = measure_ambiguity(competition, solver, pose.solver.rotation, pose.solver.translation, ctx).value;
 
     // 5b. Validity without refinement.
     r.reason = r.rotation.allFinite() && r.translation.allFinite()
@@ -518,6 +527,9 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
             refined_validity(refined.num_final_inliers, inliers, refined_evidence(refined), refined_rule(verify));
         if (refined.reason == Reason::None) r = std::move(refined);
     }
+    // Last, so that the reason names what else is wrong first: refinement cannot resolve ambiguity (the scene
+    // aligns as well at the competitor), so a refined pose is refused for it too.
+    if (r.reason == Reason::None && !(r.ambiguity <= params.max_ambiguity)) r.reason = Reason::Ambiguous;
     return r;
 }
 

@@ -28,6 +28,7 @@ public:
 
     bool yaw_only() const { return yaw_only_; }
     std::size_t max_measurements() const { return params_.max_tims; }
+    double noise_bound() const { return params_.noise_bound; }
 
     // The pose of the correspondences (a[k], b[k]) from the translation-invariant measurements `pairs` (empty =
     // strided_pairs()).

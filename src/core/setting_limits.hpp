@@ -52,7 +52,8 @@ struct IntLimits {
   REAL(refine_normal_radius_gain, 0.0, 50.0, true)                                                                     \
   REAL(sensor_height, 0.0, 1000.0, false)                                                                              \
   REAL(max_refine_rmse_gain, 0.0, 100.0, true)                                                                         \
-  INT(allow_degenerate, 0, 1)
+  INT(allow_degenerate, 0, 1)                                                                                          \
+  REAL(max_ambiguity, 0.0, 1.0, false)
 
 namespace limits {
 

@@ -29,6 +29,7 @@ enum class Reason {
     NotConverged,
     Tilted,
     LooseAlignment,
+    Ambiguous,
 };
 
 // Before matching: both clouds need more voxels than a normal needs neighbours (min_voxels) and at least three

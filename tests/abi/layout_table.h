@@ -16,9 +16,9 @@
 
 /* X(struct, id, size): the structs, with their KISSM_STRUCT_* id and sizeof. */
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
-  X(kissm_config, KISSM_STRUCT_CONFIG, 296)                                                                            \
+  X(kissm_config, KISSM_STRUCT_CONFIG, 304)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 1248)
+  X(kissm_result, KISSM_STRUCT_RESULT, 1256)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -61,7 +61,8 @@
   X(kissm_config, sensor_height, double, 272, 8)                                                                       \
   X(kissm_config, max_refine_rmse_gain, double, 280, 8)                                                                \
   X(kissm_config, allow_degenerate, int32_t, 288, 4)                                                                   \
-  X(kissm_config, reserved2, int32_t, 292, 4)
+  X(kissm_config, reserved2, int32_t, 292, 4)                                                                          \
+  X(kissm_config, max_ambiguity, double, 296, 8)
 
 #define KISSM_LAYOUT_POINTS(X)                                                                                         \
   X(kissm_points, data, const void *, 0, 8)                                                                            \
@@ -118,7 +119,8 @@
   X(kissm_result, tilt, double, 944, 8)                                                                                \
   X(kissm_result, degenerate, int32_t, 952, 4)                                                                         \
   X(kissm_result, num_weak_directions, int32_t, 956, 4)                                                                \
-  X(kissm_result, weak_directions, double[36], 960, 288)
+  X(kissm_result, weak_directions, double[36], 960, 288)                                                               \
+  X(kissm_result, ambiguity, double, 1248, 8)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

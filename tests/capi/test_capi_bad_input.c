@@ -512,7 +512,8 @@ enum {
     F_SENSOR_HEIGHT,
     F_MAX_REFINE_RMSE_GAIN,
     F_ALLOW_DEGENERATE,
-    F_RESERVED2
+    F_RESERVED2,
+    F_MAX_AMBIGUITY
 };
 
 typedef struct field_case {
@@ -561,6 +562,7 @@ static void set_field(kissm_config *c, int field, double v) {
     case F_MAX_REFINE_RMSE_GAIN: c->max_refine_rmse_gain = v; break;
     case F_ALLOW_DEGENERATE: c->allow_degenerate = (int32_t)v; break;
     case F_RESERVED2: c->reserved2 = (int32_t)v; break;
+    case F_MAX_AMBIGUITY: c->max_ambiguity = v; break;
     default: break;
     }
 }
@@ -683,6 +685,10 @@ static const field_case k_bad_fields[] = {
     {F_ALLOW_DEGENERATE, 2, "config.allow_degenerate"},
     {F_RESERVED2, 1, "config.reserved2"},
     {F_RESERVED2, -1, "config.reserved2"},
+    {F_MAX_AMBIGUITY, -0.01, "config.max_ambiguity"},
+    {F_MAX_AMBIGUITY, 1.01, "config.max_ambiguity"},
+    {F_MAX_AMBIGUITY, NAN, "config.max_ambiguity"},
+    {F_MAX_AMBIGUITY, INFINITY, "config.max_ambiguity"},
 };
 
 /* Documented boundary values that must be accepted. */

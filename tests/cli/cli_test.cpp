@@ -915,6 +915,36 @@ void test_validity_options() {
                  KISSM_REASON_TOO_FEW_INLIERS);
 }
 
+// --max-ambiguity: the tool's and the library's range checks, refused by `refine` (no solver, no competitor), and
+// the decision moves exactly at the ambiguity the JSON reports, with and without refinement.
+void test_ambiguity_option() {
+    CommittedPair pair;
+    REQUIRE(load_committed_pair(&pair));
+    const std::string plain = "register " + pair_args(pair) + " --voxel 0.25 ";
+    const std::string ref = "refine " + pair_args(pair) + " --voxel 0.25 --initial " + quote(pair.truth_path) + " ";
+    for (const char *bad : {"abc", "nan", "inf", "''"})
+        expect_usage_error(plain + "--max-ambiguity " + bad, "--max-ambiguity");
+    for (const char *bad : {"-0.01", "1.01"}) {
+        expect_usage_error(plain + "--max-ambiguity " + bad, "--max-ambiguity: config.max_ambiguity");
+    }
+    expect_usage_error(ref + "--max-ambiguity 0.5", "--max-ambiguity");
+    CHECK(contains(help_line(run("register --help").out, "--max-ambiguity"), "(default 0.7;"));
+
+    const Run base = run(plain + "--json");
+    CHECK_MSG(base.code == 0, "register: exit %d (%s)", base.code, base.err.c_str());
+    const double a = contract_json(base, false, "register").at("ambiguity").as_double();
+    CHECK_MSG(a > 0.0 && a < 0.7, "ambiguity %.17g", a); // a scene with one answer
+    check_decision_flips(plain, "--max-ambiguity", "ambiguity", a, 0.0, KISSM_REASON_AMBIGUOUS, base);
+    const std::string reg = plain + "--refine gicp ";
+    const Run fine = run(reg + "--json");
+    check_decision_flips(reg, "--max-ambiguity", "ambiguity", a, 0.0, KISSM_REASON_AMBIGUOUS, fine);
+    // kissm_refine runs no solver: no competitor, ambiguity null.
+    const Run refined = run(ref + "--json");
+    CHECK(contract_json(refined, true, "refine").at("ambiguity").is(Json::Type::Null));
+    // The summary shows it.
+    CHECK(contains(run(plain).out, "\nambiguity: "));
+}
+
 // The ground truth moved by 2 degrees about a skew axis and by (0.15, -0.1, 0.08) m: exactly rigid.
 void perturbed(const double truth[16], double out[16]) {
     const double axis[3] = {1.0 / std::sqrt(14.0), 2.0 / std::sqrt(14.0), 3.0 / std::sqrt(14.0)};
@@ -1567,6 +1597,7 @@ int main(int argc, char **argv) {
                              {"refine_initial", test_refine_initial},
                              {"refine_roundtrip", test_refine_roundtrip},
                              {"validity_options", test_validity_options},
+                             {"ambiguity_option", test_ambiguity_option},
                              {"refine_rule_options", test_refine_rule_options},
                              {"ground_options", test_ground_options},
                              {"ground_command", test_ground_command}};

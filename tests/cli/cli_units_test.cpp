@@ -399,7 +399,8 @@ void test_result_json() {
     CHECK(j.at("counts").keys() == cli_test::contract_count_keys());
     CHECK(j.at("time_ms").keys() == cli_test::contract_time_keys());
     CHECK(j.at("information").is(cli_test::Json::Type::Null));
-    CHECK(j.at("tilt").is(cli_test::Json::Type::Null)); // NaN unless rotation_dof = 1
+    CHECK(j.at("tilt").is(cli_test::Json::Type::Null));      // NaN unless rotation_dof = 1
+    CHECK(j.at("ambiguity").is(cli_test::Json::Type::Null)); // NaN unless the solver ran
     CHECK(j.at("counts").at("source_suppressed").text == "0" && j.at("time_ms").at("suppression").text == "0");
     CHECK(j.at("coarse_transform").is_matrix(4, 4, true) &&
           j.at("coarse_transform").items[0].items[0].is(cli_test::Json::Type::Null));

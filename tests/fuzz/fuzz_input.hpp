@@ -46,13 +46,14 @@ inline void set_refinement(kissm_config &c, unsigned tens) {
     case 4: // never converged by the test, only by the cap
         c.refine_rotation_epsilon = 0.0, c.refine_translation_epsilon_gain = 0.0, c.refine_max_iterations = 50;
         break;
-    case 5: c.min_overlap = 1.0; break;
-    case 6: c.refine_max_distance_gain = 0.05; break; // hardly anything within reach
-    case 7: c.refine_max_iterations = 0; break;       // out of range: kissm_create refuses it
+    case 5: c.min_overlap = 1.0, c.max_ambiguity = 0.0; break; // every competing pose refuses a solved one
+    case 6: c.refine_max_distance_gain = 0.05; break;          // hardly anything within reach
+    case 7: c.refine_max_iterations = 0; break;                // out of range: kissm_create refuses it
     case 8: // the validity rules at their loosest: every direction but the strongest counts as weak (degenerate
             // results with their weak directions), and such poses may be valid
         c.max_rotation_uncertainty = 3.15, c.min_inlier_coverage = 0.0, c.refine_min_inliers = 3;
         c.min_overlap = 0.0, c.min_refine_condition = 1.0, c.allow_degenerate = 1, c.max_refine_rmse_gain = 100.0;
+        c.max_ambiguity = 1.0;
         break;
     default: break;
     }
@@ -249,8 +250,11 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
 // final inliers; an invalid one reports why; either way the refinement's fields are sane.
 inline bool result_sane(const kissm_result &r, const kissm_config &c) {
     if (!refine_fields_sane(r, c)) return false;
-    if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_LOOSE_ALIGNMENT;
-    if (!rigid_pose(r) || r.num_final_inliers < 3) return false;
+    // The ambiguity: in [0, 1] when the solver found a pose (its rotation uncertainty is then a number), else NaN.
+    if (std::isnan(r.rotation_uncertainty) ? !std::isnan(r.ambiguity) : !(r.ambiguity >= 0.0 && r.ambiguity <= 1.0))
+        return false;
+    if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_AMBIGUOUS;
+    if (!rigid_pose(r) || r.num_final_inliers < 3 || !(r.ambiguity <= c.max_ambiguity)) return false;
     // Valid with refinement: its inliers' part of the rule too; without: the rotation pinned down.
     if (!std::isnan(r.overlap))
         return r.num_final_inliers >= static_cast<std::uint64_t>(c.refine_min_inliers) &&
@@ -260,14 +264,16 @@ inline bool result_sane(const kissm_result &r, const kissm_config &c) {
 }
 
 // A refinement from the caller's pose (kissm_refine, kissm_refine_features) always ran: valid, or
-// LOW_OVERLAP / UNCONSTRAINED / NOT_CONVERGED / LOOSE_ALIGNMENT, with a rigid pose either way and no solver numbers;
+// LOW_OVERLAP / UNCONSTRAINED / UNCERTAIN_ROTATION / NOT_CONVERGED / LOOSE_ALIGNMENT, with a rigid pose either way
+// and no solver numbers (no rotation uncertainty, coverage or ambiguity);
 // coarse_transform is the initial transform made rigid, so within 1e-3 of it.
 inline bool refine_result_sane(const kissm_result &r, const kissm_config &c, const double initial[16]) {
     if (!refine_fields_sane(r, c) || std::isnan(r.overlap) || !rigid_pose(r)) return false;
     if (!r.valid && r.reason != KISSM_REASON_LOW_OVERLAP && r.reason != KISSM_REASON_UNCONSTRAINED &&
-        r.reason != KISSM_REASON_NOT_CONVERGED && r.reason != KISSM_REASON_LOOSE_ALIGNMENT)
+        r.reason != KISSM_REASON_UNCERTAIN_ROTATION && r.reason != KISSM_REASON_NOT_CONVERGED &&
+        r.reason != KISSM_REASON_LOOSE_ALIGNMENT)
         return false;
-    if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage)) return false;
+    if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage) || !std::isnan(r.ambiguity)) return false;
     if (r.valid && r.reason != KISSM_REASON_NONE) return false;
     for (int i = 0; i < 16; ++i)
         if (!(std::fabs(r.coarse_transform[i] - initial[i]) <= 1e-3 * (1.0 + std::fabs(initial[i])))) return false;

@@ -30,34 +30,38 @@ typedef struct {
     double max_refine_rmse_gain; /* 0: the default */
     double min_refine_condition; /* 0: the default */
     int32_t allow_degenerate;    /* kissm_config.allow_degenerate */
+    double max_ambiguity;        /* below 0: the default */
 } golden_case;
 
 static const golden_case kCases[] = {
     {"yard_float64_v0.25", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE,
-     3, 0.0, 0.0, 0},
+     3, 0.0, 0.0, 0, -1.0},
     {"yard_float32_v0.3", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE,
-     3, 0.0, 0.0, 0},
+     3, 0.0, 0.0, 0, -1.0},
     {"yard_float64_v0.25_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, -1.0},
     {"yard_float32_v0.3_point_to_plane", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_POINT_TO_PLANE, 0,
-     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
+     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, -1.0},
     {"yard_float64_v0.25_refine_gicp", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, -1.0},
     {"yard_float64_v0.25_local", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_LOCAL,
-     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, -1.0},
     {"yard_float32_v0.3_sign_free_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_SIGN_FREE,
-     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0},
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, -1.0},
     {"yard_float64_v0.25_ground", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_GROUND, 3, 0.0, 0.0, 0},
+     KISSM_SUPPRESS_GROUND, 3, 0.0, 0.0, 0, -1.0},
     {"yard_float32_v0.3_yaw_gicp", KISSM_SCALAR_FLOAT32, 0.3, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 1, 0.0, 0.0, 0},
+     KISSM_SUPPRESS_NONE, 1, 0.0, 0.0, 0, -1.0},
     /* kissm_refine held to a residual below what the yard's right alignment leaves: LOOSE_ALIGNMENT. */
     {"yard_float64_v0.25_refine_gicp_tight", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1, KISSM_VIEWPOINT_FIXED,
-     KISSM_SUPPRESS_NONE, 3, 0.05, 0.0, 0},
+     KISSM_SUPPRESS_NONE, 3, 0.05, 0.0, 0, -1.0},
     /* A condition threshold above what the yard's directions reach: degenerate, with weak directions, and valid
      * because the case allows it. */
     {"yard_float64_v0.25_refine_gicp_allow_degenerate", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 1,
-     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0, 0.5, 1},
+     KISSM_VIEWPOINT_FIXED, KISSM_SUPPRESS_NONE, 3, 0.0, 0.5, 1, -1.0},
+    /* An ambiguity bound below what the yard's best competing pose reaches: AMBIGUOUS, the refined pose kept. */
+    {"yard_float64_v0.25_gicp_max_ambiguity", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
+     KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, 0.05},
 };
 
 static const char *viewpoint_name(int32_t mode) {
@@ -145,6 +149,7 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     if (gc->max_refine_rmse_gain > 0.0) config.max_refine_rmse_gain = gc->max_refine_rmse_gain;
     if (gc->min_refine_condition > 0.0) config.min_refine_condition = gc->min_refine_condition;
     config.allow_degenerate = gc->allow_degenerate;
+    if (gc->max_ambiguity >= 0.0) config.max_ambiguity = gc->max_ambiguity;
     result->struct_size = sizeof *result;
     status = kissm_create(&config, &matcher);
     if (status == KISSM_OK && gc->is_refine_call) {
@@ -172,7 +177,7 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     X(num_refine_correspondences) X(refine_iterations) X(refine_converged) X(num_source_suppressed)     \
     X(num_target_suppressed) X(degenerate) X(num_weak_directions)
 /* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
-#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt)
+#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt) X(ambiguity)
 #define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36) X(weak_directions, 36)
 /* clang-format on */
 
@@ -217,6 +222,12 @@ static double default_rmse_gain(void) {
     return c.max_refine_rmse_gain;
 }
 
+static double default_max_ambiguity(void) {
+    kissm_config c;
+    kissm_config_init(&c, sizeof c);
+    return c.max_ambiguity;
+}
+
 static double default_min_condition(void) {
     kissm_config c;
     kissm_config_init(&c, sizeof c);
@@ -246,6 +257,8 @@ static void write_golden(void) {
         printf("      \"min_refine_condition\": %.17g,\n",
                kCases[c].min_refine_condition > 0.0 ? kCases[c].min_refine_condition : default_min_condition());
         printf("      \"allow_degenerate\": %d,\n", (int)kCases[c].allow_degenerate);
+        printf("      \"max_ambiguity\": %.17g,\n",
+               kCases[c].max_ambiguity >= 0.0 ? kCases[c].max_ambiguity : default_max_ambiguity());
         printf("      \"scalar\": \"%s\",\n", kCases[c].scalar_type == KISSM_SCALAR_FLOAT32 ? "float32" : "float64");
         printf("      \"voxel_size\": %.17g,\n", kCases[c].voxel_size);
         if (kCases[c].is_refine_call) {

@@ -80,6 +80,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         refine_normal_radius_gain=1.5,
         max_refine_rmse_gain=0.6,
         allow_degenerate=True,
+        max_ambiguity=0.9,
     )
     c = config._to_c()
     assert (c.voxel_size, c.num_threads, c.normal_radius_gain, c.fpfh_radius_gain) == (0.25, 3, 2.5, 6.0)
@@ -94,6 +95,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
     assert (c.max_rotation_uncertainty, c.min_inlier_coverage, c.refine_min_inliers) == (0.05, 0.3, 25)
     assert (c.min_refine_condition, c.refine_normal_radius_gain, c.max_refine_rmse_gain) == (0.05, 1.5, 0.6)
     assert c.allow_degenerate == 1
+    assert c.max_ambiguity == 0.9
     assert c.reserved1 == c.reserved2 == 0
     assert c.log_fn == _ffi.ffi.NULL and c.progress_fn == _ffi.ffi.NULL
     # what the matcher got is what was asked for
@@ -158,6 +160,9 @@ def test_fields_round_trip_into_the_c_struct() -> None:
         # a bool here; an int other than 0 or 1 reaches the library, which names the field
         ("allow_degenerate", 2, "config.allow_degenerate is 2; it must be in [0, 1]"),
         ("allow_degenerate", -1, "config.allow_degenerate is -1; it must be in [0, 1]"),
+        ("max_ambiguity", -0.01, "config.max_ambiguity is -0.01; it must be in [0, 1]"),
+        ("max_ambiguity", 1.5, "config.max_ambiguity is 1.5; it must be in [0, 1]"),
+        ("max_ambiguity", float("nan"), "config.max_ambiguity is nan"),
     ],
 )
 def test_invalid_values_raise_valueerror_with_the_library_message(field: str, value: object, message: str) -> None:

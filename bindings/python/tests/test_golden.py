@@ -53,6 +53,7 @@ DOUBLES = [
     "rotation_uncertainty",
     "inlier_coverage",
     "tilt",
+    "ambiguity",
 ]
 ARRAYS = ["transform", "coarse_transform", "information"]
 #: The weak directions: 36 doubles in the file (row-major 6x6, the rows beyond num_weak_directions NaN), the
@@ -82,6 +83,7 @@ def run_case(case: dict[str, Any], threads: int) -> kissm.Result:
         max_refine_rmse_gain=case["max_refine_rmse_gain"],
         min_refine_condition=case["min_refine_condition"],
         allow_degenerate=bool(case["allow_degenerate"]),
+        max_ambiguity=case["max_ambiguity"],
     )
     with kissm.Matcher(config) as matcher:
         if case["call"] == "refine":
@@ -102,12 +104,15 @@ def test_golden_file_lists_every_kind_of_case() -> None:
     assert _ffi.lib.KISSM_REASON_LOOSE_ALIGNMENT in {case["reason"] for case in GOLDEN["cases"]}
     # A degenerate refined pose, valid under allow_degenerate, with its weak directions.
     assert any(case["valid"] and case["degenerate"] and case["allow_degenerate"] for case in GOLDEN["cases"])
+    # A pose refused for its ambiguity under a bound below the yard's competitor's share.
+    assert _ffi.lib.KISSM_REASON_AMBIGUOUS in {case["reason"] for case in GOLDEN["cases"]}
     for case in GOLDEN["cases"]:
         assert case["call"] in ("register", "refine") and case["refine"] in kissm._config.REFINE_MODES
         assert case["viewpoint"] in kissm._config.VIEWPOINT_MODES
         assert ("initial_transform" in case) == (case["call"] == "refine")
         assert all(name in case for name in COUNTS + DOUBLES + ARRAYS + WEAK), case["name"]
         assert case["allow_degenerate"] in (0, 1) and 0.0 <= case["min_refine_condition"] <= 1.0, case["name"]
+        assert 0.0 <= case["max_ambiguity"] <= 1.0, case["name"]
         assert 0 <= case["num_weak_directions"] <= 6 and len(case["weak_directions"]) == 36, case["name"]
         assert case["degenerate"] == (case["num_weak_directions"] > 0), case["name"]
 

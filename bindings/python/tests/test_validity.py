@@ -217,12 +217,14 @@ def test_without_a_pose_neither_measure_exists() -> None:
 def test_repr_shows_the_measures(coarse, refined) -> None:
     lines = repr(coarse).splitlines()
     assert lines[2].strip() == (
-        f"rotation_uncertainty {math.degrees(coarse.rotation_uncertainty):.3g} deg (the inliers' spread),"
+        f"rotation_uncertainty {math.degrees(coarse.rotation_uncertainty):.3g} deg (the inliers' spread), "
+        f"ambiguity {coarse.ambiguity:.3f},"
     )
     text = repr(refined)
     assert (
         f"rotation_uncertainty {math.degrees(refined.rotation_uncertainty):.3g} deg, "
-        f"inlier_coverage {refined.inlier_coverage:.3f} (the inliers' spread)," in text
+        f"inlier_coverage {refined.inlier_coverage:.3f} (the inliers' spread), ambiguity {refined.ambiguity:.3f},"
+        in text
     )
 
 

@@ -65,6 +65,8 @@ const char *kissm_last_error_message(void);
 
 #define KISSM_REASON_LOOSE_ALIGNMENT 13
 
+#define KISSM_REASON_AMBIGUOUS 14
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0
@@ -192,6 +194,8 @@ typedef struct kissm_config {
     int32_t allow_degenerate;
 
     int32_t reserved2;
+
+    double max_ambiguity;
 } kissm_config;
 
 int32_t kissm_config_init(kissm_config *config, uint32_t struct_size);
@@ -313,6 +317,8 @@ typedef struct kissm_result {
     int32_t num_weak_directions;
 
     double weak_directions[36];
+
+    double ambiguity;
 } kissm_result;
 
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);

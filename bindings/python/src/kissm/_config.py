@@ -67,6 +67,7 @@ _FLOAT_FIELDS = (
     "refine_normal_radius_gain",
     "sensor_height",
     "max_refine_rmse_gain",
+    "max_ambiguity",
 )
 _INT_FIELDS = (
     "num_threads",
@@ -252,6 +253,10 @@ class Config:
     by the other rules and, if valid, flagged ``Result.degenerate`` with its free directions in
     ``Result.weak_directions``, for callers who constrain those from elsewhere (odometry, a motion model). Stored
     in [0, 1] as an integer: False or True."""
+    max_ambiguity: float = _DEFAULTS["max_ambiguity"]
+    """``Result.valid`` needs ``Result.ambiguity`` <= this (else reason "a second, distinct pose has nearly as much
+    support": a repetitive or symmetric scene, such as a street of identical facades, that matches as well one
+    period along or turned onto its own symmetry); 1 never refuses a pose for it; in [0, 1]."""
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object

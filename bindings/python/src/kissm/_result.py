@@ -40,6 +40,7 @@ _FLOAT_FIELDS = (
     "rotation_uncertainty",
     "inlier_coverage",
     "tilt",
+    "ambiguity",
 )
 _TIME_FIELDS = (
     "time_voxelize_ms",
@@ -234,6 +235,14 @@ class Result:
     on the right, in the source's frame), its largest-magnitude component positive; the pose moved along it
     changes the alignment by almost nothing. A slide along the target's unit direction ``d`` is the row
     ``(0, 0, 0, *(rotation.T @ d))``, up to sign."""
+    ambiguity: float
+    """When the global solver found a pose: the support of the best competing pose, distinct from it (moving the
+    matched points by more than 8 ``noise_bound``), over its own, in [0, 1]: the competitor's inliers among every
+    match against this pose's, and from one half on the smaller of that and the same ratio of source voxels landing
+    beside target voxels. Near 0 in a scene with one answer, near 1 in a repetitive or symmetric one (a street of
+    identical facades one period along, a symmetric object turned). ``valid`` needs it <= ``Config.max_ambiguity``
+    (else reason "a second, distinct pose has nearly as much support"). NaN when the solver did not run (and after
+    :meth:`Matcher.refine`)."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
@@ -301,7 +310,7 @@ class Result:
                 evidence = f"{pad}rotation_uncertainty {math.degrees(self.rotation_uncertainty):.3g} deg"
                 if not math.isnan(self.inlier_coverage):
                     evidence += f", inlier_coverage {self.inlier_coverage:.3f}"
-                lines.append(f"{evidence} (the inliers' spread),")
+                lines.append(f"{evidence} (the inliers' spread), ambiguity {self.ambiguity:.3f},")
         moved = ""
         if self.refined:
             stop = "converged" if self.refine_converged else "iteration cap"

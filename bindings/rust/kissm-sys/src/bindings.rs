@@ -37,6 +37,7 @@ pub const KISSM_REASON_CLUSTERED_INLIERS: i32 = 10;
 pub const KISSM_REASON_NOT_CONVERGED: i32 = 11;
 pub const KISSM_REASON_TILTED: i32 = 12;
 pub const KISSM_REASON_LOOSE_ALIGNMENT: i32 = 13;
+pub const KISSM_REASON_AMBIGUOUS: i32 = 14;
 pub const KISSM_NONFINITE_REJECT: i32 = 0;
 pub const KISSM_NONFINITE_DROP: i32 = 1;
 pub const KISSM_VIEWPOINT_FIXED: i32 = 0;
@@ -246,10 +247,14 @@ pub struct kissm_config {
     pub allow_degenerate: i32,
     /// Reserved; must be 0.
     pub reserved2: i32,
+    /** A solved pose whose best distinct competitor reaches more than this share of its support
+ (kissm_result.ambiguity) ends valid = 0 with #KISSM_REASON_AMBIGUOUS; 1 never refuses a pose for it; in
+ [0, 1]. Default 0.7.*/
+    pub max_ambiguity: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 296usize];
+    ["Size of kissm_config"][::core::mem::size_of::<kissm_config>() - 304usize];
     ["Alignment of kissm_config"][::core::mem::align_of::<kissm_config>() - 8usize];
     [
         "Offset of field: kissm_config::struct_size",
@@ -374,6 +379,9 @@ const _: () = {
     [
         "Offset of field: kissm_config::reserved2",
     ][::core::mem::offset_of!(kissm_config, reserved2) - 292usize];
+    [
+        "Offset of field: kissm_config::max_ambiguity",
+    ][::core::mem::offset_of!(kissm_config, max_ambiguity) - 296usize];
 };
 impl Default for kissm_config {
     fn default() -> Self {
@@ -598,10 +606,17 @@ pub struct kissm_result {
  its largest component positive; a pose moved along it changes the alignment by almost nothing. Rows
  beyond num_weak_directions are NaN.*/
     pub weak_directions: [f64; 36usize],
+    /** When the robust solver found a pose: the support of the best competing pose, distinct from it (moving the
+ matched points by more than 8 noise bounds), over its own, in [0, 1]. Support is the inliers among every
+ match after the same polish, and from one half on the smaller of that ratio and the dense one (source
+ voxels landing beside target voxels). Near 0 in a scene with one answer; near 1 in a repetitive or
+ symmetric one. Above kissm_config.max_ambiguity: #KISSM_REASON_AMBIGUOUS. NaN when the solver did not run
+ (and from kissm_refine()).*/
+    pub ambiguity: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
-    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 1248usize];
+    ["Size of kissm_result"][::core::mem::size_of::<kissm_result>() - 1256usize];
     ["Alignment of kissm_result"][::core::mem::align_of::<kissm_result>() - 8usize];
     [
         "Offset of field: kissm_result::struct_size",
@@ -747,6 +762,9 @@ const _: () = {
     [
         "Offset of field: kissm_result::weak_directions",
     ][::core::mem::offset_of!(kissm_result, weak_directions) - 960usize];
+    [
+        "Offset of field: kissm_result::ambiguity",
+    ][::core::mem::offset_of!(kissm_result, ambiguity) - 1248usize];
 };
 impl Default for kissm_result {
     fn default() -> Self {

@@ -418,6 +418,8 @@ impl Config {
         /// A raw config (see [`Config::from_raw`]) holding anything but 0 reads as `true` here; creating a
         /// matcher from one holding neither 0 nor 1 fails.
         allow_degenerate: bool,
+        /// A valid pose needs [`Registration::ambiguity`](crate::Registration::ambiguity) at most this.
+        max_ambiguity: f64,
     }
 }
 
@@ -463,6 +465,7 @@ impl fmt::Debug for Config {
             .field("sensor_height", &self.raw.sensor_height)
             .field("max_refine_rmse_gain", &self.raw.max_refine_rmse_gain)
             .field("allow_degenerate", &self.allow_degenerate())
+            .field("max_ambiguity", &self.raw.max_ambiguity)
             .finish()
     }
 }
@@ -664,6 +667,11 @@ impl ConfigBuilder {
         /// [`min_refine_condition`](ConfigBuilder::min_refine_condition). The C field holds 1 or 0, `0..=1`
         /// (default 0, `false`).
         allow_degenerate: bool,
+        /// A valid pose needs [`Registration::ambiguity`](crate::Registration::ambiguity), the best distinct
+        /// competing pose's support over its own, at most this (above it:
+        /// [`Reason::Ambiguous`](crate::Reason::Ambiguous)): repetitive or symmetric scenes match as well one
+        /// period along or turned onto their own symmetry; 1 never refuses a pose for it; in [0, 1] (default 0.7).
+        max_ambiguity: f64,
     }
 
     /// Validates every field (`kissm_config_validate`) and returns the configuration, or an

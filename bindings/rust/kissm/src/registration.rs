@@ -60,6 +60,12 @@ pub enum Reason {
     /// ([`Refinement::rmse`] above it): a local optimum beside the right pose, as a refinement from a prior
     /// outside its convergence basin reaches (a road shifted along itself, a scene turned onto its symmetry).
     LooseAlignment,
+    /// The scene holds a second pose, distinct from the one returned, with nearly as much support
+    /// ([`Registration::ambiguity`] above [`Config::max_ambiguity`](crate::Config::max_ambiguity)): a repetitive
+    /// or symmetric scene (a street of identical facades, pillars at a regular spacing, a symmetric object) that
+    /// matches as well one period along or turned onto its own symmetry. A prior or a check from elsewhere must
+    /// choose.
+    Ambiguous,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -78,6 +84,7 @@ c_codes!(Reason, "KISSM_REASON_", "reason", Other {
     ClusteredInliers => sys::KISSM_REASON_CLUSTERED_INLIERS,
     NotConverged => sys::KISSM_REASON_NOT_CONVERGED,
     Tilted => sys::KISSM_REASON_TILTED,
+    Ambiguous => sys::KISSM_REASON_AMBIGUOUS,
     LooseAlignment => sys::KISSM_REASON_LOOSE_ALIGNMENT,
 });
 
@@ -294,6 +301,14 @@ pub struct Registration {
     /// evidence for [`Reason::Tilted`] (a valid pose needs it within
     /// [`Config::max_rotation_uncertainty`](crate::Config::max_rotation_uncertainty)). NaN otherwise.
     pub tilt: f64,
+    /// When the solver found a pose: the support of the best competing pose, distinct from it (moving the
+    /// matched points by more than 8 [`noise_bound`](Registration::noise_bound)s), over its own, in [0, 1]: the
+    /// competitor's inliers among every match against this pose's, and from one half on the smaller of that and
+    /// the same ratio of source voxels landing beside target voxels. Near 0 in a scene with one answer, near 1 in
+    /// a repetitive or symmetric one. A valid pose needs at most
+    /// [`Config::max_ambiguity`](crate::Config::max_ambiguity) ([`Reason::Ambiguous`] above it). NaN when the
+    /// solver did not run and after [`Matcher::refine`](crate::Matcher::refine).
+    pub ambiguity: f64,
     /// Milliseconds per stage.
     pub timings: Timings,
 }
@@ -377,6 +392,7 @@ impl Registration {
             inlier_extent: r.inlier_extent,
             rotation_uncertainty: r.rotation_uncertainty,
             tilt: r.tilt,
+            ambiguity: r.ambiguity,
             timings: Timings {
                 voxelize_ms: r.time_voxelize_ms,
                 features_ms: r.time_features_ms,
@@ -460,8 +476,22 @@ impl Registration {
             && bits(&self.rotation, &other.rotation)
             && bits(&self.translation, &other.translation)
             && bits(
-                &[self.inlier_ratio, self.residual_rms, self.noise_bound, self.rotation_uncertainty, self.tilt],
-                &[other.inlier_ratio, other.residual_rms, other.noise_bound, other.rotation_uncertainty, other.tilt],
+                &[
+                    self.inlier_ratio,
+                    self.residual_rms,
+                    self.noise_bound,
+                    self.rotation_uncertainty,
+                    self.tilt,
+                    self.ambiguity,
+                ],
+                &[
+                    other.inlier_ratio,
+                    other.residual_rms,
+                    other.noise_bound,
+                    other.rotation_uncertainty,
+                    other.tilt,
+                    other.ambiguity,
+                ],
             )
             && bits(&self.inlier_extent, &other.inlier_extent)
             && same_refinement

@@ -111,6 +111,8 @@ fn validity_settings_are_the_library_ones() {
         assert_eq!(c.min_overlap().to_bits(), lib.min_overlap.to_bits());
         assert_eq!(c.min_refine_condition().to_bits(), lib.min_refine_condition.to_bits());
         assert_eq!(c.max_refine_rmse_gain().to_bits(), lib.max_refine_rmse_gain.to_bits());
+        assert_eq!(c.max_ambiguity().to_bits(), lib.max_ambiguity.to_bits());
+        assert!((0.0..=1.0).contains(&c.max_ambiguity()));
         // Inside the documented ranges.
         assert!(c.max_rotation_uncertainty() > 0.0 && c.max_rotation_uncertainty() <= 3.15);
         assert!((0.0..=1.0).contains(&c.min_inlier_coverage()));
@@ -138,8 +140,10 @@ fn builder_sets_every_validity_field() {
         .min_refine_condition(0.05)
         .max_refine_rmse_gain(0.7)
         .allow_degenerate(true)
+        .max_ambiguity(0.9)
         .build();
     let c = c.unwrap();
+    assert_eq!((c.max_ambiguity(), c.as_raw().max_ambiguity), (0.9, 0.9));
     assert_eq!(c.max_refine_rmse_gain(), 0.7);
     assert_eq!(c.as_raw().max_refine_rmse_gain, 0.7);
     assert!(c.allow_degenerate());
@@ -160,6 +164,7 @@ fn builder_sets_every_validity_field() {
         "min_refine_condition: 0.05",
         "max_refine_rmse_gain: 0.7",
         "allow_degenerate: true",
+        "max_ambiguity: 0.9",
     ] {
         assert!(debug.contains(field), "{debug}");
     }
@@ -172,6 +177,7 @@ fn builder_sets_every_validity_field() {
         .min_refine_condition(Config::default().min_refine_condition())
         .max_refine_rmse_gain(Config::default().max_refine_rmse_gain())
         .allow_degenerate(Config::default().allow_degenerate())
+        .max_ambiguity(Config::default().max_ambiguity())
         .build()
         .unwrap();
     assert_eq!(format!("{back:?}"), format!("{:?}", Config::default()));
@@ -192,6 +198,14 @@ fn builder_sets_every_validity_field() {
         let err = Config::builder().max_refine_rmse_gain(gain).build().unwrap_err();
         assert_eq!(err.kind(), kissm::ErrorKind::InvalidArgument);
         assert!(err.message().contains("config.max_refine_rmse_gain"), "{err}");
+    }
+    for bound in [0.0, 1.0] {
+        assert_eq!(Config::builder().max_ambiguity(bound).build().unwrap().max_ambiguity(), bound);
+    }
+    for bound in [-0.01, 1.01, f64::NAN, f64::INFINITY] {
+        let err = Config::builder().max_ambiguity(bound).build().unwrap_err();
+        assert_eq!(err.kind(), kissm::ErrorKind::InvalidArgument);
+        assert!(err.message().contains("config.max_ambiguity"), "{err}");
     }
 }
 
@@ -476,7 +490,13 @@ fn reasons_round_trip() {
         Reason::LooseAlignment.to_string(),
         "the refined clouds stay apart (a local optimum beside the right pose)"
     );
-    assert_eq!(Reason::from_code(14), Reason::Other(14));
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_AMBIGUOUS), Reason::Ambiguous);
+    assert_eq!(Reason::Ambiguous.code(), 14);
+    assert_eq!(
+        Reason::Ambiguous.to_string(),
+        "a second, distinct pose has nearly as much support (a repetitive or symmetric scene)"
+    );
+    assert_eq!(Reason::from_code(15), Reason::Other(15));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);

@@ -2,7 +2,7 @@
 //! Cross-language round trip, Rust side: the clouds of `tests/data` (or `KISSM_TEST_DATA`) registered
 //! (`"call": "register"`) or refined from the case's `"initial_transform"` (`"call": "refine"`) with the
 //! case's refine mode, viewpoint mode, suppression, rotational degrees of freedom and validity settings
-//! (`max_refine_rmse_gain`, `min_refine_condition`, `allow_degenerate`), as listed in
+//! (`max_refine_rmse_gain`, `min_refine_condition`, `allow_degenerate`, `max_ambiguity`), as listed in
 //! `tests/data/golden.json` (written by the C library), give the same result bit for bit (the file writes
 //! NaN as `null`; any NaN matches it). The C suite (`tests/roundtrip`) and the Python suite
 //! (`tests/test_golden.py`) check the same file.
@@ -108,6 +108,7 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
         ("rotation_uncertainty", reg.rotation_uncertainty),
         ("inlier_coverage", fine.map_or(nan, |f| f.inlier_coverage)),
         ("tilt", reg.tilt),
+        ("ambiguity", reg.ambiguity),
     ];
     for (key, got) in doubles {
         same(key.into(), case.get(key).num(), got);
@@ -160,6 +161,7 @@ fn golden_file_matches_bit_for_bit() {
         dofs.insert(dof);
         let rmse_gain = case.get("max_refine_rmse_gain").num();
         let min_condition = case.get("min_refine_condition").num();
+        let max_ambiguity = case.get("max_ambiguity").num();
         let allow_degenerate = match case.get("allow_degenerate").u64() {
             0 => false,
             1 => true,
@@ -187,6 +189,7 @@ fn golden_file_matches_bit_for_bit() {
                 .max_refine_rmse_gain(rmse_gain)
                 .min_refine_condition(min_condition)
                 .allow_degenerate(allow_degenerate)
+                .max_ambiguity(max_ambiguity)
                 .build()
                 .unwrap();
             let mut matcher = Matcher::new(&config).unwrap();
@@ -221,5 +224,7 @@ fn golden_file_matches_bit_for_bit() {
     assert!(dofs.contains(&1) && dofs.contains(&3), "rotation_dof {dofs:?}");
     let loose = Reason::LooseAlignment.code() as u64;
     assert!(reasons.contains(&loose), "no case ends LooseAlignment: reasons {reasons:?}");
+    let ambiguous = Reason::Ambiguous.code() as u64;
+    assert!(reasons.contains(&ambiguous), "no case ends Ambiguous: reasons {reasons:?}");
     assert!(!accepted_degenerate.is_empty(), "no case is a degenerate pose accepted by allow_degenerate");
 }

@@ -25,7 +25,7 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             refine_max_iterations, refine_max_distance_gain, refine_kernel_gain, refine_rotation_epsilon,
             refine_translation_epsilon_gain, max_rotation_uncertainty, min_overlap, min_inlier_coverage,
             refine_min_inliers, reserved1, min_refine_condition, refine_normal_radius_gain, suppression, rotation_dof,
-            up, sensor_height, max_refine_rmse_gain, allow_degenerate, reserved2),
+            up, sensor_height, max_refine_rmse_gain, allow_degenerate, reserved2, max_ambiguity),
         "kissm_points" => fields!(sys::kissm_points; data, count, stride_bytes, scalar_type, reserved),
         "kissm_result" => fields!(sys::kissm_result; struct_size, valid, reason, reserved0, transform, rotation,
             translation, num_source_points, num_target_points, num_source_nonfinite, num_target_nonfinite,
@@ -35,7 +35,8 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             time_features_ms, time_matching_ms, time_pruning_ms, time_solver_ms, time_total_ms, coarse_transform,
             information, overlap, refine_rmse, refine_condition, rotation_uncertainty, inlier_coverage,
             time_refine_ms, num_refine_correspondences, refine_iterations, refine_converged, num_source_suppressed,
-            num_target_suppressed, time_suppression_ms, tilt, degenerate, num_weak_directions, weak_directions),
+            num_target_suppressed, time_suppression_ms, tilt, degenerate, num_weak_directions, weak_directions,
+            ambiguity),
         _ => None,
     }
 }

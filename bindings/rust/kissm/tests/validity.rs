@@ -5,8 +5,9 @@
 //! `Registration::rotation_uncertainty`; with refinement `refine_min_inliers` against the final inliers,
 //! `min_inlier_coverage` against `Refinement::inlier_coverage` and `min_refine_condition` against
 //! `Refinement::condition` (also in `Matcher::refine`'s rule; beyond it the pose is also `degenerate`, its
-//! weakest direction reported, and `allow_degenerate` accepts it); and a refinement stopped by its iteration
-//! cap (`Reason::NotConverged`).
+//! weakest direction reported, and `allow_degenerate` accepts it); `max_ambiguity` against
+//! `Registration::ambiguity` with and without refinement; and a refinement stopped by its iteration cap
+//! (`Reason::NotConverged`).
 
 mod common;
 
@@ -126,6 +127,29 @@ fn rotation_uncertainty_decides_an_unrefined_pose() {
     assert!(refined.is_refined());
     assert_eq!(refined.rotation_uncertainty.to_bits(), u.to_bits());
     accurate(pair, &refined, "refined, with a rotation threshold below the uncertainty");
+}
+
+#[test]
+fn ambiguity_decides_with_and_without_refinement() {
+    let Some(pair) = scene("ambiguity_decides_with_and_without_refinement") else { return };
+    for mode in [RefineMode::None, RefineMode::Gicp] {
+        let base = register(builder(mode), pair);
+        accurate(pair, &base, "default");
+        // A scene with one answer: the best competitor has well under the pose's support.
+        let a = base.ambiguity;
+        assert!(a > 0.0 && a < Config::default().max_ambiguity(), "{a}");
+        // Exactly the measured ambiguity is allowed; one ulp less is not, and nothing else changes.
+        let at = register(builder(mode).max_ambiguity(a), pair);
+        let below = register(builder(mode).max_ambiguity(just_below(a)), pair);
+        decision_flips(&base, &at, &below, Reason::Ambiguous, "max_ambiguity");
+        assert_eq!(below.reason.code(), kissm_sys::KISSM_REASON_AMBIGUOUS);
+    }
+    // A refinement from a prior runs no solver: no competitor either.
+    let config = builder(RefineMode::Gicp).max_ambiguity(0.0).build().unwrap();
+    let from_truth =
+        Matcher::new(&config).unwrap().refine(&pair.source, &pair.target, &pair.truth.to_matrix()).unwrap();
+    assert!(from_truth.ambiguity.is_nan());
+    accurate(pair, &from_truth, "refine from the truth, max_ambiguity 0");
 }
 
 #[test]

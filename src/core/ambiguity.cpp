@@ -1,0 +1,216 @@
+// SPDX-License-Identifier: MIT
+#include "ambiguity.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <unordered_set>
+#include <utility>
+
+KISSM_DETAIL_BEGIN
+
+namespace {
+
+// Competitors per rotation: the densest translation cells. Six under the winner's rotation reach a period's
+// neighbours on both sides along two directions; four under a second rotation.
+constexpr std::size_t kWinnerRotationPeaks = 6;
+constexpr std::size_t kSecondRotationPeaks = 4;
+constexpr std::size_t kHalfTurnPeaks = 2;
+// The dense support reads at most this many source voxels (evenly strided).
+constexpr std::size_t kDenseSamples = 4096;
+// The target's centroid and principal axes, and how far a candidate moves the matched points, read at most this
+// many points (evenly strided).
+constexpr std::size_t kShapeSamples = 4096;
+constexpr std::size_t kMovedSamples = 512;
+// Source voxels whose normal is within about 20 degrees of the dominant normal direction are left out of it.
+constexpr double kDominantPlaneCos = 0.94;
+
+struct Candidate {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    bool polish = true; // polished over the matches; a geometric one is exact and judged where it is
+};
+
+std::uint64_t cell_key(const Eigen::Vector3d &p, double inv_cell) {
+    // 21 bits per axis around the origin: a local frame spans far fewer cells than 2^20 either way.
+    const auto q = [&](double x) {
+        const double c = std::floor(x * inv_cell);
+        const double clamped = std::min(std::max(c, -1048576.0), 1048575.0);
+        return static_cast<std::uint64_t>(static_cast<std::int64_t>(clamped) + 1048576) & 0x1FFFFFu;
+    };
+    return (q(p.x()) << 42) | (q(p.y()) << 21) | q(p.z());
+}
+
+// The translations b - R a of every match, binned in cells of two noise bounds; the mean translation of the
+// `count` fullest cells (ties by cell key, so the answer depends on the data alone).
+void translation_peaks(const AmbiguityInput &in, const Eigen::Matrix3d &R, double cell, std::size_t count,
+                       std::vector<Candidate> &out) {
+    const std::vector<Eigen::Vector3d> &a = *in.source, &b = *in.target;
+    const double inv = 1.0 / cell;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(a.size());
+    std::vector<Eigen::Vector3d> v(a.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        v[k] = b[k] - R * a[k];
+        keyed[k] = {cell_key(v[k], inv), static_cast<std::uint32_t>(k)};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    struct Run {
+        std::size_t votes;
+        std::uint64_t key;
+        Eigen::Vector3d mean;
+    };
+    std::vector<Run> runs;
+    for (std::size_t i = 0; i < keyed.size();) {
+        std::size_t j = i;
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) sum += v[keyed[j].second];
+        runs.push_back({j - i, keyed[i].first, sum / static_cast<double>(j - i)});
+        i = j;
+    }
+    const std::size_t n = std::min(count, runs.size());
+    std::partial_sort(
+        runs.begin(), runs.begin() + static_cast<std::ptrdiff_t>(n), runs.end(),
+        [](const Run &x, const Run &y) { return x.votes != y.votes ? x.votes > y.votes : x.key < y.key; });
+    for (std::size_t i = 0; i < n; ++i) out.push_back({R, runs[i].mean});
+}
+
+// Whether source voxels land beside target voxels: a cell of one voxel around each, 27 cells looked up.
+class Occupancy {
+public:
+    Occupancy(const std::vector<Vec3f> &points, double voxel) : inv_(1.0 / voxel), voxel_(voxel) {
+        cells_.reserve(points.size());
+        for (const Vec3f &p : points) cells_.insert(cell_key(p.cast<double>(), inv_));
+    }
+    // Fraction of the sampled source voxels whose image under (R, t) has an occupied cell beside it.
+    double support(const std::vector<Vec3f> &source, const std::vector<std::uint32_t> &sample, const Eigen::Matrix3d &R,
+                   const Eigen::Vector3d &t) const {
+        std::size_t hit = 0;
+        for (std::uint32_t k : sample)
+            if (beside(R * source[k].cast<double>() + t)) ++hit;
+        return sample.empty() ? 0.0 : static_cast<double>(hit) / static_cast<double>(sample.size());
+    }
+
+private:
+    bool beside(const Eigen::Vector3d &p) const {
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz)
+                    if (cells_.count(cell_key(p + voxel_ * Eigen::Vector3d(dx, dy, dz), inv_)) != 0) return true;
+        return false;
+    }
+    std::unordered_set<std::uint64_t> cells_;
+    double inv_, voxel_;
+};
+
+// The source voxels the dense support reads: evenly strided, without those on the dominant plane's direction (the
+// ground of a LiDAR scan, a floor): a pose slid along a road keeps its ground aligned wherever it is, so the ground
+// says nothing about which of two poses is right, and would make every slide look nearly as good.
+std::vector<std::uint32_t> dense_sample(const std::vector<Vec3f> &voxels, const Normals &normals) {
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (std::size_t k = 0; k < voxels.size(); ++k)
+        if (normals.valid[k])
+            scatter.noalias() += normals.normal[k].cast<double>() * normals.normal[k].cast<double>().transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> dominant(scatter);
+    const Eigen::Vector3d d = dominant.eigenvectors().col(2);
+    std::vector<std::uint32_t> kept;
+    for (std::size_t k = 0; k < voxels.size(); ++k)
+        if (!normals.valid[k] || std::fabs(normals.normal[k].cast<double>().dot(d)) < kDominantPlaneCos)
+            kept.push_back(static_cast<std::uint32_t>(k));
+    const std::size_t stride = std::max<std::size_t>(1, (kept.size() + kDenseSamples - 1) / kDenseSamples);
+    std::vector<std::uint32_t> sample;
+    for (std::size_t i = 0; i < kept.size(); i += stride) sample.push_back(kept[i]);
+    return sample;
+}
+
+} // namespace
+
+Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, const Eigen::Matrix3d &R,
+                            const Eigen::Vector3d &t, RunContext &ctx) {
+    Ambiguity out;
+    const std::vector<Eigen::Vector3d> &a = *in.source, &b = *in.target;
+    if (a.empty() || in.winner_inliers == 0) return out;
+    const double bound = solver.noise_bound();
+    std::vector<Candidate> candidates;
+    translation_peaks(in, R, 2.0 * bound, kWinnerRotationPeaks, candidates);
+
+    // A second rotation from the measurements the winner's rotation does not explain (a measurement's bound is
+    // twice a correspondence's: the translation cancels in the difference, the noise of both ends adds).
+    const std::vector<std::uint32_t> &core = *in.core;
+    std::vector<IndexPair> unexplained;
+    for (const IndexPair &p : *in.measurements) {
+        const Eigen::Vector3d da = a[core[p.second]] - a[core[p.first]], db = b[core[p.second]] - b[core[p.first]];
+        if ((db - R * da).norm() > 2.0 * bound) unexplained.push_back(p);
+    }
+    if (unexplained.size() >= 3) {
+        std::vector<Eigen::Vector3d> ca(core.size()), cb(core.size());
+        for (std::size_t k = 0; k < core.size(); ++k) ca[k] = a[core[k]], cb[k] = b[core[k]];
+        const PoseSolution second = solver.solve(ca, cb, std::move(unexplained), ctx);
+        if (second.solver.solved) {
+            candidates.push_back({second.solver.rotation, second.solver.translation});
+            translation_peaks(in, second.solver.rotation, 2.0 * bound, kSecondRotationPeaks, candidates);
+        }
+    }
+
+    // A symmetric scene's symmetry axes are principal axes of its points: the winner turned half a turn about
+    // each principal axis of the target's voxels, through their centroid (a whole symmetric object: exactly its
+    // symmetry), and with the densest translations for that rotation (a partial view, a scene).
+    const std::vector<Vec3f> &voxels = *in.target_voxels;
+    const std::size_t every = std::max<std::size_t>(1, voxels.size() / kShapeSamples);
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    std::size_t taken = 0;
+    for (std::size_t k = 0; k < voxels.size(); k += every, ++taken) centre += voxels[k].cast<double>();
+    centre /= static_cast<double>(std::max<std::size_t>(1, taken));
+    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+    for (std::size_t k = 0; k < voxels.size(); k += every)
+        spread.noalias() += (voxels[k].cast<double>() - centre) * (voxels[k].cast<double>() - centre).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(spread);
+    for (int i = 0; i < 3; ++i) {
+        const Eigen::Vector3d u = axes.eigenvectors().col(i).normalized();
+        const Eigen::Matrix3d half_turn = 2.0 * u * u.transpose() - Eigen::Matrix3d::Identity();
+        candidates.push_back({half_turn * R, half_turn * (t - centre) + centre, false});
+        translation_peaks(in, half_turn * R, 2.0 * bound, kHalfTurnPeaks, candidates);
+    }
+
+    const double winner = static_cast<double>(in.winner_inliers);
+    const std::size_t stride = std::max<std::size_t>(1, a.size() / kMovedSamples);
+    // RMS of how far (R', t') moves the matched source points from where the winner puts them.
+    const auto moved = [&](const Candidate &c) {
+        double sum = 0.0;
+        std::size_t n = 0;
+        for (std::size_t k = 0; k < a.size(); k += stride, ++n) sum += ((c.R - R) * a[k] + (c.t - t)).squaredNorm();
+        return std::sqrt(sum / static_cast<double>(n));
+    };
+    const double distinct = kDistinctNoiseBounds * bound;
+    std::unique_ptr<Occupancy> occupancy; // built the first time a competitor needs the dense check
+    std::vector<std::uint32_t> sample;
+    double winner_dense = 0.0;
+    std::vector<std::uint8_t> mask;
+    for (Candidate &c : candidates) {
+        // The winner found again (its own translation peak, a polish that returns to it) is no competitor; half
+        // the distance before the polish, which moves a candidate by about a noise bound.
+        if (!(moved(c) > 0.5 * distinct)) continue;
+        const std::size_t count =
+            c.polish ? solver.polish(a, b, c.R, c.t, mask) : count_inliers(a, b, bound, c.R, c.t, mask);
+        // Few inliers make the ratio noisy either way; the competitor's count raised by two standard deviations of
+        // a count (Poisson: 2 sqrt(n) + 1) errs on the side of calling a scene ambiguous.
+        const double n2 = static_cast<double>(count);
+        const double sparse = (n2 + 2.0 * std::sqrt(n2) + 1.0) / winner;
+        if (!(moved(c) > distinct)) continue;
+        ++out.candidates;
+        double value = sparse;
+        if (sparse >= kDenseFrom) {
+            if (!occupancy) {
+                occupancy = std::make_unique<Occupancy>(*in.target_voxels, in.voxel_size);
+                sample = dense_sample(*in.source_voxels, *in.source_normals);
+                winner_dense = occupancy->support(*in.source_voxels, sample, R, t);
+            }
+            const double dense = occupancy->support(*in.source_voxels, sample, c.R, c.t);
+            value = std::min(sparse, winner_dense > 0.0 ? dense / winner_dense : 1.0);
+        }
+        out.value = std::max(out.value, std::min(1.0, value));
+    }
+    return out;
+}
+
+KISSM_DETAIL_END
