@@ -26,6 +26,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/refine_index.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/refine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/ambiguity.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/confidence.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/features_codec.cpp
 )

@@ -48,9 +48,12 @@ def _building(
     return parts
 
 
-def street(rng: np.random.Generator, sensor_x: float, periodic: bool, layout_seed: int = 7) -> np.ndarray:
+def street(
+    rng: np.random.Generator, sensor_x: float, periodic: bool, layout_seed: int = 7, period: float = 10.0
+) -> np.ndarray:
     """A street along x seen from (sensor_x, 0, 0) out to 25 m, in the world frame. Periodic: the same building
-    (8 m, 6 m high, four windows) every 10 m on both sides; else buildings of the layout's own random sizes."""
+    (2 m short of the period, 6 m high, a window every 2 m) every `period` m on both sides; else buildings of the
+    layout's own random sizes."""
     radius, density = 25.0, 12.0
     parts = [
         _rect(rng, np.array([sensor_x - radius, -12, 0.0]), np.array([2 * radius, 0, 0]), np.array([0, 24, 0]), density)
@@ -60,7 +63,7 @@ def street(rng: np.random.Generator, sensor_x: float, periodic: bool, layout_see
         x = -200.0
         while x < 200.0:
             if periodic:
-                length, height, windows, gap = 8.0, 6.0, 4, 2.0
+                length, height, windows, gap = period - 2.0, 6.0, int(round((period - 2.0) / 2.0)), 2.0
             else:
                 length, height = layout.uniform(4, 12), layout.uniform(4, 10)
                 windows, gap = int(layout.integers(1, 6)), layout.uniform(1, 6)
@@ -147,16 +150,17 @@ def _in_sensor_frame(world: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return out
 
 
-def street_trials(periodic: bool) -> list[Trial]:
+def street_trials(periodic: bool, period: float = 10.0, seed: int = 3) -> list[Trial]:
     """The source sensor 2-13 m further along the street, yawed 0 or 30 degrees."""
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(seed)
     trials = []
     for shift in (2.0, 4.5, 7.0, 10.0, 13.0):
         for yaw in (0.0, 30.0):
-            target = street(rng, 0.0, periodic)
+            target = street(rng, 0.0, periodic, period=period)
             gt = _pose(yaw, np.array([0.0, 0.0, 1.0]), np.array([shift, 0.0, 0.0]))
-            source = _in_sensor_frame(street(rng, shift, periodic), gt)
-            name = f"{'identical' if periodic else 'varied'} street, {shift:4.1f} m on, yaw {yaw:2.0f}"
+            source = _in_sensor_frame(street(rng, shift, periodic, period=period), gt)
+            kind = f"identical street, {period:.0f} m" if periodic else "varied street"
+            name = f"{kind}, {shift:4.1f} m on, yaw {yaw:2.0f}"
             trials.append(Trial(name, source.astype(np.float32), target.astype(np.float32), gt, SCENE_KIND))
     return trials
 
@@ -192,6 +196,7 @@ def table_trials(symmetric: bool) -> list[Trial]:
 #: Each repetitive family beside its control.
 FAMILIES = (
     Family("identical street (repetitive)", lambda: street_trials(True)),
+    Family("identical street, 12 m period (repetitive)", lambda: street_trials(True, period=12.0, seed=4)),
     Family("varied street (control)", lambda: street_trials(False)),
     Family("pillar grid (repetitive)", lambda: pillar_trials(True)),
     Family("scattered pillars (control)", lambda: pillar_trials(False)),

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import json
 import math
 from pathlib import Path
 from typing import Literal
@@ -93,6 +94,7 @@ class Tally:
         self.entry_points_differ: list[str] = []  # register and register_features gave other bits
         # (field, family kind, right?) -> values, for the separation table
         self.values: dict[tuple[str, str, bool], list[float]] = collections.defaultdict(list)
+        self.records: list[dict[str, object]] = []  # every run's numbers, for --records
 
     def add(self, family: str, mode: str, valid: bool, right: bool, line: str, r: kissm.Result | None = None) -> None:
         key = (
@@ -107,6 +109,8 @@ class Tally:
         self.counts[(family, mode)][key] += 1
         if valid and not right:
             self.wrong_valid.append(line)
+        if r is not None:
+            self.records.append(record(family, mode, line[:48].strip(), right, r))
         if r is None or not np.isfinite(np.asarray(r.transform)).all():
             return
         kind = (
@@ -141,6 +145,13 @@ class Tally:
                 right = self.values.get((name, kind, True), [])
                 wrong = self.values.get((name, kind, False), [])
                 print(f"  {name:28s} {kind:16s} {span(right)} | {span(wrong)}")
+
+
+def record(family: str, mode: str, name: str, right: bool, r: kissm.Result) -> dict[str, object]:
+    """A run's numbers for --records: what a confidence could read, and whether the pose was right."""
+    out: dict[str, object] = {"family": family, "mode": mode, "name": name, "right": right}
+    out.update({k: v for k, v in r.to_dict().items() if isinstance(v, (bool, int, float))})
+    return out
 
 
 def span(values: list[float]) -> str:
@@ -352,7 +363,7 @@ def repetitive_scenes(tally: Tally, args: argparse.Namespace) -> None:
             run(tally, family.name, t, args)
 
 
-def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
+def priors(args: argparse.Namespace, rng: np.random.Generator, records: list[dict[str, object]]) -> None:
     """kissm.refine from the ground truth disturbed by growing amounts: the basin, and what the refine rule says."""
     counts: dict[tuple[int, int], collections.Counter[str]] = collections.defaultdict(collections.Counter)
     differ = 0  # refine on the points and refine_features on the features, other bits
@@ -371,6 +382,7 @@ def priors(args: argparse.Namespace, rng: np.random.Generator) -> None:
                         r = m.refine_features(fs, ft, start)
                         differ += not same_result(r, m.refine(src, tgt, start))
                         _, _, right = judge_at(r.transform, p.gt, k.max_rot_deg, k.max_trans_m)
+                        records.append(record("refine from a prior", "gicp", f"{p.name} {deg} {vox}", right, r))
                         key = (
                             "right, valid"
                             if r.valid and right
@@ -398,6 +410,7 @@ def main() -> int:
     parser.add_argument("--rotations", type=int, default=6)
     parser.add_argument("--priors", action="store_true", help="also kissm.refine from disturbed ground truth")
     parser.add_argument("--rows", action="store_true", help="print every run, not only the summary")
+    parser.add_argument("--records", type=Path, help="write every run's numbers here (JSON lines)")
     args = parser.parse_args()
     rng = np.random.default_rng(12345)
     tally = Tally()
@@ -413,5 +426,7 @@ def main() -> int:
     repetitive_scenes(tally, args)
     tally.print()
     if args.priors and has_index(args.data):
-        priors(args, rng)
+        priors(args, rng, tally.records)
+    if args.records:
+        args.records.write_text("".join(json.dumps(row, allow_nan=True) + "\n" for row in tally.records))
     return 0

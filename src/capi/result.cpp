@@ -106,6 +106,7 @@ void reset_full(kissm_result *r) noexcept {
     r->tilt = nan;
     for (double &v : r->weak_directions) v = nan;
     r->ambiguity = nan;
+    r->confidence = nan;
 }
 
 } // namespace
@@ -148,6 +149,7 @@ void fill_result(const Registration &g, kissm_result *caller) {
             for (int j = 0; j < 6; ++j)
                 r->weak_directions[6 * i + static_cast<std::size_t>(j)] = g.weak_directions[i][j];
     }
+    r->confidence = g.confidence;
 #define KISSM_COPY_FIELD(name) r->name = g.name;
     KISSM_RESULT_SAME_FIELDS(KISSM_COPY_FIELD)
 #undef KISSM_COPY_FIELD

@@ -85,7 +85,8 @@ void print_result_summary(std::FILE *out, const kissm_result &r, ResultKind kind
     const bool global = kind == ResultKind::Global;
     std::fprintf(out, "valid: %s", r.valid ? "yes" : "no");
     if (!r.valid) std::fprintf(out, " (reason: %s)", kissm_reason_string(r.reason));
-    std::fprintf(out, "\n");
+    // The probability that the pose is within the success tolerance (docs/design/accuracy.md, "Confidence").
+    std::fprintf(out, "; confidence %s\n", number_text(r.confidence, "%.3f").text);
     std::fprintf(out, "counts                       source      target\n");
     row2(out, "points", r.num_source_points, r.num_target_points);
     if (r.num_source_nonfinite || r.num_target_nonfinite) {
@@ -183,6 +184,7 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field("rotation_uncertainty", r.rotation_uncertainty);
     json.field("tilt", r.tilt);
     json.field("ambiguity", r.ambiguity);
+    json.field("confidence", r.confidence);
     if (!with_times) return;
     json.key("time_ms");
     json.begin_object();

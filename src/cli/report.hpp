@@ -28,10 +28,10 @@ void print_result_summary(std::FILE *out, const kissm_result &result, ResultKind
 // valid, reason, reason_code, [initial_transform,] transform, rotation, translation, coarse_transform,
 // refine, information, overlap, refine_rmse, refine_condition, inlier_coverage, refine_iterations,
 // refine_converged, final_inliers, counts (... refine_correspondences, source_suppressed, target_suppressed),
-// inlier_ratio, residual_rms, noise_bound, inlier_extent, rotation_uncertainty, tilt, ambiguity, time_ms (voxelize,
-// features, suppression, matching, pruning, solver, refine, total).
-// refine_mode: the config's KISSM_REFINE_* (the mode used). initial_transform: kissm_refine's, or null.
-// with_times false leaves time_ms out, so that the same pair gives the same bytes on every run (batch).
+// inlier_ratio, residual_rms, noise_bound, inlier_extent, rotation_uncertainty, tilt, ambiguity, confidence, time_ms
+// (voxelize, features, suppression, matching, pruning, solver, refine, total). refine_mode: the config's KISSM_REFINE_*
+// (the mode used). initial_transform: kissm_refine's, or null. with_times false leaves time_ms out, so that the same
+// pair gives the same bytes on every run (batch).
 void add_result_json(JsonWriter &json, const kissm_result &result, int32_t refine_mode,
                      const double *initial_transform = nullptr, bool with_times = true);
 

@@ -4,8 +4,6 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <memory>
-#include <unordered_set>
 #include <utility>
 
 KISSM_DETAIL_BEGIN
@@ -17,8 +15,14 @@ namespace {
 constexpr std::size_t kWinnerRotationPeaks = 6;
 constexpr std::size_t kSecondRotationPeaks = 4;
 constexpr std::size_t kHalfTurnPeaks = 2;
+// Below this share of the winner's support within twice the noise bound, a candidate is reported by that share
+// and not polished.
+constexpr double kWorthPolishing = 0.25;
 // The dense support reads at most this many source voxels (evenly strided).
-constexpr std::size_t kDenseSamples = 4096;
+constexpr std::size_t kDenseSamples = 1024;
+// The second rotation reads at most this many of the unexplained measurements (evenly strided): the winner's own
+// solve reads up to 5,000, and a competitor with nearly the winner's support shows in a fifth of them.
+constexpr std::size_t kSecondRotationMeasurements = 1000;
 // The target's centroid and principal axes, and how far a candidate moves the matched points, read at most this
 // many points (evenly strided).
 constexpr std::size_t kShapeSamples = 4096;
@@ -32,15 +36,54 @@ struct Candidate {
     bool polish = true; // polished over the matches; a geometric one is exact and judged where it is
 };
 
-std::uint64_t cell_key(const Eigen::Vector3d &p, double inv_cell) {
-    // 21 bits per axis around the origin: a local frame spans far fewer cells than 2^20 either way.
-    const auto q = [&](double x) {
-        const double c = std::floor(x * inv_cell);
-        const double clamped = std::min(std::max(c, -1048576.0), 1048575.0);
-        return static_cast<std::uint64_t>(static_cast<std::int64_t>(clamped) + 1048576) & 0x1FFFFFu;
-    };
-    return (q(p.x()) << 42) | (q(p.y()) << 21) | q(p.z());
+// A cell's integer coordinates, clamped to 21 bits around the origin (a local frame spans far fewer cells).
+inline std::int64_t cell_of(double x, double inv_cell) {
+    return static_cast<std::int64_t>(std::min(std::max(std::floor(x * inv_cell), -1048575.0), 1048574.0));
 }
+
+inline std::uint64_t key_of(std::int64_t x, std::int64_t y, std::int64_t z) {
+    const auto q = [](std::int64_t c) { return static_cast<std::uint64_t>(c + 1048576) & 0x1FFFFFu; };
+    return (q(x) << 42) | (q(y) << 21) | q(z);
+}
+
+inline std::uint64_t cell_key(const Eigen::Vector3d &p, double inv_cell) {
+    return key_of(cell_of(p.x(), inv_cell), cell_of(p.y(), inv_cell), cell_of(p.z(), inv_cell));
+}
+
+// Cell keys in an open-addressing table (linear probing, a power-of-two capacity at least twice the keys): the
+// dense support looks up to 27 cells per point, and a node-based set cost more in allocations than in lookups.
+class CellTable {
+public:
+    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0}; // cell_key never makes it (63 bits)
+    explicit CellTable(std::size_t keys) {
+        std::size_t capacity = 16;
+        while (capacity < 2 * keys) capacity *= 2;
+        keys_.assign(capacity, kEmpty);
+        mask_ = capacity - 1;
+    }
+    std::size_t capacity() const { return keys_.size(); }
+    std::uint64_t key(std::size_t slot) const { return keys_[slot]; }
+    // The slot of `key`, taken for it when it was absent.
+    std::size_t insert(std::uint64_t key) {
+        std::size_t slot = first(key);
+        while (keys_[slot] != kEmpty && keys_[slot] != key) slot = (slot + 1) & mask_;
+        keys_[slot] = key;
+        return slot;
+    }
+    bool contains(std::uint64_t key) const {
+        for (std::size_t slot = first(key);; slot = (slot + 1) & mask_) {
+            if (keys_[slot] == key) return true;
+            if (keys_[slot] == kEmpty) return false;
+        }
+    }
+
+private:
+    std::size_t first(std::uint64_t key) const {
+        return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+    }
+    std::vector<std::uint64_t> keys_;
+    std::size_t mask_ = 0;
+};
 
 // The translations b - R a of every match, binned in cells of two noise bounds; the mean translation of the
 // `count` fullest cells (ties by cell key, so the answer depends on the data alone).
@@ -48,38 +91,34 @@ void translation_peaks(const AmbiguityInput &in, const Eigen::Matrix3d &R, doubl
                        std::vector<Candidate> &out) {
     const std::vector<Eigen::Vector3d> &a = *in.source, &b = *in.target;
     const double inv = 1.0 / cell;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(a.size());
-    std::vector<Eigen::Vector3d> v(a.size());
+    CellTable table(a.size());
+    std::vector<std::uint32_t> votes(table.capacity(), 0);
+    std::vector<Eigen::Vector3d> sums(table.capacity(), Eigen::Vector3d::Zero());
     for (std::size_t k = 0; k < a.size(); ++k) {
-        v[k] = b[k] - R * a[k];
-        keyed[k] = {cell_key(v[k], inv), static_cast<std::uint32_t>(k)};
+        const Eigen::Vector3d v = b[k] - R * a[k];
+        const std::size_t slot = table.insert(cell_key(v, inv));
+        ++votes[slot];
+        sums[slot] += v;
     }
-    std::sort(keyed.begin(), keyed.end());
     struct Run {
-        std::size_t votes;
+        std::uint32_t votes;
         std::uint64_t key;
-        Eigen::Vector3d mean;
+        std::size_t slot;
     };
     std::vector<Run> runs;
-    for (std::size_t i = 0; i < keyed.size();) {
-        std::size_t j = i;
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        for (; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) sum += v[keyed[j].second];
-        runs.push_back({j - i, keyed[i].first, sum / static_cast<double>(j - i)});
-        i = j;
-    }
+    for (std::size_t slot = 0; slot < table.capacity(); ++slot)
+        if (votes[slot] != 0) runs.push_back({votes[slot], table.key(slot), slot});
     const std::size_t n = std::min(count, runs.size());
     std::partial_sort(
         runs.begin(), runs.begin() + static_cast<std::ptrdiff_t>(n), runs.end(),
         [](const Run &x, const Run &y) { return x.votes != y.votes ? x.votes > y.votes : x.key < y.key; });
-    for (std::size_t i = 0; i < n; ++i) out.push_back({R, runs[i].mean});
+    for (std::size_t i = 0; i < n; ++i) out.push_back({R, sums[runs[i].slot] / static_cast<double>(runs[i].votes)});
 }
 
 // Whether source voxels land beside target voxels: a cell of one voxel around each, 27 cells looked up.
 class Occupancy {
 public:
-    Occupancy(const std::vector<Vec3f> &points, double voxel) : inv_(1.0 / voxel), voxel_(voxel) {
-        cells_.reserve(points.size());
+    Occupancy(const std::vector<Vec3f> &points, double voxel) : cells_(points.size()), inv_(1.0 / voxel) {
         for (const Vec3f &p : points) cells_.insert(cell_key(p.cast<double>(), inv_));
     }
     // Fraction of the sampled source voxels whose image under (R, t) has an occupied cell beside it.
@@ -93,14 +132,17 @@ public:
 
 private:
     bool beside(const Eigen::Vector3d &p) const {
-        for (int dx = -1; dx <= 1; ++dx)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dz = -1; dz <= 1; ++dz)
-                    if (cells_.count(cell_key(p + voxel_ * Eigen::Vector3d(dx, dy, dz), inv_)) != 0) return true;
+        const std::int64_t x = cell_of(p.x(), inv_), y = cell_of(p.y(), inv_), z = cell_of(p.z(), inv_);
+        // The point's own cell first: where most landed points find their voxel.
+        if (cells_.contains(key_of(x, y, z))) return true;
+        for (std::int64_t dx = -1; dx <= 1; ++dx)
+            for (std::int64_t dy = -1; dy <= 1; ++dy)
+                for (std::int64_t dz = -1; dz <= 1; ++dz)
+                    if ((dx | dy | dz) != 0 && cells_.contains(key_of(x + dx, y + dy, z + dz))) return true;
         return false;
     }
-    std::unordered_set<std::uint64_t> cells_;
-    double inv_, voxel_;
+    CellTable cells_;
+    double inv_;
 };
 
 // The source voxels the dense support reads: evenly strided, without those on the dominant plane's direction (the
@@ -142,6 +184,12 @@ Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, 
         const Eigen::Vector3d da = a[core[p.second]] - a[core[p.first]], db = b[core[p.second]] - b[core[p.first]];
         if ((db - R * da).norm() > 2.0 * bound) unexplained.push_back(p);
     }
+    if (unexplained.size() > kSecondRotationMeasurements) {
+        const std::size_t step = (unexplained.size() + kSecondRotationMeasurements - 1) / kSecondRotationMeasurements;
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < unexplained.size(); i += step) unexplained[kept++] = unexplained[i];
+        unexplained.resize(kept);
+    }
     if (unexplained.size() >= 3) {
         std::vector<Eigen::Vector3d> ca(core.size()), cb(core.size());
         for (std::size_t k = 0; k < core.size(); ++k) ca[k] = a[core[k]], cb[k] = b[core[k]];
@@ -182,33 +230,49 @@ Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, 
         return std::sqrt(sum / static_cast<double>(n));
     };
     const double distinct = kDistinctNoiseBounds * bound;
-    std::unique_ptr<Occupancy> occupancy; // built the first time a competitor needs the dense check
-    std::vector<std::uint32_t> sample;
-    double winner_dense = 0.0;
+    // Few inliers make the ratio noisy either way; the competitor's count raised by two standard deviations of a
+    // count (Poisson: 2 sqrt(n) + 1) errs on the side of calling a scene ambiguous.
+    const auto share = [&](std::size_t count) {
+        const double n2 = static_cast<double>(count);
+        return (n2 + 2.0 * std::sqrt(n2) + 1.0) / winner;
+    };
+    std::vector<std::pair<double, std::size_t>> dense_due; // (sparse share, candidate) for the dense check
     std::vector<std::uint8_t> mask;
-    for (Candidate &c : candidates) {
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        Candidate &c = candidates[i];
         // The winner found again (its own translation peak, a polish that returns to it) is no competitor; half
         // the distance before the polish, which moves a candidate by about a noise bound.
         if (!(moved(c) > 0.5 * distinct)) continue;
-        const std::size_t count =
-            c.polish ? solver.polish(a, b, c.R, c.t, mask) : count_inliers(a, b, bound, c.R, c.t, mask);
-        // Few inliers make the ratio noisy either way; the competitor's count raised by two standard deviations of
-        // a count (Poisson: 2 sqrt(n) + 1) errs on the side of calling a scene ambiguous.
-        const double n2 = static_cast<double>(count);
-        const double sparse = (n2 + 2.0 * std::sqrt(n2) + 1.0) / winner;
+        // A candidate with under a quarter of the winner's support within twice the bound is no competitor, and is
+        // not worth its polish.
+        const double rough = share(count_inliers(a, b, 2.0 * bound, c.R, c.t, mask));
+        if (rough < kWorthPolishing) {
+            ++out.candidates;
+            out.value = std::max(out.value, std::min(1.0, rough));
+            continue;
+        }
+        const double sparse =
+            share(c.polish ? solver.polish(a, b, c.R, c.t, mask) : count_inliers(a, b, bound, c.R, c.t, mask));
         if (!(moved(c) > distinct)) continue;
         ++out.candidates;
-        double value = sparse;
-        if (sparse >= kDenseFrom) {
-            if (!occupancy) {
-                occupancy = std::make_unique<Occupancy>(*in.target_voxels, in.voxel_size);
-                sample = dense_sample(*in.source_voxels, *in.source_normals);
-                winner_dense = occupancy->support(*in.source_voxels, sample, R, t);
-            }
-            const double dense = occupancy->support(*in.source_voxels, sample, c.R, c.t);
-            value = std::min(sparse, winner_dense > 0.0 ? dense / winner_dense : 1.0);
+        if (sparse < kDenseFrom) {
+            out.value = std::max(out.value, std::min(1.0, sparse));
+        } else {
+            dense_due.emplace_back(sparse, i);
         }
-        out.value = std::max(out.value, std::min(1.0, value));
+    }
+    if (dense_due.empty()) return out;
+    // The dense check in order of sparse share: a candidate's value is at most its share, so once the shares left are
+    // no more than the value found, none of them can raise it.
+    std::stable_sort(dense_due.begin(), dense_due.end(),
+                     [](const auto &x, const auto &y) { return x.first > y.first; });
+    const Occupancy occupancy(*in.target_voxels, in.voxel_size);
+    const std::vector<std::uint32_t> sample = dense_sample(*in.source_voxels, *in.source_normals);
+    const double winner_dense = occupancy.support(*in.source_voxels, sample, R, t);
+    for (const auto &[sparse, i] : dense_due) {
+        if (std::min(1.0, sparse) <= out.value) break;
+        const double dense = occupancy.support(*in.source_voxels, sample, candidates[i].R, candidates[i].t);
+        out.value = std::max(out.value, std::min({1.0, sparse, winner_dense > 0.0 ? dense / winner_dense : 1.0}));
     }
     return out;
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "pipeline.hpp"
 #include "ambiguity.hpp"
+#include "confidence.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -427,6 +428,19 @@ InlierEvidence final_inliers(const std::vector<Eigen::Vector3d> &a, const std::v
     return inliers;
 }
 
+// The result's confidence (confidence.hpp) from its own numbers; `solver`: the global solver estimated the pose.
+double confidence_of(const Registration &r, const Params &params, bool solver) {
+    ConfidenceInput in;
+    in.has_pose = r.solved && r.rotation.allFinite() && r.translation.allFinite();
+    in.solver = solver;
+    in.refined = r.refined;
+    in.inliers = r.num_final_inliers;
+    in.ambiguity = r.ambiguity;
+    in.overlap = r.overlap;
+    in.refine_rmse_voxels = r.refine_rmse / params.voxel_size;
+    return pose_confidence(in);
+}
+
 void log_counts(const Registration &r, RunContext &ctx) {
     if (!ctx.logs(LogLevel::Info)) return;
     std::ostringstream msg;
@@ -530,6 +544,7 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     // Last, so that the reason names what else is wrong first: refinement cannot resolve ambiguity (the scene
     // aligns as well at the competitor), so a refined pose is refused for it too.
     if (r.reason == Reason::None && !(r.ambiguity <= params.max_ambiguity)) r.reason = Reason::Ambiguous;
+    r.confidence = confidence_of(r, params, true);
     return r;
 }
 
@@ -566,6 +581,7 @@ Registration refine_described(const CloudFeatures &source, const CloudFeatures &
     if (p.refine_mode == RefineMode::None) p.refine_mode = RefineMode::Gicp;
     refine_registration(source, target, R, t, p, r, ctx);
     r.reason = prior_validity(refined_evidence(r), refined_rule(p));
+    r.confidence = confidence_of(r, params, false);
     return r;
 }
 

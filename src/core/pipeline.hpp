@@ -74,6 +74,7 @@ struct Registration {
     std::vector<Vector6d> weak_directions;
     double rotation_uncertainty = std::numeric_limits<double>::quiet_NaN(); // radians, see validity.hpp
     double ambiguity = std::numeric_limits<double>::quiet_NaN();            // see ambiguity.hpp (solver only)
+    double confidence = 0.0;                                                // confidence.hpp; 0 without a pose
     double inlier_coverage = std::numeric_limits<double>::quiet_NaN();      // see validity.hpp
     double overlap_spread = std::numeric_limits<double>::quiet_NaN();       // metres, of the refined overlap
     // Suppression (ground.hpp) and the yaw-only solver (NaN unless rotation_dof = 1 solved).

@@ -18,7 +18,7 @@
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
   X(kissm_config, KISSM_STRUCT_CONFIG, 304)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 1256)
+  X(kissm_result, KISSM_STRUCT_RESULT, 1264)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -120,7 +120,8 @@
   X(kissm_result, degenerate, int32_t, 952, 4)                                                                         \
   X(kissm_result, num_weak_directions, int32_t, 956, 4)                                                                \
   X(kissm_result, weak_directions, double[36], 960, 288)                                                               \
-  X(kissm_result, ambiguity, double, 1248, 8)
+  X(kissm_result, ambiguity, double, 1248, 8)                                                                          \
+  X(kissm_result, confidence, double, 1256, 8)
 
 #define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
 

@@ -463,6 +463,7 @@ static void test_register_with_refine(void) {
         coarse_part.refine_rmse = plain.refine_rmse;
         coarse_part.refine_condition = plain.refine_condition;
         coarse_part.inlier_coverage = plain.inlier_coverage;
+        coarse_part.confidence = plain.confidence; /* the refined model reads the overlap */
         coarse_part.num_refine_correspondences = 0;
         coarse_part.refine_iterations = 0;
         coarse_part.refine_converged = 0;

@@ -67,6 +67,12 @@ static void check_consistency(const char *label, const kissm_result *r) {
     CHECK(r->noise_bound > 0.0);
     CHECK(r->inlier_extent[0] >= r->inlier_extent[1] && r->inlier_extent[1] >= r->inlier_extent[2] &&
           r->inlier_extent[2] > 0.0);
+    /* a scene with one answer, registered right: no competitor near the pose's support, and a confidence that a
+     * loop closure could take (the documented threshold 0.95); the confidence is the documented function of the
+     * inliers (confidence.hpp: refinement did not run, and an ambiguity below 0.6 leaves it whole) */
+    CHECK_MSG(r->ambiguity >= 0.0 && r->ambiguity < 0.5, "%s: ambiguity %g", label, r->ambiguity);
+    CHECK_MSG(r->confidence >= 0.95 && r->confidence <= 1.0, "%s: confidence %g", label, r->confidence);
+    CHECK_NEAR(r->confidence, 1.0 / (1.0 + exp(-(-33.3372 + 13.297 * log1p((double)r->num_final_inliers)))), 1e-12);
     /* times: non-negative, total = sum of the stages */
     CHECK(r->time_voxelize_ms >= 0.0 && r->time_features_ms >= 0.0 && r->time_matching_ms >= 0.0 &&
           r->time_pruning_ms >= 0.0 && r->time_solver_ms >= 0.0);

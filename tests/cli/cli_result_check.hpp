@@ -47,6 +47,7 @@ inline std::vector<std::string> contract_keys(bool refine_command) {
                           "rotation_uncertainty",
                           "tilt",
                           "ambiguity",
+                          "confidence",
                           "time_ms",
                           "read_ms"}) {
         keys.push_back(k);
@@ -106,7 +107,7 @@ inline void check_contract(const Json &j, bool refine_command, const char *what)
     const Json &info = j.at("information");
     CHECK_MSG(info.is(T::Null) || info.is_matrix(6, 6, false), "%s: information is neither null nor 6x6", what);
     for (const char *k : {"overlap", "refine_rmse", "refine_condition", "inlier_coverage", "inlier_ratio",
-                          "residual_rms", "noise_bound", "rotation_uncertainty", "tilt", "ambiguity"}) {
+                          "residual_rms", "noise_bound", "rotation_uncertainty", "tilt", "ambiguity", "confidence"}) {
         CHECK_MSG(is_number_or_null(j.at(k)), "%s: %s is not a number or null", what, k);
     }
     for (const std::string &k : contract_count_keys()) {
@@ -177,7 +178,8 @@ inline void check_matches_library(const Json &j, const kissm_result &r, const ch
                    {"noise_bound", r.noise_bound},
                    {"rotation_uncertainty", r.rotation_uncertainty},
                    {"tilt", r.tilt},
-                   {"ambiguity", r.ambiguity}};
+                   {"ambiguity", r.ambiguity},
+                   {"confidence", r.confidence}};
     for (const auto &s : scalars) check_scalar(j.at(s.key), s.value, what, s.key);
     check_doubles(j.at("inlier_extent").flat(), r.inlier_extent, 3, what, "inlier_extent");
     CHECK_MSG(j.at("degenerate").boolean == (r.degenerate != 0), "%s: degenerate", what);

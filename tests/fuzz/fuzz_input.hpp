@@ -253,6 +253,9 @@ inline bool result_sane(const kissm_result &r, const kissm_config &c) {
     // The ambiguity: in [0, 1] when the solver found a pose (its rotation uncertainty is then a number), else NaN.
     if (std::isnan(r.rotation_uncertainty) ? !std::isnan(r.ambiguity) : !(r.ambiguity >= 0.0 && r.ambiguity <= 1.0))
         return false;
+    // The confidence: in [0, 1], 0 without a pose.
+    if (!(r.confidence >= 0.0 && r.confidence <= 1.0)) return false;
+    if (!std::isfinite(r.transform[0]) && r.confidence != 0.0) return false;
     if (!r.valid) return r.reason != KISSM_REASON_NONE && r.reason <= KISSM_REASON_AMBIGUOUS;
     if (!rigid_pose(r) || r.num_final_inliers < 3 || !(r.ambiguity <= c.max_ambiguity)) return false;
     // Valid with refinement: its inliers' part of the rule too; without: the rotation pinned down.
@@ -274,6 +277,7 @@ inline bool refine_result_sane(const kissm_result &r, const kissm_config &c, con
         r.reason != KISSM_REASON_LOOSE_ALIGNMENT)
         return false;
     if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage) || !std::isnan(r.ambiguity)) return false;
+    if (!(r.confidence >= 0.0 && r.confidence <= 1.0)) return false;
     if (r.valid && r.reason != KISSM_REASON_NONE) return false;
     for (int i = 0; i < 16; ++i)
         if (!(std::fabs(r.coarse_transform[i] - initial[i]) <= 1e-3 * (1.0 + std::fabs(initial[i])))) return false;
@@ -288,7 +292,7 @@ inline bool result_reset(const kissm_result &r) {
     for (double v : r.coarse_transform)
         if (!std::isnan(v)) return false;
     return std::isnan(r.overlap) && std::isnan(r.rotation_uncertainty) && std::isnan(r.inlier_coverage) &&
-           r.num_refine_correspondences == 0 && r.refine_iterations == 0;
+           std::isnan(r.confidence) && r.num_refine_correspondences == 0 && r.refine_iterations == 0;
 }
 
 inline bool same_bits(const double *a, const double *b, std::size_t n) { return std::memcmp(a, b, n * sizeof *a) == 0; }
@@ -300,9 +304,10 @@ inline bool same_result(const kissm_result &a, const kissm_result &b) {
            same_bits(&a.overlap, &b.overlap, 1) && same_bits(&a.refine_rmse, &b.refine_rmse, 1) &&
            same_bits(&a.refine_condition, &b.refine_condition, 1) &&
            same_bits(&a.rotation_uncertainty, &b.rotation_uncertainty, 1) &&
-           same_bits(&a.inlier_coverage, &b.inlier_coverage, 1) &&
-           a.num_refine_correspondences == b.num_refine_correspondences && a.refine_iterations == b.refine_iterations &&
-           a.refine_converged == b.refine_converged && a.num_final_inliers == b.num_final_inliers &&
+           same_bits(&a.inlier_coverage, &b.inlier_coverage, 1) && same_bits(&a.ambiguity, &b.ambiguity, 1) &&
+           same_bits(&a.confidence, &b.confidence, 1) && a.num_refine_correspondences == b.num_refine_correspondences &&
+           a.refine_iterations == b.refine_iterations && a.refine_converged == b.refine_converged &&
+           a.num_final_inliers == b.num_final_inliers &&
            a.num_initial_correspondences == b.num_initial_correspondences &&
            a.num_source_voxels == b.num_source_voxels && a.num_target_voxels == b.num_target_voxels;
 }

@@ -177,7 +177,7 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     X(num_refine_correspondences) X(refine_iterations) X(refine_converged) X(num_source_suppressed)     \
     X(num_target_suppressed) X(degenerate) X(num_weak_directions)
 /* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
-#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt) X(ambiguity)
+#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt) X(ambiguity) X(confidence)
 #define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36) X(weak_directions, 36)
 /* clang-format on */
 

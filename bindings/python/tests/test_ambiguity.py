@@ -96,6 +96,8 @@ def test_identical_buildings_are_right_or_refused(shift: float, yaw: float, refi
     assert DEFAULT_BOUND < result.ambiguity <= 1.0, result
     assert not result.valid and result.reason == AMBIGUOUS
     assert result.reason_code == _ffi.lib.KISSM_REASON_AMBIGUOUS == 14
+    # A competitor as good as the pose: a coin flip at best (docs/design/accuracy.md, "Confidence").
+    assert result.confidence < 0.5, result
     # The bound at 1 never refuses a pose for it: the other rules decide (the same pose, bit for bit).
     lenient = kissm.register(source, target, STREET_VOXEL, num_threads=2, refine=refine, max_ambiguity=1.0)
     assert lenient.reason != AMBIGUOUS and np.array_equal(lenient.transform, result.transform)

@@ -54,6 +54,7 @@ DOUBLES = [
     "inlier_coverage",
     "tilt",
     "ambiguity",
+    "confidence",
 ]
 ARRAYS = ["transform", "coarse_transform", "information"]
 #: The weak directions: 36 doubles in the file (row-major 6x6, the rows beyond num_weak_directions NaN), the

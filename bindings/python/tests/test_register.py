@@ -83,7 +83,7 @@ def test_result_to_dict_is_plain(result) -> None:
 
 def test_result_repr_is_readable(result) -> None:
     text = repr(result)
-    assert text.startswith("kissm.Result(valid=True,\n")
+    assert text.startswith(f"kissm.Result(valid=True, confidence={result.confidence:.3f},\n")
     assert f"{result.num_final_inliers} final inliers of {result.num_initial_correspondences} matches" in text
     assert f"rotation {result.rotation_angle_deg:.2f} deg" in text and "transform=[[" in text
     assert text.endswith("]])")

@@ -319,6 +319,8 @@ typedef struct kissm_result {
     double weak_directions[36];
 
     double ambiguity;
+
+    double confidence;
 } kissm_result;
 
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);

@@ -41,6 +41,7 @@ _FLOAT_FIELDS = (
     "inlier_coverage",
     "tilt",
     "ambiguity",
+    "confidence",
 )
 _TIME_FIELDS = (
     "time_voxelize_ms",
@@ -243,6 +244,13 @@ class Result:
     identical facades one period along, a symmetric object turned). ``valid`` needs it <= ``Config.max_ambiguity``
     (else reason "a second, distinct pose has nearly as much support"). NaN when the solver did not run (and after
     :meth:`Matcher.refine`)."""
+    confidence: float
+    """The probability that the pose is within the success tolerance (5 degrees, and 2 m for LiDAR, 0.3 m indoors, 1
+    cm on small objects: about 4 to 7 voxels at the suggested sizes), in [0, 1]: a fixed logistic function of
+    ``num_final_inliers`` (with refinement also of ``overlap``) times a factor falling with ``ambiguity`` (1 up to
+    0.6, a pick among equals from 0.8), and after :meth:`Matcher.refine` of ``overlap`` and ``refine_rmse``
+    (docs/design/accuracy.md, "Confidence"). 0 without a pose. It reads no ``Config`` threshold. Runs its fit did
+    not see held no wrong pose at 0.95 or above: a threshold for loop closures."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:
@@ -296,6 +304,7 @@ class Result:
         head = "kissm.Result("
         pad = " " * len(head)
         status = "valid=True" if self.valid else f"valid=False, reason={self.reason!r}"
+        status += f", confidence={self.confidence:.3f}"
         lines = [f"{head}{status},"]
         from_prior = self.refined and self.num_initial_correspondences == 0  # Matcher.refine: no global solver
         if from_prior:

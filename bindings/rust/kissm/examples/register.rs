@@ -19,7 +19,7 @@
 //! `refine_condition`, `degenerate`, `weak_directions` (the rows in use: `[]` when none), `inlier_coverage`,
 //! `refine_iterations`, `refine_converged`, `final_inliers`, `counts` (with `source_suppressed`,
 //! `target_suppressed`), `inlier_ratio`, `residual_rms`, `noise_bound`, `inlier_extent`,
-//! `rotation_uncertainty`, `tilt`, `ambiguity`, `time_ms` (with `suppression`), `read_ms`), the same layout and the same
+//! `rotation_uncertainty`, `tilt`, `ambiguity`, `confidence`, `time_ms` (with `suppression`), `read_ms`), the same layout and the same
 //! number format: the shortest of `%.15g`, `%.16g` and `%.17g` that reads back to the exact double, `null`
 //! for NaN and infinities (and for `information` when refinement did not run). Exit status: 0 valid pose, 1
 //! not valid, 2 usage or input error.
@@ -307,6 +307,7 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("rotation_uncertainty", json_number(reg.rotation_uncertainty)),
         ("tilt", json_number(reg.tilt)),
         ("ambiguity", json_number(reg.ambiguity)),
+        ("confidence", json_number(reg.confidence)),
         ("time_ms", json_object(&times, 4)),
         ("read_ms", json_number(read_ms)),
     ]);

@@ -109,6 +109,7 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
         ("inlier_coverage", fine.map_or(nan, |f| f.inlier_coverage)),
         ("tilt", reg.tilt),
         ("ambiguity", reg.ambiguity),
+        ("confidence", reg.confidence),
     ];
     for (key, got) in doubles {
         same(key.into(), case.get(key).num(), got);
