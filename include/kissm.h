@@ -150,8 +150,11 @@ KISSM_API const char *kissm_last_error_message(void);
 #define KISSM_REASON_TOO_FEW_FEATURES 2        /**< A cloud has too few points with a reliable descriptor. */
 #define KISSM_REASON_TOO_FEW_CORRESPONDENCES 3 /**< Matching or pruning left too few correspondences. */
 #define KISSM_REASON_SOLVER_FAILED 4           /**< The robust solver found no consistent rotation. */
-#define KISSM_REASON_TOO_FEW_INLIERS 5         /**< Final inliers below kissm_config.min_inliers. */
-#define KISSM_REASON_DEGENERATE 6              /**< The inliers are collinear or planar: the pose is ambiguous. */
+/** Final inliers below kissm_config.min_inliers (with refinement: refine_min_inliers); without refinement a pose
+ * with at least refine_min_inliers is verified by GICP first, and returned refined and valid when the refined rule
+ * accepts it. */
+#define KISSM_REASON_TOO_FEW_INLIERS 5
+#define KISSM_REASON_DEGENERATE 6 /**< The inliers are collinear or planar: the pose is ambiguous. */
 /** Refinement ran and its pose lays too little of the source onto the target (kissm_result.overlap below
  * kissm_config.min_overlap, or fewer than 6 correspondences). */
 #define KISSM_REASON_LOW_OVERLAP 7

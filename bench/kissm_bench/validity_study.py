@@ -14,6 +14,8 @@ The families:
     scan of another dataset against the same maps (no pose right);
   * pairs of unrelated scans (no overlap: every valid pose is wrong): LiDAR scans of three datasets against each
     other at 0.3 and 0.5 m, and the bunny against a scaled 3DMatch fragment and back;
+  * with suppression="ground", every pair of KITTI 07 keyframes 1 to 4 apart and the other LiDAR pairs, raw and
+    yawed twice;
   * the committed synthetic pair (tests/data) with its target turned about z every 15 degrees and moved;
   * scenes with a second right-looking pose (kissm_bench.repetitive): a street of identical buildings, a pillar
     grid, a symmetric table, each beside a control with the repetition broken;
@@ -37,7 +39,7 @@ import collections
 import json
 import math
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import kissm
 import numpy as np
@@ -177,10 +179,10 @@ def same_result(a: kissm.Result, b: kissm.Result) -> bool:
     )
 
 
-def run(tally: Tally, family: str, t: Trial, args: argparse.Namespace) -> None:
+def run(tally: Tally, family: str, t: Trial, args: argparse.Namespace, **config: Any) -> None:
     k = t.kind
     for mode in MODES:
-        r = kissm.register(t.source, t.target, voxel_size=k.voxel, num_threads=args.threads, refine=mode)
+        r = kissm.register(t.source, t.target, voxel_size=k.voxel, num_threads=args.threads, refine=mode, **config)
         e_rot, e_trans, right = judge_at(r.transform, t.gt, k.max_rot_deg, k.max_trans_m, t.at)
         line = (
             f"{t.name:48s} {mode:14s} valid={int(r.valid)} error {e_rot:7.2f} deg {e_trans:8.4f} m "
@@ -190,7 +192,7 @@ def run(tally: Tally, family: str, t: Trial, args: argparse.Namespace) -> None:
         if args.rows:
             print(line, flush=True)
         # The same pair through features described apart: the same bits, or the difference is listed.
-        with kissm.Matcher(voxel_size=k.voxel, num_threads=args.threads, refine_mode=mode) as m:
+        with kissm.Matcher(voxel_size=k.voxel, num_threads=args.threads, refine_mode=mode, **config) as m:
             f = m.register_features(m.compute_features(t.source), m.compute_features(t.target))
         _, _, f_right = judge_at(f.transform, t.gt, k.max_rot_deg, k.max_trans_m, t.at)
         tally.add(family, mode + " (features)", f.valid, f_right, line.replace(mode, mode + " (features)", 1), f)
@@ -244,6 +246,38 @@ def far_keyframes(tally: Tally, args: argparse.Namespace, rng: np.random.Generat
             g2 = gt.copy()
             g2[:3, :3] = gt[:3, :3] @ turn.T
             run(tally, far, Trial(f"kitti07 {a}<-{b} rot", turned(cloud[b], turn), cloud[a], g2, KEYFRAME_KIND), args)
+
+
+def ground_suppressed(tally: Tally, args: argparse.Namespace, rng: np.random.Generator) -> None:
+    """With suppression="ground": every pair of KITTI 07 keyframes 1 to 4 apart and the other LiDAR pairs, raw and
+    yawed twice (ground suppression assumes the sensor's up), where fewer keypoints leave fewer inliers."""
+    kf = keyframes(args.data)
+    if kf is None:
+        return
+    chain, cloud = kf
+    trials = [
+        Trial(f"kitti07 {a}<-{b}", cloud[b], cloud[a], np.linalg.inv(chain[a]) @ chain[b], KEYFRAME_KIND)
+        for a in range(5)
+        for b in range(a + 1, 5)
+    ]
+    for p in load_pairs(args.data):
+        if p.kind.category == "lidar" and not p.name.startswith("kitti07"):
+            src, tgt = p.read()
+            trials.append(Trial(p.name, src, tgt, p.gt, p.kind))
+    for t in trials:
+        run(
+            tally,
+            "ground suppressed (LiDAR)",
+            Trial(f"{t.name} raw", t.source, t.target, t.gt, t.kind),
+            args,
+            suppression="ground",
+        )
+        for _ in range(2):
+            turn = axis_angle(np.array([0.0, 0.0, 1.0]), rng.uniform(0, 360))
+            gt = t.gt.copy()
+            gt[:3, :3] = t.gt[:3, :3] @ turn.T
+            yawed = Trial(f"{t.name} yawed", turned(t.source, turn), t.target, gt, t.kind)
+            run(tally, "ground suppressed (LiDAR)", yawed, args, suppression="ground")
 
 
 def scan_to_map(tally: Tally, args: argparse.Namespace, rng: np.random.Generator) -> None:
@@ -419,6 +453,7 @@ def main() -> int:
         far_keyframes(tally, args, rng)
         scan_to_map(tally, args, rng)
         scan_sets(tally, args, np.random.default_rng(33))  # its own draws: the others keep theirs
+        ground_suppressed(tally, args, np.random.default_rng(44))
         unrelated(tally, args)
     else:
         print(f"(no real data at {args.data}: the synthetic pair only)")

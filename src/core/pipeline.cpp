@@ -528,11 +528,16 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         refine_registration(source, target, r.coarse_rotation, r.coarse_translation, params, r, ctx);
         r.reason = refined_validity(r.num_final_inliers, inliers, refined_evidence(r), refined_rule(params));
         if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
-    } else if (r.reason == Reason::UncertainRotation && !tilted) {
+    } else if ((r.reason == Reason::UncertainRotation ||
+                (r.reason == Reason::TooFewInliers &&
+                 r.num_final_inliers >= static_cast<std::uint64_t>(params.refine_min_inliers))) &&
+               !tilted) {
         // Few inliers on a compact object leave the rotation uncertain by a few degrees whether the pose is right
-        // or wrong, so the coarse evidence cannot decide; the dense alignment can. Refined with GICP, the pose is
-        // reported when the refined rule accepts it, and the coarse result stands otherwise
-        // (docs/design/accuracy.md, "Verifying uncertain rotations").
+        // or wrong, and a pair of low overlap (keyframes far apart, the ground suppressed) keeps fewer inliers than
+        // min_inliers with the right pose, so the coarse evidence cannot decide; the dense alignment can. Refined with
+        // GICP, the pose is reported when the refined rule accepts it (the rule of refine_mode GICP, inliers
+        // included: refine_min_inliers), and the coarse result stands otherwise (docs/design/accuracy.md,
+        // "Verifying uncertain rotations").
         Params verify = params;
         verify.refine_mode = RefineMode::Gicp;
         Registration refined = r;

@@ -143,8 +143,17 @@ def test_refine_min_inliers_replaces_min_inliers_with_refinement(pair, coarse, r
     # min_inliers is the rule without refinement only, and refine_min_inliers only with it
     assert kissm.register(pair.source, pair.target, VOXEL, refine="gicp", min_inliers=n + 1).valid
     assert kissm.register(pair.source, pair.target, VOXEL, refine_min_inliers=100000).valid
-    unrefined = kissm.register(pair.source, pair.target, VOXEL, min_inliers=n + 1)
-    assert not unrefined.valid and unrefined.reason_code == _ffi.lib.KISSM_REASON_TOO_FEW_INLIERS
+    # Without refinement, a pose short of min_inliers but with refine_min_inliers is verified by GICP and returned
+    # refined when the refined rule accepts it (the GICP registration's pose and decision)...
+    verified = kissm.register(pair.source, pair.target, VOXEL, min_inliers=n + 1)
+    assert verified.valid and verified.refined and bits(verified.coarse_transform) == bits(coarse.transform)
+    assert bits(verified.transform) == bits(refined.transform)
+    # ...and the coarse decision stands when it does not, or when there are too few inliers for the refined rule.
+    strict = kissm.register(pair.source, pair.target, VOXEL, min_inliers=n + 1, min_inlier_coverage=1.0)
+    assert not strict.valid and strict.reason_code == _ffi.lib.KISSM_REASON_TOO_FEW_INLIERS and not strict.refined
+    assert_same_result(strict, coarse, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})
+    short = kissm.register(pair.source, pair.target, VOXEL, min_inliers=n + 1, refine_min_inliers=n + 1)
+    assert not short.valid and short.reason_code == _ffi.lib.KISSM_REASON_TOO_FEW_INLIERS and not short.refined
 
 
 def test_min_refine_condition_decides_with_refinement_and_from_a_prior(pair, coarse, refined) -> None:
