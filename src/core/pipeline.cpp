@@ -500,7 +500,8 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
                                        match_target = as_double(matched.target);
     const InlierEvidence inliers = final_inliers(match_source, match_target, solver, pose.solver, source, target, r);
 
-    // 5c. Ambiguity: the best competing pose's support (ambiguity.hpp).
+    // 5c. Ambiguity: the best competing pose's support (ambiguity.hpp), measured before the rules so that every
+    // result with a pose carries it; the rule that reads it comes last (below).
     const AmbiguityInput competition{&match_source,         &match_target,       &pruned.core,
                                      &pruned.measurements,  r.num_final_inliers, &source.voxels.points,
                                      &target.voxels.points, &source.normals,     params.voxel_size};
