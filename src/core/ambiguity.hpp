@@ -32,8 +32,10 @@ struct AmbiguityInput {
 
 struct Ambiguity {
     // The best distinct competitor's support over the winner's, in [0, 1] (1 also when it has more): its
-    // polished inliers over every match against the winner's, and from kDenseFrom on the smaller of that and
-    // its dense support (source voxels landing beside target voxels) against the winner's.
+    // polished inliers over every match, raised by 2 sqrt(n) + 1, against the winner's, and from kDenseFrom on the
+    // smaller of that and its dense support (source voxels landing beside target voxels) against the winner's. A
+    // candidate under a quarter of the winner's support within twice the bound is reported by that share,
+    // unpolished.
     double value = 0.0;
     int candidates = 0; // poses examined
 };
@@ -46,8 +48,9 @@ constexpr double kDistinctNoiseBounds = 8.0;
 constexpr double kDenseFrom = 0.5;
 
 // The competitors: the densest translations under the winner's rotation (a period along a repetitive scene),
-// and the rotation the core's measurements give without those the winner explains (a symmetry), with its densest
-// translations; each polished over every match like the winner.
+// the rotation the core's measurements give without those the winner explains, with its densest translations,
+// and the winner turned half a turn about each principal axis of the target's voxels (a symmetry), through their
+// centroid and with the densest translations; each polished over every match like the winner.
 Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, const Eigen::Matrix3d &R,
                             const Eigen::Vector3d &t, RunContext &ctx);
 
