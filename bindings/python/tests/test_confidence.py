@@ -68,7 +68,7 @@ def test_without_a_pose_it_is_zero() -> None:
     assert not result.has_pose and result.confidence == 0.0
 
 
-def test_a_competitor_as_good_makes_it_unlikely(pair) -> None:
+def test_the_confidence_reads_no_threshold(pair) -> None:
     # The committed pair itself under a bound that refuses its competitor: the confidence does not depend on the
     # bound, only on the numbers.
     base = kissm.register(pair.source, pair.target, VOXEL, num_threads=2)
