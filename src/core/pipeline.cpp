@@ -347,7 +347,7 @@ void refine_registration(const CloudFeatures &source, const CloudFeatures &targe
     r.refined = true;
     r.rotation = o.rotation;
     r.translation = o.translation + ot - o.rotation * os;
-    r.information = information_in_caller_frame(o, os, params.voxel_size);
+    r.information = information_in_caller_frame(o, os, calibrated_variance(o, params.voxel_size));
     r.overlap = o.overlap;
     r.refine_rmse = o.num_correspondences > 0 ? o.rmse : std::numeric_limits<double>::quiet_NaN();
     r.refine_iterations = o.iterations;

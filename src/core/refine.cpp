@@ -76,6 +76,21 @@ void add(Sums &acc, const Sums &p) {
     acc.wsum += p.wsum;
 }
 
+// The median of |r| over the terms at (R, t), r^2 = e^T M e (one pass and a selection on a copy: the order of the
+// terms is fixed, so the bits are).
+double median_distance(const UninitVector<Term> &terms, const Eigen::Matrix3d &R, const Eigen::Vector3d &t) {
+    if (terms.size() == 0) return 0.0;
+    std::vector<double> r(terms.size());
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+        const Term &term = terms[k];
+        const Eigen::Vector3d e = term.b - (R * term.a + t);
+        r[k] = std::sqrt(std::max(0.0, e.dot(unpack(term.m) * e)));
+    }
+    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    return *mid;
+}
+
 class Refiner {
 public:
     Refiner(const RefineCloud &source, const RefineCloud &target, const RefineIndex &index, const RefineParams &params,
@@ -266,6 +281,7 @@ private:
         const Sums s = sums(ts, R, t, true);
         out.weight_sum = s.wsum;
         out.rmse = s.wsum > 0.0 ? std::sqrt(s.cost / s.wsum) : 0.0;
+        out.residual_median = median_distance(ts, R, t);
         const Matrix6d H = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(s.H);
         Matrix6d Ad = Matrix6d::Zero();
         Ad.topLeftCorner<3, 3>() = R;
@@ -344,14 +360,21 @@ RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, c
     return refiner.run(R0, t0);
 }
 
-Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin,
-                                     double floor_length) {
+double posterior_variance(const RefineOutput &out, double floor_length) {
+    const double dof = out.weight_sum - 6.0;
+    const double variance = dof > 0.0 ? out.rmse * out.rmse * out.weight_sum / dof : 0.0;
+    return std::max(variance, 1e-6 * floor_length * floor_length);
+}
+
+double calibrated_variance(const RefineOutput &out, double floor_length) {
+    const double spread = 1.4826 * out.residual_median; // the standard deviation a normal law with this median has
+    return std::max(kResidualShare * spread * spread, 1e-6 * floor_length * floor_length);
+}
+
+Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin, double variance) {
     // xi_local = Ad_{Tr(-o)} xi_caller with Ad = [[I, 0], [[-o]x, I]].
     Matrix6d Ad = Matrix6d::Identity();
     Ad.bottomLeftCorner<3, 3>() = skew(-source_origin);
-    const double dof = out.weight_sum - 6.0;
-    double variance = dof > 0.0 ? out.rmse * out.rmse * out.weight_sum / dof : 0.0;
-    variance = std::max(variance, 1e-6 * floor_length * floor_length);
     Matrix6d info = Ad.transpose() * out.hessian * Ad / variance;
     return 0.5 * (info + info.transpose());
 }

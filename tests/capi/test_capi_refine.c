@@ -175,7 +175,7 @@ static double information_rotation_sigma(const double info[36]) {
 
 /* kissm_refine's rule, from the numbers it reports (docs/refinement.md): at least 6 correspondences and
  * overlap >= min_overlap, else LOW_OVERLAP; refine_condition >= min_refine_condition, else UNCONSTRAINED;
- * converged, else NOT_CONVERGED; refine_rmse <= max_refine_rmse_gain * voxel_size, else LOOSE_ALIGNMENT; 4 times
+ * converged, else NOT_CONVERGED; refine_rmse <= max_refine_rmse_gain * voxel_size, else LOOSE_ALIGNMENT; 2 times
  * the information's rotation sigma <= max_rotation_uncertainty, else UNCERTAIN_ROTATION; the config's values,
  * whatever the defaults are. */
 static void check_prior_rule(const char *label, const kissm_result *r, const kissm_config *c) {
@@ -189,7 +189,7 @@ static void check_prior_rule(const char *label, const kissm_result *r, const kis
     else if (!(r->refine_rmse <= c->max_refine_rmse_gain * c->voxel_size))
         expected = KISSM_REASON_LOOSE_ALIGNMENT;
     else if (!(c->allow_degenerate && r->degenerate) &&
-             !(4.0 * information_rotation_sigma(r->information) <= c->max_rotation_uncertainty))
+             !(2.0 * information_rotation_sigma(r->information) <= c->max_rotation_uncertainty))
         expected = KISSM_REASON_UNCERTAIN_ROTATION;
     CHECK_MSG(r->reason == expected && r->valid == (expected == KISSM_REASON_NONE),
               "%s: valid %d reason %d, the rule gives reason %d", label, (int)r->valid, (int)r->reason, (int)expected);
@@ -810,7 +810,7 @@ static void test_plane_and_pipe(void) {
     scn_cloud_free(&b);
 }
 
-/* The refined rotation rule: 4 times the rotation sigma the information states, against max_rotation_uncertainty.
+/* The refined rotation rule: 2 times the rotation sigma the information states, against max_rotation_uncertainty.
  * A bound 4 % above it keeps the pose valid, 4 % below refuses it (UNCERTAIN_ROTATION) with the same pose. */
 static void test_refined_rotation_rule(void) {
     const kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
@@ -827,13 +827,13 @@ static void test_refined_rotation_rule(void) {
     kissm_destroy(m);
     CHECK_MSG(base.valid == 1, "reason %d", (int)base.reason);
     sigma = information_rotation_sigma(base.information);
-    CHECK_MSG(sigma > 0.0 && 4.0 * sigma < c.max_rotation_uncertainty, "sigma %g", sigma);
+    CHECK_MSG(sigma > 0.0 && 2.0 * sigma < c.max_rotation_uncertainty, "sigma %g", sigma);
     for (k = 0; k < 2; ++k) {
-        c.max_rotation_uncertainty = (k == 0 ? 4.16 : 3.84) * sigma;
+        c.max_rotation_uncertainty = (k == 0 ? 2.08 : 1.92) * sigma;
         REQUIRE(kissm_create(&c, &m) == KISSM_OK);
         scn_result_poison(&r);
         CHECK_EQ_INT(kissm_refine(m, &s, &t, initial, &r), KISSM_OK);
-        check_prior_rule(k == 0 ? "rotation bound above 4 sigma" : "rotation bound below 4 sigma", &r, &c);
+        check_prior_rule(k == 0 ? "rotation bound above 2 sigma" : "rotation bound below 2 sigma", &r, &c);
         CHECK_EQ_INT(r.valid, k == 0);
         if (k == 1) CHECK_EQ_INT(r.reason, KISSM_REASON_UNCERTAIN_ROTATION);
         CHECK(memcmp(r.transform, base.transform, sizeof r.transform) == 0);

@@ -100,13 +100,13 @@ def test_max_rotation_uncertainty_decides_without_refinement(pair, coarse) -> No
     assert verified.valid and verified.refine_iterations > 0
     assert np.array_equal(verified.coarse_transform, coarse.transform)
     assert not np.array_equal(verified.transform, coarse.transform)
-    # With refinement it bounds 4 times the rotation sigma the information states, not the solver's uncertainty.
+    # With refinement it bounds 2 times the rotation sigma the information states, not the solver's uncertainty.
     refined = kissm.register(pair.source, pair.target, VOXEL, refine="gicp")
     sigma = information_rotation_sigma(refined.information)
-    assert 0.0 < 4.0 * sigma < measured
-    loose = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=4.04 * sigma)
+    assert 0.0 < 2.0 * sigma < measured
+    loose = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=2.02 * sigma)
     assert loose.valid and loose.rotation_uncertainty == measured
-    tight = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=3.96 * sigma)
+    tight = kissm.register(pair.source, pair.target, VOXEL, refine="gicp", max_rotation_uncertainty=1.98 * sigma)
     assert not tight.valid and tight.reason_code == _ffi.lib.KISSM_REASON_UNCERTAIN_ROTATION
     assert_same_result(tight, refined, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})  # pose kept
 
@@ -208,7 +208,7 @@ def test_refinement_from_a_prior_has_no_solver_measures(pair) -> None:
     assert_same_result(strict, result)
     # max_rotation_uncertainty bounds the refined rotation's stated sigma (4 of them) here too.
     sigma = information_rotation_sigma(result.information)
-    unsure = kissm.refine(pair.source, pair.target, pair.transform, VOXEL, max_rotation_uncertainty=3.96 * sigma)
+    unsure = kissm.refine(pair.source, pair.target, pair.transform, VOXEL, max_rotation_uncertainty=1.98 * sigma)
     assert not unsure.valid and unsure.reason_code == _ffi.lib.KISSM_REASON_UNCERTAIN_ROTATION
     assert_same_result(unsure, result, ignore=TIME_FIELDS | {"valid", "reason", "reason_code"})
     assert "rotation_uncertainty" not in repr(result)

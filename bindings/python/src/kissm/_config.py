@@ -209,7 +209,7 @@ class Config:
     max_rotation_uncertainty: float = _DEFAULTS["max_rotation_uncertainty"]
     """Without refinement, ``Result.valid`` needs ``Result.rotation_uncertainty`` <= this (radians; else reason "the
     inliers leave the rotation uncertain": too few inliers, or all on one compact object); in (0, 3.15]. With
-    refinement it bounds 4 times the rotation's 1-sigma that ``Result.information`` states (the square root of the
+    refinement it bounds 2 times the rotation's 1-sigma that ``Result.information`` states (the square root of the
     largest eigenvalue of its inverse's rotation block), with the same reason."""
     min_overlap: float = _DEFAULTS["min_overlap"]
     """With refinement, ``Result.valid`` needs ``Result.overlap`` >= this (else reason "the refined pose overlaps

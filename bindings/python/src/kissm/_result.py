@@ -172,8 +172,10 @@ class Result:
                                  gtsam.noiseModel.Gaussian.Information(result.information))
 
     (g2o orders translation first: swap the 3x3 blocks.) It is the Gauss-Newton information of the refinement's
-    cost scaled by its residual variance, counting correspondences as independent, so it is optimistic; a
-    small eigenvalue marks a direction the data leaves free (see ``refine_condition``)."""
+    point-to-plane cost over a calibrated variance (12 times the square of the residuals' robust spread, as
+    neighbouring voxels are not independent measurements), measured against the truth on simulated and real
+    scans (``docs/design/accuracy.md``): use it as it is. A small eigenvalue marks a direction the data leaves
+    free (see ``refine_condition``)."""
     overlap: float
     """Share of the source's voxels that the refined pose lays within refinement's correspondence distance of a
     target voxel, in [0, 1]; NaN when refinement did not run. ``Config.min_overlap`` is checked against it."""

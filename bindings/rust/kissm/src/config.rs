@@ -377,7 +377,7 @@ impl Config {
         refine_translation_epsilon_gain: f64,
         /// Without refinement, a valid pose needs
         /// [`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this
-        /// (radians); with refinement, 4 times the rotation sigma its information states.
+        /// (radians); with refinement, 2 times the rotation sigma its information states.
         max_rotation_uncertainty: f64,
         /// With refinement, a valid pose needs [`Refinement::overlap`](crate::Refinement::overlap) at least this.
         min_overlap: f64,
@@ -605,7 +605,7 @@ impl ConfigBuilder {
         /// Without refinement, a valid pose needs inliers that pin its rotation down to this many radians
         /// ([`Registration::rotation_uncertainty`](crate::Registration::rotation_uncertainty) at most this;
         /// above it: [`Reason::UncertainRotation`](crate::Reason::UncertainRotation)); in (0, 3.15] (default
-        /// 0.0349, 2 degrees). With refinement it bounds 4 times the rotation's 1-sigma that the refined
+        /// 0.0349, 2 degrees). With refinement it bounds 2 times the rotation's 1-sigma that the refined
         /// information states (the square root of the largest eigenvalue of its inverse's rotation block).
         max_rotation_uncertainty: f64,
         /// With refinement, a valid registration needs solver inliers spread over at least this much of the

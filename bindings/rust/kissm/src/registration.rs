@@ -176,10 +176,11 @@ pub struct Refinement {
     /// the source's frame (rotation first, then translation: the right perturbation GTSAM's `Pose3` uses;
     /// g2o orders translation first).
     ///
-    /// It is the Gauss-Newton information of the refinement's cost scaled by its residual variance, with
-    /// every correspondence counted as an independent measurement, so it is **optimistic**: the true
-    /// uncertainty is larger. Use it to weight pose-graph edges relative to each other, or to find a
-    /// direction the data leaves free (a small eigenvalue), not as a calibrated covariance.
+    /// It is the Gauss-Newton information of the refinement's point-to-plane cost over a calibrated
+    /// variance (12 times the square of the residuals' robust spread: neighbouring voxels are not
+    /// independent measurements), measured against the truth on simulated and real scans
+    /// (`docs/design/accuracy.md`): use it in a pose graph as it is. A small eigenvalue shows a direction the
+    /// data leaves free.
     pub information: [[f64; 6]; 6],
     /// Share of the source's voxels that the refined pose lays within the refinement's correspondence
     /// distance of a target voxel, in [0, 1].
