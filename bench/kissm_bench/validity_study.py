@@ -18,7 +18,8 @@ The families:
     yawed twice;
   * the committed synthetic pair (tests/data) with its target turned about z every 15 degrees and moved;
   * scenes with a second right-looking pose (kissm_bench.repetitive): a street of identical buildings, a pillar
-    grid, a symmetric table, each beside a control with the repetition broken;
+    grid, a symmetric table, each beside a control with the repetition broken; and 30 compound objects of spheres
+    and boxes (kissm_bench.raycast), whose parts match themselves turned;
   * with --priors, kissm.refine from the ground truth disturbed by 0-180 degrees and 0-30 voxels (the refine
     rule: overlap, conditioning, convergence, the residual).
 
@@ -122,6 +123,8 @@ class Tally:
             if "(repetitive)" in family
             else "their controls"
             if "(control)" in family
+            else "symmetric parts"
+            if "(symmetric parts)" in family
             else "real pairs"
         )
         for name, rule_mode, get in RULE_FIELDS:
@@ -143,7 +146,14 @@ class Tally:
             print("  " + line)
         print("\nwhat the rules read, runs with at least 10 inliers: range over right poses | over wrong poses")
         for name, _, _ in RULE_FIELDS:
-            for kind in ("real pairs", "synthetic pair", "unrelated scans", "repetitive scenes", "their controls"):
+            for kind in (
+                "real pairs",
+                "synthetic pair",
+                "unrelated scans",
+                "repetitive scenes",
+                "their controls",
+                "symmetric parts",
+            ):
                 right = self.values.get((name, kind, True), [])
                 wrong = self.values.get((name, kind, False), [])
                 print(f"  {name:28s} {kind:16s} {span(right)} | {span(wrong)}")

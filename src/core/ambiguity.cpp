@@ -4,6 +4,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <utility>
 
 KISSM_DETAIL_BEGIN
@@ -33,7 +35,8 @@ constexpr double kDominantPlaneCos = 0.94;
 struct Candidate {
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
-    bool polish = true; // polished over the matches; a geometric one is exact and judged where it is
+    bool polish = true;      // polished over the matches; a geometric one is exact and judged where it is
+    bool rival_only = false; // from the next core: a rival or nothing (its few matches make a noisy share)
 };
 
 // A cell's integer coordinates, clamped to 21 bits around the origin (a local frame spans far fewer cells).
@@ -130,6 +133,20 @@ public:
         return sample.empty() ? 0.0 : static_cast<double>(hit) / static_cast<double>(sample.size());
     }
 
+    // Whether at least `needed` of the sampled source voxels land beside a target voxel under (R, t); stops as soon
+    // as the answer is known (a pose that lands the source elsewhere is dismissed after a few hundred misses).
+    bool support_reaches(const std::vector<Vec3f> &source, const std::vector<std::uint32_t> &sample,
+                         const Eigen::Matrix3d &R, const Eigen::Vector3d &t, std::size_t needed) const {
+        std::size_t hit = 0, left = sample.size();
+        for (std::uint32_t k : sample) {
+            if (hit >= needed) return true;
+            if (hit + left < needed) return false;
+            --left;
+            if (beside(R * source[k].cast<double>() + t)) ++hit;
+        }
+        return hit >= needed;
+    }
+
 private:
     bool beside(const Eigen::Vector3d &p) const {
         const std::int64_t x = cell_of(p.x(), inv_), y = cell_of(p.y(), inv_), z = cell_of(p.z(), inv_);
@@ -200,6 +217,22 @@ Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, 
         }
     }
 
+    // The pose of the next core (pruning.hpp): the structure that agrees with itself once the winner's core is out.
+    // Where a symmetric part won (a sphere or a box matched onto itself turned, two alike parts swapped), the
+    // right pose's matches are there. Few and weaker, so it is judged as a rival only (below).
+    const std::vector<std::uint32_t> &second_core = *in.second_core;
+    if (second_core.size() >= 3 && in.second_measurements->size() >= 3) {
+        std::vector<Eigen::Vector3d> ca(second_core.size()), cb(second_core.size());
+        for (std::size_t k = 0; k < second_core.size(); ++k) ca[k] = a[second_core[k]], cb[k] = b[second_core[k]];
+        const PoseSolution next = solver.solve(ca, cb, *in.second_measurements, ctx);
+        if (next.solver.solved) {
+            const std::size_t first = candidates.size();
+            candidates.push_back({next.solver.rotation, next.solver.translation});
+            translation_peaks(in, next.solver.rotation, 2.0 * bound, kSecondRotationPeaks, candidates);
+            for (std::size_t i = first; i < candidates.size(); ++i) candidates[i].rival_only = true;
+        }
+    }
+
     // A symmetric scene's symmetry axes are principal axes of its points: the winner turned half a turn about
     // each principal axis of the target's voxels, through their centroid (a whole symmetric object: exactly its
     // symmetry), and with the densest translations for that rotation (a partial view, a scene).
@@ -237,12 +270,20 @@ Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, 
         return (n2 + 2.0 * std::sqrt(n2) + 1.0) / winner;
     };
     std::vector<std::pair<double, std::size_t>> dense_due; // (sparse share, candidate) for the dense check
+    std::vector<std::size_t> rivals;                       // the next core's distinct candidates
     std::vector<std::uint8_t> mask;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
         Candidate &c = candidates[i];
         // The winner found again (its own translation peak, a polish that returns to it) is no competitor; half
         // the distance before the polish, which moves a candidate by about a noise bound.
         if (!(moved(c) > 0.5 * distinct)) continue;
+        // The next core's poses are judged where they lie, by their dense support only (below).
+        if (c.rival_only) {
+            if (!(moved(c) > distinct)) continue;
+            ++out.candidates;
+            rivals.push_back(i);
+            continue;
+        }
         // A candidate with under a quarter of the winner's support within twice the bound is no competitor, and is
         // not worth its polish.
         const double rough = share(count_inliers(a, b, 2.0 * bound, c.R, c.t, mask));
@@ -261,14 +302,25 @@ Ambiguity measure_ambiguity(const AmbiguityInput &in, const PoseSolver &solver, 
             dense_due.emplace_back(sparse, i);
         }
     }
-    if (dense_due.empty()) return out;
+    if (dense_due.empty() && rivals.empty()) return out;
+    const Occupancy occupancy(*in.target_voxels, in.voxel_size);
+    const std::vector<std::uint32_t> sample = dense_sample(*in.source_voxels, *in.source_normals);
+    const double winner_dense = occupancy.support(*in.source_voxels, sample, R, t);
+    // A rival: the next core's pose laying clearly more of the source beside the target than the winner, however
+    // few matches it has. The winner then explains a part of the scene (a symmetric part matched onto itself) and
+    // the rest of the clouds disagrees with it.
+    const auto needed =
+        static_cast<std::size_t>(std::ceil(kRivalDense * winner_dense * static_cast<double>(sample.size()) - 1e-9));
+    for (std::size_t i : rivals) {
+        if (out.value >= 1.0) break;
+        if (needed <= sample.size() &&
+            occupancy.support_reaches(*in.source_voxels, sample, candidates[i].R, candidates[i].t, needed))
+            out.value = 1.0;
+    }
     // The dense check in order of sparse share: a candidate's value is at most its share, so once the shares left are
     // no more than the value found, none of them can raise it.
     std::stable_sort(dense_due.begin(), dense_due.end(),
                      [](const auto &x, const auto &y) { return x.first > y.first; });
-    const Occupancy occupancy(*in.target_voxels, in.voxel_size);
-    const std::vector<std::uint32_t> sample = dense_sample(*in.source_voxels, *in.source_normals);
-    const double winner_dense = occupancy.support(*in.source_voxels, sample, R, t);
     for (const auto &[sparse, i] : dense_due) {
         if (std::min(1.0, sparse) <= out.value) break;
         const double dense = occupancy.support(*in.source_voxels, sample, candidates[i].R, candidates[i].t);

@@ -5,12 +5,19 @@
 
 KISSM_DETAIL_BEGIN
 
-std::vector<std::uint32_t> core_numbers(const CsrGraph &g) {
+std::vector<std::uint32_t> core_numbers(const CsrGraph &g, const std::vector<std::uint8_t> *excluded) {
     const std::size_t n = g.num_vertices();
     std::vector<std::uint32_t> deg(n);
     std::uint32_t max_deg = 0;
     for (std::size_t v = 0; v < n; ++v) {
-        deg[v] = static_cast<std::uint32_t>(g.offsets[v + 1] - g.offsets[v]);
+        if (excluded) {
+            std::uint32_t d = 0;
+            if (!(*excluded)[v])
+                for (std::uint64_t k = g.offsets[v]; k < g.offsets[v + 1]; ++k) d += (*excluded)[g.adj[k]] == 0;
+            deg[v] = d;
+        } else {
+            deg[v] = static_cast<std::uint32_t>(g.offsets[v + 1] - g.offsets[v]);
+        }
         max_deg = std::max(max_deg, deg[v]);
     }
     // Bin sort of vertices by degree: bin_start[d] = first position of degree d in `order`.
@@ -29,6 +36,7 @@ std::vector<std::uint32_t> core_numbers(const CsrGraph &g) {
     // move to the front of their bin.
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t v = order[i];
+        if (excluded && (*excluded)[v]) continue; // not in the graph: it lowers no neighbour's degree
         for (std::uint64_t k = g.offsets[v]; k < g.offsets[v + 1]; ++k) {
             const std::uint32_t u = g.adj[k];
             if (deg[u] > deg[v]) {
@@ -49,8 +57,9 @@ std::vector<std::uint32_t> core_numbers(const CsrGraph &g) {
     return deg;
 }
 
-std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core) {
-    const std::vector<std::uint32_t> core = core_numbers(g);
+std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core,
+                                     const std::vector<std::uint8_t> *excluded) {
+    const std::vector<std::uint32_t> core = core_numbers(g, excluded);
     max_core = 0;
     for (std::uint32_t c : core) max_core = std::max(max_core, c);
     std::vector<std::uint32_t> out;

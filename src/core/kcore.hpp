@@ -10,10 +10,12 @@
 KISSM_DETAIL_BEGIN
 
 // Core number of every vertex.
-std::vector<std::uint32_t> core_numbers(const CsrGraph &g);
+// Vertices with excluded[v] != 0 (when given) are left out of the graph: core number 0, their edges ignored.
+std::vector<std::uint32_t> core_numbers(const CsrGraph &g, const std::vector<std::uint8_t> *excluded = nullptr);
 
 // Vertices whose core number is the maximum, ascending; `max_core` receives that maximum (0 for an
 // empty graph, in which case no vertex is returned).
-std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core);
+std::vector<std::uint32_t> max_kcore(const CsrGraph &g, std::uint32_t &max_core,
+                                     const std::vector<std::uint8_t> *excluded = nullptr);
 
 KISSM_DETAIL_END

@@ -502,9 +502,10 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
 
     // 5c. Ambiguity: the best competing pose's support (ambiguity.hpp), measured before the rules so that every
     // result with a pose carries it; the rule that reads it comes last (below).
-    const AmbiguityInput competition{&match_source,         &match_target,       &pruned.core,
-                                     &pruned.measurements,  r.num_final_inliers, &source.voxels.points,
-                                     &target.voxels.points, &source.normals,     params.voxel_size};
+    const AmbiguityInput competition{&match_source,        &match_target,         &pruned.core,
+                                     &pruned.measurements, &pruned.second_core,   &pruned.second_measurements,
+                                     r.num_final_inliers,  &source.voxels.points, &target.voxels.points,
+                                     &source.normals,      params.voxel_size};
     r.ambiguity = measure_ambiguity(competition, solver, pose.solver.rotation, pose.solver.translation, ctx).value;
 
     // 5b. Validity without refinement.

@@ -19,6 +19,10 @@ struct PrunedMatches {
     std::vector<std::uint32_t> core;     // indices of the kept correspondences, ascending
     std::uint32_t max_core_number = 0;   // the core's k
     std::vector<IndexPair> measurements; // core edges, renumbered to positions in `core`; at most about max
+    // The maximum k-core of the graph without the core's vertices: the next structure that agrees with itself
+    // (a symmetric part's twin, the right pose where a symmetry won), for the ambiguity stage.
+    std::vector<std::uint32_t> second_core;
+    std::vector<IndexPair> second_measurements;
 };
 
 // a[k] -> b[k] are the matched points; `noise_bound` the distance agreement of an edge.

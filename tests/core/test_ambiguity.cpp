@@ -98,8 +98,17 @@ Outcome measure(const Scene &s, int threads) {
     Normals normals; // no normals: every voxel is read
     normals.normal.assign(s.source_voxels.size(), Vec3f::Zero());
     normals.valid.assign(s.source_voxels.size(), 0);
-    const AmbiguityInput in{
-        &a, &b, &pruned.core, &pruned.measurements, inliers, &s.source_voxels, &s.target_voxels, &normals, kVoxel};
+    const AmbiguityInput in{&a,
+                            &b,
+                            &pruned.core,
+                            &pruned.measurements,
+                            &pruned.second_core,
+                            &pruned.second_measurements,
+                            inliers,
+                            &s.source_voxels,
+                            &s.target_voxels,
+                            &normals,
+                            kVoxel};
     return {sol.solver.rotation, sol.solver.translation,
             measure_ambiguity(in, solver, sol.solver.rotation, sol.solver.translation, ctx)};
 }

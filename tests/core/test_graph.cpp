@@ -40,8 +40,8 @@ static void test_core_numbers_hand_made() {
     CHECK((maxcore == std::vector<std::uint32_t>{0, 1, 2, 3, 4}));
 }
 
-static void test_core_of_two_cliques() {
-    // Two disjoint 4-cliques joined by one edge; plus a 6-clique elsewhere: max core is the 6-clique (k = 5).
+// Two disjoint 4-cliques {0..3}, {4..7} joined by the edge 3-4, and a 6-clique {8..13}.
+static std::vector<std::pair<int, int>> two_cliques_and_a_six_clique() {
     std::vector<std::pair<int, int>> e;
     auto clique = [&](int first, int size) {
         for (int i = first; i < first + size; ++i)
@@ -51,12 +51,50 @@ static void test_core_of_two_cliques() {
     clique(4, 4);
     e.emplace_back(3, 4);
     clique(8, 6);
+    return e;
+}
+
+static void test_core_of_two_cliques() {
+    // Two disjoint 4-cliques joined by one edge; plus a 6-clique elsewhere: max core is the 6-clique (k = 5).
+    const std::vector<std::pair<int, int>> e = two_cliques_and_a_six_clique();
     std::uint32_t k = 0;
     const auto maxcore = max_kcore(from_edges(14, e), k);
     CHECK_EQ_INT(k, 5);
     CHECK((maxcore == std::vector<std::uint32_t>{8, 9, 10, 11, 12, 13}));
     CHECK(max_kcore(from_edges(3, {}), k).empty());
     CHECK_EQ_INT(k, 0);
+}
+
+// Excluded vertices leave the graph: the core numbers equal those of the graph built without them (random graphs
+// against that brute force), and the two cliques' example gives the next core once the 6-clique is out.
+static void test_core_numbers_without_excluded_vertices() {
+    TestRng rng(23);
+    for (int trial = 0; trial < 20; ++trial) {
+        const std::size_t n = 60;
+        std::vector<std::pair<int, int>> e, kept;
+        std::vector<std::uint8_t> excluded(n, 0);
+        for (std::size_t v = 0; v < n; ++v) excluded[v] = rng.uniform(0, 1) < 0.3;
+        const double p = rng.uniform(0.05, 0.4);
+        for (int i = 0; i < static_cast<int>(n); ++i)
+            for (int j = i + 1; j < static_cast<int>(n); ++j)
+                if (rng.uniform(0, 1) < p) {
+                    e.emplace_back(i, j);
+                    if (!excluded[static_cast<std::size_t>(i)] && !excluded[static_cast<std::size_t>(j)])
+                        kept.emplace_back(i, j);
+                }
+        const std::vector<std::uint32_t> got = core_numbers(from_edges(n, e), &excluded);
+        std::vector<std::uint32_t> expect = core_numbers(from_edges(n, kept));
+        for (std::size_t v = 0; v < n; ++v)
+            if (excluded[v]) expect[v] = 0;
+        CHECK_MSG(got == expect, "trial %d: core numbers differ from the graph without the excluded vertices", trial);
+    }
+    const std::vector<std::pair<int, int>> e = two_cliques_and_a_six_clique();
+    std::vector<std::uint8_t> excluded(14, 0);
+    for (int v = 8; v < 14; ++v) excluded[static_cast<std::size_t>(v)] = 1;
+    std::uint32_t k = 0;
+    const auto next = max_kcore(from_edges(14, e), k, &excluded);
+    CHECK_EQ_INT(k, 3);
+    CHECK((next == std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
 }
 
 static void test_compat_graph_matches_definition() {
@@ -100,6 +138,7 @@ static void test_compat_graph_matches_definition() {
 int main() {
     RUN_TEST(test_core_numbers_hand_made);
     RUN_TEST(test_core_of_two_cliques);
+    RUN_TEST(test_core_numbers_without_excluded_vertices);
     RUN_TEST(test_compat_graph_matches_definition);
     return TEST_SUMMARY();
 }
