@@ -360,12 +360,6 @@ RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, c
     return refiner.run(R0, t0);
 }
 
-double posterior_variance(const RefineOutput &out, double floor_length) {
-    const double dof = out.weight_sum - 6.0;
-    const double variance = dof > 0.0 ? out.rmse * out.rmse * out.weight_sum / dof : 0.0;
-    return std::max(variance, 1e-6 * floor_length * floor_length);
-}
-
 double calibrated_variance(const RefineOutput &out, double floor_length) {
     const double spread = 1.4826 * out.residual_median; // the standard deviation a normal law with this median has
     return std::max(kResidualShare * spread * spread, 1e-6 * floor_length * floor_length);

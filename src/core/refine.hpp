@@ -86,26 +86,21 @@ RefineOutput refine_pose(const RefineCloud &source, const RefineCloud &target, c
                          const Eigen::Matrix3d &R0, const Eigen::Vector3d &t0, const RefineParams &params,
                          RunContext &ctx);
 
-// The residual variance of the Gauss-Newton a posteriori estimate, sum w r^2 / (sum w - 6), floored at
-// (1e-3 * floor_length)^2: the validity rule's rotation uncertainty reads the information under this variance
-// (its thresholds were measured with it: docs/design/accuracy.md).
-double posterior_variance(const RefineOutput &out, double floor_length);
-
 // The variance the reported information is scaled by, so that its NEES means what it says (docs/design/accuracy.md,
 // "A calibrated information matrix"): kResidualShare times the square of the residuals' robust spread,
-// 1.4826 * median |r|, with posterior_variance's floor. The median reads the bulk of the surfaces, which is what
-// moves the pose; the RMS is ruled by a few voxels on edges and corners whose pulls cancel, and reads a clean
-// room 4x too uncertain while it reads KITTI's keyframes 3x too confident. kResidualShare counts each residual as
-// a twelfth of an independent measurement (neighbouring voxels share their points' neighbourhoods, planes and the
-// scanner's systematic error); measured feasible from 7.2 to 18.8 on every real and simulated set, and taken
-// near the middle of that range.
+// 1.4826 * median |r|, floored at (1e-3 * floor_length)^2 (a perfect fit is not infinitely certain). The median reads
+// the bulk of the surfaces, which is what moves the pose; the RMS is ruled by a few voxels on edges and corners whose
+// pulls cancel, and reads a clean room 4x too uncertain while it reads KITTI's keyframes 3x too confident.
+// kResidualShare counts each residual as a twelfth of an independent measurement (neighbouring voxels share their
+// points' neighbourhoods, planes and the scanner's systematic error); measured feasible from 7.2 to 18.8 on every real
+// and simulated set, and taken near the middle of that range.
 constexpr double kResidualShare = 12.0;
 double calibrated_variance(const RefineOutput &out, double floor_length);
 
 // The information matrix of the pose in the callers' frames, rotation then translation, for the right
 // perturbation T exp(xi) (GTSAM's Pose3 convention; g2o's with its blocks swapped): the Gauss-Newton
 // information of refine_pose moved from the source's local frame (origin `source_origin` in the caller's
-// frame) and divided by `variance` (posterior_variance or calibrated_variance).
+// frame) and divided by `variance` (calibrated_variance).
 Matrix6d information_in_caller_frame(const RefineOutput &out, const Eigen::Vector3d &source_origin, double variance);
 
 // The directions the data leave free (degeneracy): out.directions whose ratio is below min_condition, weakest
