@@ -164,7 +164,9 @@ KISSM_API const char *kissm_last_error_message(void);
 #define KISSM_REASON_UNCONSTRAINED 8
 /** Without refinement: the inliers pin the rotation down no better than kissm_config.max_rotation_uncertainty
  * (kissm_result.rotation_uncertainty): too few of them, or all on one compact object; and the pose, refined with
- * GICP to verify it, did not pass the refined rule either (when it does, the refined pose is returned valid).
+ * GICP to verify it, did not pass the refined rule either (when it does, the refined pose is returned valid). A
+ * valid coarse pose with 2 times kissm_result.rotation_uncertainty above the bound is refined the same way to
+ * confirm it, and returned refined when the refined rule accepts it (unchanged otherwise).
  * With refinement: 2 times the rotation's 1-sigma that kissm_result.information states (the square root of the
  * largest eigenvalue of the inverse's rotation block) exceeds kissm_config.max_rotation_uncertainty. */
 #define KISSM_REASON_UNCERTAIN_ROTATION 9

@@ -532,14 +532,17 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
         if (tilted && r.reason == Reason::None) r.reason = Reason::Tilted;
     } else if ((r.reason == Reason::UncertainRotation ||
                 (r.reason == Reason::TooFewInliers &&
-                 r.num_final_inliers >= static_cast<std::uint64_t>(params.refine_min_inliers))) &&
+                 r.num_final_inliers >= static_cast<std::uint64_t>(params.refine_min_inliers)) ||
+                (r.reason == Reason::None &&
+                 !(kCoarseConfirmSigmas * inliers.rotation_uncertainty <= params.max_rotation_uncertainty))) &&
                !tilted) {
         // Few inliers on a compact object leave the rotation uncertain by a few degrees whether the pose is right
         // or wrong, and a pair of low overlap (keyframes far apart, the ground suppressed) keeps fewer inliers than
         // min_inliers with the right pose, so the coarse evidence cannot decide; the dense alignment can. Refined with
         // GICP, the pose is reported when the refined rule accepts it (the rule of refine_mode GICP, inliers
         // included: refine_min_inliers), and the coarse result stands otherwise (docs/design/accuracy.md,
-        // "Verifying uncertain rotations").
+        // "Verifying uncertain rotations"). A valid pose whose rotation is known to the bound at one sigma but not
+        // at two is refined the same way: reported refined when the refined rule accepts it, else as it was.
         Params verify = params;
         verify.refine_mode = RefineMode::Gicp;
         Registration refined = r;

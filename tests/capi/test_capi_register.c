@@ -68,20 +68,33 @@ static void check_consistency(const char *label, const kissm_result *r) {
     CHECK(r->inlier_extent[0] >= r->inlier_extent[1] && r->inlier_extent[1] >= r->inlier_extent[2] &&
           r->inlier_extent[2] > 0.0);
     /* a scene with one answer, registered right: no competitor near the pose's support, and a confidence that a
-     * loop closure could take (the documented threshold 0.95); the confidence is the documented function of the
-     * inliers (confidence.hpp: refinement did not run, and an ambiguity below 0.6 leaves it whole) */
+     * loop closure could take (the documented threshold 0.95) */
     CHECK_MSG(r->ambiguity >= 0.0 && r->ambiguity < 0.5, "%s: ambiguity %g", label, r->ambiguity);
     CHECK_MSG(r->confidence >= 0.95 && r->confidence <= 1.0, "%s: confidence %g", label, r->confidence);
-    CHECK_NEAR(r->confidence, 1.0 / (1.0 + exp(-(-33.3372 + 13.297 * log1p((double)r->num_final_inliers)))), 1e-12);
-    /* times: non-negative, total = sum of the stages */
+    /* times: non-negative, total = sum of the stages (refinement's is 0 when it did not run) */
     CHECK(r->time_voxelize_ms >= 0.0 && r->time_features_ms >= 0.0 && r->time_matching_ms >= 0.0 &&
-          r->time_pruning_ms >= 0.0 && r->time_solver_ms >= 0.0);
-    sum = r->time_voxelize_ms + r->time_features_ms + r->time_matching_ms + r->time_pruning_ms + r->time_solver_ms;
+          r->time_pruning_ms >= 0.0 && r->time_solver_ms >= 0.0 && r->time_refine_ms >= 0.0);
+    sum = r->time_voxelize_ms + r->time_features_ms + r->time_matching_ms + r->time_pruning_ms + r->time_solver_ms +
+          r->time_refine_ms;
     CHECK_MSG(fabs(r->time_total_ms - sum) <= 1e-9 * (sum > 1.0 ? sum : 1.0), "%s: total %.17g sum %.17g", label,
               r->time_total_ms, sum);
     CHECK(r->time_total_ms > 0.0);
-    /* no refinement asked for (refine_mode defaults to NONE): the solver's pose is the pose, and the
-     * refinement's fields say "not run" */
+    /* No refinement asked for (refine_mode defaults to NONE). A pose whose rotation the inliers pin down to
+     * max_rotation_uncertainty at one sigma but not at two is confirmed by refinement (validity.hpp,
+     * kCoarseConfirmSigmas): reported refined, with the refined confidence (confidence.hpp) */
+    if (!(2.0 * r->rotation_uncertainty <= scn_config(VOXEL).max_rotation_uncertainty)) {
+        CHECK_MSG(r->refine_iterations > 0 && r->time_refine_ms > 0.0, "%s: not confirmed by refinement", label);
+        for (i = 0; i < 36; ++i) CHECK(isfinite(r->information[i]));
+        CHECK(r->overlap > 0.0 && r->refine_rmse > 0.0 && r->num_refine_correspondences > 0);
+        CHECK_NEAR(r->confidence,
+                   1.0 /
+                       (1.0 + exp(-(-25.8635 + 7.31525 * log1p((double)r->num_final_inliers) + 12.0396 * r->overlap))),
+                   1e-12);
+        return;
+    }
+    /* otherwise the solver's pose is the pose, the refinement's fields say "not run", and the confidence is the
+     * documented function of the inliers (an ambiguity below 0.6 leaves it whole) */
+    CHECK_NEAR(r->confidence, 1.0 / (1.0 + exp(-(-33.3372 + 13.297 * log1p((double)r->num_final_inliers)))), 1e-12);
     CHECK(memcmp(r->coarse_transform, r->transform, sizeof(r->transform)) == 0);
     for (i = 0; i < 36; ++i) CHECK(isnan(r->information[i]));
     CHECK(isnan(r->overlap) && isnan(r->refine_rmse) && isnan(r->refine_condition));

@@ -208,7 +208,8 @@ class Config:
     """Convergence threshold on a refinement step's translation = gain * voxel_size; in [0, 1]."""
     max_rotation_uncertainty: float = _DEFAULTS["max_rotation_uncertainty"]
     """Without refinement, ``Result.valid`` needs ``Result.rotation_uncertainty`` <= this (radians; else reason "the
-    inliers leave the rotation uncertain": too few inliers, or all on one compact object); in (0, 3.15]. With
+    inliers leave the rotation uncertain": too few inliers, or all on one compact object; a valid pose with twice
+    it above this is refined to confirm it, and returned refined when the refined rule accepts it); in (0, 3.15]. With
     refinement it bounds 2 times the rotation's 1-sigma that ``Result.information`` states (the square root of the
     largest eigenvalue of its inverse's rotation block), with the same reason."""
     min_overlap: float = _DEFAULTS["min_overlap"]
