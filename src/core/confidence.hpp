@@ -23,10 +23,11 @@ struct ConfidenceInput {
 // 0 without a pose; else a logistic model of the evidence, by kind of result, rising with the evidence for the pose
 // (docs/design/accuracy.md, "Confidence"; fitted by bench/confidence_fit.py):
 //   registered:             ln(1 + inliers);
-//   registered and refined: ln(1 + inliers) and the overlap;
+//   registered and refined: ln(1 + inliers), the overlap and refine_rmse in voxels, at most 10 (falling);
 //   refined from a prior:   the overlap, and refine_rmse in voxels, at most 10 (falling);
 // and for a registration times a factor falling with the ambiguity: 1 up to 0.6, from 0.8 on the share of right
-// poses among the study's runs that ambiguous (a pick among equals), linear between. NaN inputs count as the worst.
+// poses among the study's runs of its kind that ambiguous (a pick among equals), linear between. NaN inputs count
+// as the worst.
 // It reads none of the caller's thresholds (a degeneracy flag, set by min_refine_condition, would make it one), and
 // not the inliers' coverage (its fitted weight came out negative: repetitive scenes' wrong poses cover as much).
 double pose_confidence(const ConfidenceInput &in);

@@ -19,11 +19,11 @@ ConfidenceInput registered(std::uint64_t inliers, double ambiguity) {
     return in;
 }
 
-ConfidenceInput refined(std::uint64_t inliers, double ambiguity, double overlap) {
+ConfidenceInput refined(std::uint64_t inliers, double ambiguity, double overlap, double rmse_voxels = 0.3) {
     ConfidenceInput in = registered(inliers, ambiguity);
     in.refined = true;
     in.overlap = overlap;
-    in.refine_rmse_voxels = 0.3;
+    in.refine_rmse_voxels = rmse_voxels;
     return in;
 }
 
@@ -54,6 +54,7 @@ void test_monotone_in_every_input() {
             CHECK(pose_confidence(refined(n, a, 0.6)) >= r);
             CHECK(pose_confidence(refined(n + 1, a, 0.5)) >= r && pose_confidence(refined(n, a + 0.01, 0.5)) <= r);
             CHECK(pose_confidence(refined(n, a, nan)) <= r);
+            CHECK(pose_confidence(refined(n, a, 0.5, 0.4)) <= r && pose_confidence(refined(n, a, 0.5, nan)) <= r);
         }
     }
     for (double o = 0.0; o <= 1.0; o += 0.05)
@@ -72,6 +73,8 @@ void test_ends() {
     CHECK(pose_confidence(registered(200, 1.0)) < 0.2);                                    // a pick among equals
     CHECK(pose_confidence(registered(200, 0.5)) == pose_confidence(registered(200, 0.0))); // no competitor counts
     CHECK(pose_confidence(registered(0, 0.0)) < 0.05);
+    CHECK(pose_confidence(refined(200, 1.0, 0.9)) < 0.3);      // a pick among equals, refined
+    CHECK(pose_confidence(refined(20, 0.0, 0.9, 3.0)) < 0.01); // 20 inliers, the clouds three voxels apart
     CHECK(pose_confidence(from_prior(0.9, 0.3)) > 0.99);
     CHECK(pose_confidence(from_prior(0.9, 1.0)) < 0.01);
 }

@@ -27,13 +27,17 @@ def documented(r: kissm.Result, voxel: float) -> float:
     if not r.has_pose:
         return 0.0
     if r.num_initial_correspondences == 0:  # refined from a prior
-        return logistic(1.2961 + 15.6752 * r.overlap - 24.1407 * min(r.refine_rmse / voxel, 10.0))
+        return logistic(1.30069 + 15.6705 * r.overlap - 24.144 * min(r.refine_rmse / voxel, 10.0))
     inliers = math.log1p(r.num_final_inliers)
-    evidence = logistic(
-        -25.8635 + 7.31525 * inliers + 12.0396 * r.overlap if r.refined else -33.3372 + 13.297 * inliers
-    )
+    if r.refined:
+        rmse = min(r.refine_rmse / voxel, 10.0)
+        evidence = logistic(-5.656 + 1.76257 * inliers + 8.02222 * r.overlap - 4.89573 * rmse)
+        pick = 30.0 / 110.0
+    else:
+        evidence = logistic(-3.93451 + 2.65136 * inliers)
+        pick = 4.0 / 46.0
     competed = min(max((r.ambiguity - 0.6) / 0.2, 0.0), 1.0)
-    return evidence * (1.0 - (1.0 - 18.0 / 108.0) * competed)
+    return evidence * (1.0 - (1.0 - pick) * competed)
 
 
 @pytest.mark.parametrize("refine", ["none", "gicp", "point_to_plane"])

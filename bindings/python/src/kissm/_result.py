@@ -249,10 +249,10 @@ class Result:
     confidence: float
     """The probability that the pose is within the success tolerance (5 degrees, and 2 m for LiDAR, 0.3 m indoors, 1
     cm on small objects: about 4 to 7 voxels at the suggested sizes), in [0, 1]: a fixed logistic function of
-    ``num_final_inliers`` (with refinement also of ``overlap``) times a factor falling with ``ambiguity`` (1 up to
-    0.6, a pick among equals from 0.8), and after :meth:`Matcher.refine` of ``overlap`` and ``refine_rmse``
-    (docs/design/accuracy.md, "Confidence"). 0 without a pose. It reads no ``Config`` threshold. Runs its fit did
-    not see held no wrong pose at 0.95 or above: a threshold for loop closures."""
+    ``num_final_inliers`` (with refinement also of ``overlap`` and ``refine_rmse``) times a factor falling with
+    ``ambiguity`` (1 up to 0.6, a pick among equals from 0.8), and after :meth:`Matcher.refine` of ``overlap`` and
+    ``refine_rmse`` (docs/design/accuracy.md, "Confidence"). 0 without a pose. It reads no ``Config`` threshold. Runs
+    its fit did not see held no wrong pose at 0.95 or above: a threshold for loop closures."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:

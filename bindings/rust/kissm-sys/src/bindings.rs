@@ -617,10 +617,10 @@ pub struct kissm_result {
     pub ambiguity: f64,
     /** The probability that the pose is within the success tolerance (5 degrees, and 2 m for LiDAR, 0.3 m indoors,
  1 cm on small objects: about 4 to 7 voxels at the suggested sizes), in [0, 1]: a fixed logistic function of the
- final inliers (with refinement also of the overlap), times a factor falling with the ambiguity (1 up to 0.6, a
- pick among equals from 0.8); from kissm_refine() of the overlap and refine_rmse (docs/design/accuracy.md,
- "Confidence"). 0 without a pose; NaN when the call failed. It reads none of kissm_config's thresholds. Runs its
- fit did not see held no wrong pose at 0.95 or above.*/
+ final inliers (with refinement also of the overlap and refine_rmse), times a factor falling with the ambiguity
+ (1 up to 0.6, a pick among equals from 0.8); from kissm_refine() of the overlap and refine_rmse
+ (docs/design/accuracy.md, "Confidence"). 0 without a pose; NaN when the call failed. It reads none of
+ kissm_config's thresholds. Runs its fit did not see held no wrong pose at 0.95 or above.*/
     pub confidence: f64,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]

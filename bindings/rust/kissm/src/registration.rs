@@ -312,8 +312,8 @@ pub struct Registration {
     pub ambiguity: f64,
     /// The probability that the pose is within the success tolerance (5 degrees, and 2 m for LiDAR, 0.3 m
     /// indoors, 1 cm on small objects: about 4 to 7 voxels at the suggested sizes), in [0, 1]: a fixed logistic
-    /// function of the final inliers (with refinement also of the overlap) times a factor falling with the
-    /// [`ambiguity`](Registration::ambiguity) (1 up to 0.6, a pick among equals from 0.8), and after
+    /// function of the final inliers (with refinement also of the overlap and the residual) times a factor falling
+    /// with the [`ambiguity`](Registration::ambiguity) (1 up to 0.6, a pick among equals from 0.8), and after
     /// [`Matcher::refine`](crate::Matcher::refine) of the overlap and the residual. 0 without a pose. It reads no
     /// [`Config`](crate::Config) threshold. Runs its fit did not see held no wrong pose at 0.95 or above.
     pub confidence: f64,
