@@ -1007,6 +1007,139 @@ KISSM_API int32_t kissm_cloud_points(const kissm_cloud *cloud, kissm_points *out
 /** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
+/* Pose graphs: many relative poses made into one consistent set of absolute ones                     */
+/* ------------------------------------------------------------------------------------------------ */
+
+/**
+ * @defgroup pose_graph Pose graphs
+ * @brief Nodes are scans, edges relative poses between them (a registration's transform and information, an
+ *        odometry step, a user's constraint). kissm_pose_graph_optimize() finds every node's pose in the frame of
+ *        an anchor node: Levenberg-Marquardt on SE(3) over the sparse normal equations, and for the edges added as
+ *        robust, graduated non-convexity with a truncated least-squares cost, so that a wrong loop closure ends
+ *        rejected instead of bending the map (docs/pose-graph.md).
+ *
+ * An edge from source s to target t with transform T and information I states T = inv(X_t) X_s for the nodes'
+ * world-from-node poses X, with the error xi = Log(inv(T) inv(X_t) X_s), rotation first, in the source's frame
+ * (kissm_result's convention, and GTSAM's BetweenFactor<Pose3>(t, s, T) with I as its information). A
+ * graph is used by one thread at a time (kissm_pose_graph_cancel() excepted).
+ * @{
+ */
+
+/** @brief A pose graph: nodes, edges, and the solution of its last optimisation. */
+typedef struct kissm_pose_graph kissm_pose_graph;
+
+/** Most nodes a graph may have. */
+#define KISSM_POSE_GRAPH_MAX_NODES 100000000
+/** The default bound on a robust edge's squared error xi^T I xi at which truncated least squares rejects it: the
+ * 99.9% quantile of a chi-square with 6 degrees of freedom (a right edge with a calibrated information exceeds it
+ * once in a thousand). */
+#define KISSM_POSE_GRAPH_DEFAULT_BOUND 22.4577
+
+/**
+ * @brief Creates a graph of @p num_nodes nodes, numbered 0 to num_nodes - 1, with no edges.
+ * @param[in] num_nodes 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ * @param[out] out_graph The graph, for kissm_pose_graph_destroy().
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p out_graph is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p num_nodes is 0 or above #KISSM_POSE_GRAPH_MAX_NODES.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_pose_graph_create(uint64_t num_nodes, kissm_pose_graph **out_graph);
+/**
+ * @brief Destroys a graph.
+ * @param[in] graph A graph from kissm_pose_graph_create(); NULL is fine.
+ */
+KISSM_API void kissm_pose_graph_destroy(kissm_pose_graph *graph);
+/**
+ * @brief Number of nodes of a graph.
+ * @param[in] graph The graph.
+ * @return The number of nodes; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_pose_graph_num_nodes(const kissm_pose_graph *graph);
+/**
+ * @brief Number of edges of a graph.
+ * @param[in] graph The graph.
+ * @return The number of edges; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_pose_graph_num_edges(const kissm_pose_graph *graph);
+/**
+ * @brief Adds an edge; edges are numbered in the order they are added, from 0. Forgets the last solution.
+ * @param[in,out] graph The graph.
+ * @param[in] source The source node (the node whose points the transform moves).
+ * @param[in] target The target node, not @p source.
+ * @param[in] transform T_target_source, 4x4 row-major, rigid (as kissm_register() checks an initial transform).
+ * @param[in] information 6x6 row-major, symmetric (to 1e-9 of its largest entry) and positive definite: the
+ *            inverse covariance of xi, rotation first, in the source's frame (kissm_result.information as it is).
+ * @param[in] robust 1: a candidate that may be wrong (a loop closure), which the optimisation may reject; 0: a
+ *            trusted edge (odometry, a user's constraint), always kept.
+ * @param[out] out_edge The edge's number; may be NULL.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p graph, @p transform or @p information is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT A node is not in the graph, @p source equals @p target, @p transform is not
+ *         finite and rigid, @p information is not finite, symmetric and positive definite, or @p robust is not 0
+ *         or 1.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ * On an error the graph is unchanged.
+ */
+KISSM_API int32_t kissm_pose_graph_add_edge(kissm_pose_graph *graph, uint64_t source, uint64_t target,
+                                            const double transform[16], const double information[36], int32_t robust,
+                                            uint64_t *out_edge);
+/**
+ * @brief Optimises the graph: the nodes joined to @p anchor get poses in its frame (its own is the identity).
+ *
+ * The start is a spanning tree from the anchor (trusted edges first, then the most informative), then robust
+ * edges are weighed by graduated non-convexity: an edge whose squared error xi^T I xi ends above @p bound is
+ * rejected. A node is placed when accepted edges join it to the anchor; the others get NaN poses, never a
+ * guess. The same graph gives the same bits on every run.
+ * @param[in,out] graph The graph.
+ * @param[in] anchor The node whose frame the poses are in.
+ * @param[in] bound The squared error at which a robust edge is rejected, finite and above 0
+ *            (#KISSM_POSE_GRAPH_DEFAULT_BOUND for calibrated informations).
+ * @retval KISSM_OK Done; read the solution with kissm_pose_graph_poses() and kissm_pose_graph_edges().
+ * @retval KISSM_ERR_NULL_ARGUMENT @p graph is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p anchor is not in the graph, or @p bound is not a finite number above 0
+ *         (the graph keeps its last solution).
+ * @retval KISSM_ERR_CANCELLED kissm_pose_graph_cancel() stopped it (the graph keeps no solution).
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_pose_graph_optimize(kissm_pose_graph *graph, uint64_t anchor, double bound);
+/**
+ * @brief Stops a running kissm_pose_graph_optimize() of @p graph; callable from any thread. A request made
+ *        before the call starts is dropped.
+ * @param[in] graph The graph; NULL is fine.
+ */
+KISSM_API void kissm_pose_graph_cancel(kissm_pose_graph *graph);
+/**
+ * @brief The nodes of the last solution. Any output may be NULL.
+ * @param[in] graph The graph.
+ * @param[out] out_poses num_nodes 4x4 row-major world-from-node poses (world = the anchor's frame), packed; NaN
+ *             for a node that is not placed.
+ * @param[out] out_placed num_nodes flags: 1 when accepted edges join the node to the anchor.
+ * @param[out] out_components num_nodes labels: the smallest node joined to it by accepted and trusted edges (the
+ *             anchor's component is the placed nodes).
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p graph is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT The graph has no solution (never optimised, changed since, or cancelled).
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_pose_graph_poses(const kissm_pose_graph *graph, double *out_poses, uint8_t *out_placed,
+                                         uint64_t *out_components);
+/**
+ * @brief The edges of the last solution, in the order they were added. Any output may be NULL.
+ * @param[in] graph The graph.
+ * @param[out] out_accepted num_edges flags: 1 for a trusted edge and an accepted robust one, 0 for a rejected one
+ *             and for an edge outside the anchor's component.
+ * @param[out] out_residuals num_edges squared errors xi^T I xi at the solution; NaN where a node is not placed.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p graph is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT The graph has no solution (never optimised, changed since, or cancelled).
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_pose_graph_edges(const kissm_pose_graph *graph, uint8_t *out_accepted, double *out_residuals);
+
+/** @} */
+
+/* ------------------------------------------------------------------------------------------------ */
 /* ABI self-check for bindings                                                                      */
 /* ------------------------------------------------------------------------------------------------ */
 

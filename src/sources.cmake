@@ -29,6 +29,10 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/confidence.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/features_codec.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/se3.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_tree.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_lm.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph.cpp
 )
 # The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).
 set(KISSM_CAPI_SOURCES
@@ -41,4 +45,5 @@ set(KISSM_CAPI_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/capi/ground.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/files.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/pose_graph.cpp
 )

@@ -203,7 +203,40 @@ def pipeline() -> None:
     write("stateful", "refine_features_and_points", bytes([gicp, 0x20, 0xC5]) + three + refine_ops)
 
 
+def information(kind: int, scales: Sequence[tuple[int, int]], at: int = 0) -> bytes:
+    """The fuzz_pose_graph.cpp information encoding: kind byte (0 diagonal, 1 coupled, 2-6 refused), six (mantissa,
+    exponent) byte pairs giving (1 + m / 64) 2^(e - 10), the byte choosing the entry a refused kind spoils."""
+    return bytes([kind]) + b"".join(bytes([m, e]) for m, e in scales) + bytes([at])
+
+
+def pose_graph() -> None:
+    """A square of four nodes: trusted odometry around it, two robust diagonals (one right, one far off), optimised
+    from two anchors; then refused edges and bounds; and a graph of two parts."""
+    step = (0.0, 0.0, math.pi / 2)
+    odo = encode_transform(1, step, (4.0, 0.0, 0.0))
+    sharp = information(0, [(0, 24)] * 3 + [(0, 16)] * 3)
+    ops = b""
+    for s, t in ((1, 0), (2, 1), (3, 2)):
+        ops += bytes([0x00, s, t]) + odo + sharp + bytes([1])  # robust byte 1 - 1 = 0: trusted
+    ops += bytes([0x01, 2, 0]) + encode_transform(1, (0.0, 0.0, math.pi), (0.0, 8.0, 0.0)) + sharp + bytes([2])
+    ops += bytes([0x01, 3, 1]) + encode_transform(1, (0.3, 0.2, 1.0), (9.0, -3.0, 1.0)) + sharp + bytes([2])
+    ops += bytes([0x02, 0, 0, 0x02, 2, 1, 0x03, 0x02, 3, 3])
+    write("pose_graph", "square_two_diagonals", bytes([4]) + ops)
+    refused = bytes([0x00, 0, 0]) + odo + sharp + bytes([1])  # self edge
+    refused += bytes([0x00, 1, 9]) + odo + sharp + bytes([1])  # target out of range
+    refused += bytes([0x00, 1, 0]) + encode_transform(9, step, (4.0, 0.0, 0.0), at=2) + sharp + bytes([1])
+    refused += bytes([0x00, 1, 0]) + odo + information(4, [(0, 20)] * 6, at=3) + bytes([1])
+    refused += bytes([0x00, 1, 0]) + odo + information(6, [(0, 20)] * 6) + bytes([2])
+    refused += bytes([0x00, 1, 0]) + odo + sharp + bytes([3])  # robust 2
+    refused += bytes([0x02, 0, 4, 0x02, 0, 6, 0x02, 3, 0])
+    write("pose_graph", "refused_calls", bytes([4]) + refused)
+    parts = bytes([0x00, 1, 0]) + odo + sharp + bytes([2]) + bytes([0x00, 3, 2]) + odo + information(1, [(9, 22)] * 6)
+    parts += bytes([1, 0x02, 1, 0, 0x02, 2, 0])
+    write("pose_graph", "two_parts", bytes([5]) + parts)
+
+
 if __name__ == "__main__":
     readers()
     pipeline()
+    pose_graph()
     print(f"wrote {sum(1 for _ in OUT.rglob('*') if _.is_file())} seed files under {OUT}")

@@ -8,6 +8,7 @@
 #include "capi/conversions.hpp"
 #include "core/params.hpp"
 #include "core/pipeline.hpp"
+#include "core/pose_graph.hpp"
 #include "core/run_context.hpp"
 #include "kissm.h"
 
@@ -30,4 +31,12 @@ struct kissm_features {
 
 struct kissm_cloud {
     std::vector<double> xyz;
+};
+
+struct kissm_pose_graph {
+    std::size_t num_nodes = 0;
+    std::vector<kissm::detail::PoseGraphEdge> edges;
+    bool solved = false; // solution is that of the current edges
+    kissm::detail::PoseGraphSolution solution;
+    std::atomic<int> cancel_requested{0}; // set by kissm_pose_graph_cancel from any thread
 };

@@ -19,6 +19,7 @@ static kissm_matcher *g_m = NULL; /* default config, voxel GOOD_VOXEL */
 /* A sentinel that no allocation returns: outputs must keep it when a call fails. */
 #define SENTINEL_MATCHER ((kissm_matcher *)(uintptr_t)0x1234)
 #define SENTINEL_FEATURES ((kissm_features *)(uintptr_t)0x5678)
+#define SENTINEL_POSE_GRAPH ((kissm_pose_graph *)(uintptr_t)0x9abc)
 
 static int msg_has(const char *word) {
     const char *msg = kissm_last_error_message();
@@ -1390,6 +1391,114 @@ static void test_refine_degenerate(void) {
     scn_cloud_free(&b);
 }
 
+/* ---------------------------------------------------------------------------------------------- */
+/* Pose graphs                                                                                      */
+/* ---------------------------------------------------------------------------------------------- */
+
+/* An edge that add_edge refuses: the status, the argument its message names, and the graph unchanged (no edge,
+ * out_edge untouched, the last solution kept). */
+static void check_refused_edge(kissm_pose_graph *g, uint64_t s, uint64_t t, const double T[16], const double I[36],
+                               int32_t robust, int32_t status, const char *word, const char *what) {
+    uint64_t id = 777, before = kissm_pose_graph_num_edges(g);
+    uint8_t placed = 9;
+    int32_t st = kissm_pose_graph_add_edge(g, s, t, T, I, robust, &id);
+    CHECK_MSG(st == status, "%s: status %d (%s)", what, (int)st, kissm_last_error_message());
+    CHECK_MSG(msg_has(word), "%s", what);
+    CHECK_MSG(id == 777 && kissm_pose_graph_num_edges(g) == before, "%s: the graph changed", what);
+    CHECK_MSG(kissm_pose_graph_poses(g, NULL, &placed, NULL) == KISSM_OK && placed == 1, "%s: solution lost", what);
+}
+
+static void test_pose_graph_bad_input(void) {
+    kissm_pose_graph *g = SENTINEL_POSE_GRAPH;
+    double T[16], I[36], bad[36], out_pose[16 * 3];
+    uint8_t flags[3];
+    size_t i;
+    int k;
+    for (k = 0; k < 16; ++k) T[k] = (k % 5 == 0) ? 1.0 : 0.0;
+    T[3] = 1.0;
+    memset(I, 0, sizeof(I));
+    for (k = 0; k < 6; ++k) I[7 * k] = 100.0;
+    I[1] = I[6] = 10.0; /* symmetric, positive definite */
+
+    /* create */
+    CHECK_EQ_INT(kissm_pose_graph_create(3, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("out_graph"));
+    CHECK_EQ_INT(kissm_pose_graph_create(0, &g), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("num_nodes") && g == SENTINEL_POSE_GRAPH);
+    CHECK_EQ_INT(kissm_pose_graph_create((uint64_t)KISSM_POSE_GRAPH_MAX_NODES + 1u, &g), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("num_nodes") && g == SENTINEL_POSE_GRAPH);
+    REQUIRE(kissm_pose_graph_create(3, &g) == KISSM_OK);
+
+    /* NULLs */
+    CHECK_EQ_INT(kissm_pose_graph_add_edge(NULL, 0, 1, T, I, 1, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("graph"));
+    CHECK_EQ_INT(kissm_pose_graph_optimize(NULL, 0, 1.0), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_pose_graph_poses(NULL, out_pose, flags, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_pose_graph_edges(NULL, flags, NULL), KISSM_ERR_NULL_ARGUMENT);
+    /* no solution yet: outputs untouched */
+    memset(flags, 9, sizeof(flags));
+    CHECK_EQ_INT(kissm_pose_graph_poses(g, NULL, flags, NULL), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("solution") && flags[0] == 9);
+    CHECK_EQ_INT(kissm_pose_graph_edges(g, flags, NULL), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(flags[0] == 9);
+
+    /* one good edge and a solution, which every refused edge below must leave in place */
+    REQUIRE(kissm_pose_graph_add_edge(g, 1, 0, T, I, 1, NULL) == KISSM_OK);
+    REQUIRE(kissm_pose_graph_optimize(g, 0, KISSM_POSE_GRAPH_DEFAULT_BOUND) == KISSM_OK);
+    check_refused_edge(g, 0, 1, NULL, I, 1, KISSM_ERR_NULL_ARGUMENT, "transform", "NULL transform");
+    check_refused_edge(g, 0, 1, T, NULL, 1, KISSM_ERR_NULL_ARGUMENT, "information", "NULL information");
+    check_refused_edge(g, 3, 1, T, I, 1, KISSM_ERR_INVALID_ARGUMENT, "source", "source out of range");
+    check_refused_edge(g, 0, UINT64_MAX, T, I, 1, KISSM_ERR_INVALID_ARGUMENT, "target", "target out of range");
+    check_refused_edge(g, 2, 2, T, I, 1, KISSM_ERR_INVALID_ARGUMENT, "source and target", "self edge");
+    check_refused_edge(g, 0, 1, T, I, 2, KISSM_ERR_INVALID_ARGUMENT, "robust", "robust 2");
+    check_refused_edge(g, 0, 1, T, I, -1, KISSM_ERR_INVALID_ARGUMENT, "robust", "robust -1");
+    for (i = 0; i < sizeof(k_bad_transforms) / sizeof(k_bad_transforms[0]); ++i) {
+        double m[16];
+        make_bad_transform(&k_bad_transforms[i], m);
+        check_refused_edge(g, 0, 1, m, I, 1, KISSM_ERR_INVALID_ARGUMENT, "transform", k_bad_transforms[i].name);
+    }
+    for (k = 0; k < 16; ++k) {
+        double m[16];
+        memcpy(m, T, sizeof(m));
+        m[k] = NAN;
+        check_refused_edge(g, 0, 1, m, I, 1, KISSM_ERR_INVALID_ARGUMENT, "transform", "NaN in transform");
+    }
+    for (k = 0; k < 36; ++k) {
+        memcpy(bad, I, sizeof(bad));
+        bad[k] = k % 2 ? INFINITY : NAN;
+        check_refused_edge(g, 0, 1, T, bad, 1, KISSM_ERR_INVALID_ARGUMENT, "information", "non-finite information");
+    }
+    memcpy(bad, I, sizeof(bad));
+    bad[1] = 10.001; /* I[0][1] != I[1][0] */
+    check_refused_edge(g, 0, 1, T, bad, 1, KISSM_ERR_INVALID_ARGUMENT, "symmetric", "asymmetric information");
+    memcpy(bad, I, sizeof(bad));
+    bad[35] = 0.0; /* singular */
+    check_refused_edge(g, 0, 1, T, bad, 1, KISSM_ERR_INVALID_ARGUMENT, "positive definite", "singular information");
+    memcpy(bad, I, sizeof(bad));
+    bad[14] = -1.0; /* a negative eigenvalue */
+    check_refused_edge(g, 0, 1, T, bad, 1, KISSM_ERR_INVALID_ARGUMENT, "positive definite", "indefinite information");
+    memset(bad, 0, sizeof(bad));
+    check_refused_edge(g, 0, 1, T, bad, 1, KISSM_ERR_INVALID_ARGUMENT, "positive definite", "zero information");
+    /* symmetric to within 1e-9 of the largest entry: accepted */
+    memcpy(bad, I, sizeof(bad));
+    bad[1] += 1e-8;
+    CHECK_EQ_INT(kissm_pose_graph_add_edge(g, 2, 1, T, bad, 1, NULL), KISSM_OK);
+
+    /* optimize: the anchor and the bound; a refused call keeps the last solution */
+    REQUIRE(kissm_pose_graph_optimize(g, 0, KISSM_POSE_GRAPH_DEFAULT_BOUND) == KISSM_OK);
+    CHECK_EQ_INT(kissm_pose_graph_optimize(g, 3, 1.0), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("anchor"));
+    CHECK_EQ_INT(kissm_pose_graph_optimize(g, 0, 0.0), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("bound"));
+    CHECK_EQ_INT(kissm_pose_graph_optimize(g, 0, -1.0), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_pose_graph_optimize(g, 0, NAN), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_pose_graph_optimize(g, 0, INFINITY), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("bound"));
+    CHECK_EQ_INT(kissm_pose_graph_poses(g, out_pose, flags, NULL), KISSM_OK);
+    CHECK(flags[0] == 1 && flags[1] == 1 && flags[2] == 1);
+    kissm_pose_graph_destroy(g);
+}
+
 int main(void) {
     scn_make_pair(&g_pair, 7, 6.0, 0.01);
     {
@@ -1411,6 +1520,7 @@ int main(void) {
     RUN_TEST(test_refine_bad_initial_transform);
     RUN_TEST(test_refine_struct_sizes_and_mismatch);
     RUN_TEST(test_refine_degenerate);
+    RUN_TEST(test_pose_graph_bad_input);
     kissm_destroy(g_m);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();

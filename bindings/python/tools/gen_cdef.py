@@ -11,7 +11,8 @@ header cannot be fed to it as it is. This script turns the header into such a cd
 - ``#define NAME <integer expression>`` becomes ``#define NAME <integer literal>`` (the expression is
   evaluated over integer literals and previously defined integer macros), the one form of macro that an
   ABI-mode cdef can hold;
-- ``#define NAME "text"`` (string macros) are listed in a comment, since a cdef cannot hold them;
+- ``#define NAME "text"`` (string macros) and ``#define NAME 1.5`` (floating-point macros) are listed in a
+  comment, since a cdef cannot hold them;
 - other object-like macros (``KISSM_API``: attributes, ``__declspec``) are decorations: their name is
   removed wherever it appears in a declaration;
 - ``#include``, include guards and everything else of the preprocessor are dropped;
@@ -54,6 +55,8 @@ BANNER = (
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _DIRECTIVE = re.compile(r"^\s*#\s*([A-Za-z_]+)\b(.*)$")
 _DEFINE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(\(?)(.*)$")
+#: A floating-point literal (a decimal point or an exponent), which a cdef cannot hold.
+_FLOAT = re.compile(r"^[-+]?(\d+\.\d*|\.\d+|\d+(?=[eE]))([eE][-+]?\d+)?[fFlL]?$")
 
 
 class CdefError(Exception):
@@ -213,7 +216,7 @@ def generate(header_text: str) -> str:
             name, paren, value = dm.group(1), dm.group(2), dm.group(3).strip()
             if paren:
                 raise CdefError(f"function-like macro {name} cannot be expressed in a cdef")
-            if value.startswith('"'):
+            if value.startswith('"') or _FLOAT.match(value):
                 string_macros.append((name, value))
             elif value == "":
                 decorations.add(name)  # include guards and empty decorations
@@ -256,7 +259,10 @@ def generate(header_text: str) -> str:
     strings = "".join(f" *   {name} {value}\n" for name, value in string_macros)
     header = BANNER
     if strings:
-        header += "/* String macros (a cdef cannot hold them; their runtime twins are functions):\n" + strings + " */\n"
+        header += (
+            "/* String and floating-point macros (a cdef cannot hold them; kissm_version_string() gives the string, "
+            "the bindings spell out the numbers):\n" + strings + " */\n"
+        )
     return header + "\n" + "\n".join(out_lines) + "\n"
 
 

@@ -18,6 +18,10 @@ A thin Python layer over the kissm C library (loaded through cffi in ABI mode)::
     tracked = kissm.refine(source_xyz, target_xyz, prior_4x4, voxel_size=0.5)        # from a known pose
     refined.information  # 6x6, rotation then translation: GTSAM's Pose3 convention
 
+    with kissm.PoseGraph(num_scans) as graph:  # many relative poses made into one consistent set
+        graph.add_edge(1, 0, refined.transform, refined.information, robust=True)  # scan 1 in scan 0's frame
+        solution = graph.optimize(anchor=0)  # .poses (N, 4, 4) in scan 0's frame, .accepted per edge
+
 Results are bitwise identical to the C library's (and the ``kissm`` CLI's) on the same input, whatever
 ``num_threads``. The library never prints; neither does this package.
 """
@@ -49,6 +53,7 @@ from ._errors import (
 )
 from ._matcher import Features, Matcher
 from ._points import as_point_array
+from ._pose_graph import PoseGraph, PoseGraphSolution
 from ._read import read_points
 from ._result import Result
 
@@ -170,6 +175,8 @@ __all__ = [
     "OutOfMemoryError",
     "ParseError",
     "PointsLike",
+    "PoseGraph",
+    "PoseGraphSolution",
     "RefineMode",
     "Result",
     "StructSizeError",

@@ -72,6 +72,8 @@ pub const KISSM_FORMAT_KITTI_BIN: i32 = 3;
 pub const KISSM_FORMAT_NPY: i32 = 4;
 pub const KISSM_FORMAT_XYZ: i32 = 5;
 pub const KISSM_FORMAT_BIN_XYZ: i32 = 6;
+pub const KISSM_POSE_GRAPH_MAX_NODES: i32 = 100000000;
+pub const KISSM_POSE_GRAPH_DEFAULT_BOUND: f64 = 22.4577;
 pub const KISSM_STRUCT_CONFIG: i32 = 1;
 pub const KISSM_STRUCT_POINTS: i32 = 2;
 pub const KISSM_STRUCT_RESULT: i32 = 3;
@@ -1135,6 +1137,134 @@ extern "C" {
     pub fn kissm_cloud_points(
         cloud: *const kissm_cloud,
         out_points: *mut kissm_points,
+    ) -> i32;
+}
+/// @brief A pose graph: nodes, edges, and the solution of its last optimisation.
+#[repr(C)]
+#[derive(Debug)]
+pub struct kissm_pose_graph {
+    _unused: [u8; 0],
+}
+extern "C" {
+    /** @brief Creates a graph of @p num_nodes nodes, numbered 0 to num_nodes - 1, with no edges.
+ @param[in] num_nodes 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ @param[out] out_graph The graph, for kissm_pose_graph_destroy().
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p out_graph is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p num_nodes is 0 or above #KISSM_POSE_GRAPH_MAX_NODES.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_pose_graph_create(
+        num_nodes: u64,
+        out_graph: *mut *mut kissm_pose_graph,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Destroys a graph.
+ @param[in] graph A graph from kissm_pose_graph_create(); NULL is fine.*/
+    pub fn kissm_pose_graph_destroy(graph: *mut kissm_pose_graph);
+}
+extern "C" {
+    /** @brief Number of nodes of a graph.
+ @param[in] graph The graph.
+ @return The number of nodes; 0 for NULL.*/
+    pub fn kissm_pose_graph_num_nodes(graph: *const kissm_pose_graph) -> u64;
+}
+extern "C" {
+    /** @brief Number of edges of a graph.
+ @param[in] graph The graph.
+ @return The number of edges; 0 for NULL.*/
+    pub fn kissm_pose_graph_num_edges(graph: *const kissm_pose_graph) -> u64;
+}
+extern "C" {
+    /** @brief Adds an edge; edges are numbered in the order they are added, from 0. Forgets the last solution.
+ @param[in,out] graph The graph.
+ @param[in] source The source node (the node whose points the transform moves).
+ @param[in] target The target node, not @p source.
+ @param[in] transform T_target_source, 4x4 row-major, rigid (as kissm_register() checks an initial transform).
+ @param[in] information 6x6 row-major, symmetric (to 1e-9 of its largest entry) and positive definite: the
+            inverse covariance of xi, rotation first, in the source's frame (kissm_result.information as it is).
+ @param[in] robust 1: a candidate that may be wrong (a loop closure), which the optimisation may reject; 0: a
+            trusted edge (odometry, a user's constraint), always kept.
+ @param[out] out_edge The edge's number; may be NULL.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p graph, @p transform or @p information is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT A node is not in the graph, @p source equals @p target, @p transform is not
+         finite and rigid, @p information is not finite, symmetric and positive definite, or @p robust is not 0
+         or 1.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ On an error the graph is unchanged.*/
+    pub fn kissm_pose_graph_add_edge(
+        graph: *mut kissm_pose_graph,
+        source: u64,
+        target: u64,
+        transform: *const f64,
+        information: *const f64,
+        robust: i32,
+        out_edge: *mut u64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Optimises the graph: the nodes joined to @p anchor get poses in its frame (its own is the identity).
+
+ The start is a spanning tree from the anchor (trusted edges first, then the most informative), then robust
+ edges are weighed by graduated non-convexity: an edge whose squared error xi^T I xi ends above @p bound is
+ rejected. A node is placed when accepted edges join it to the anchor; the others get NaN poses, never a
+ guess. The same graph gives the same bits on every run.
+ @param[in,out] graph The graph.
+ @param[in] anchor The node whose frame the poses are in.
+ @param[in] bound The squared error at which a robust edge is rejected, finite and above 0
+            (#KISSM_POSE_GRAPH_DEFAULT_BOUND for calibrated informations).
+ @retval KISSM_OK Done; read the solution with kissm_pose_graph_poses() and kissm_pose_graph_edges().
+ @retval KISSM_ERR_NULL_ARGUMENT @p graph is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p anchor is not in the graph, or @p bound is not a finite number above 0
+         (the graph keeps its last solution).
+ @retval KISSM_ERR_CANCELLED kissm_pose_graph_cancel() stopped it (the graph keeps no solution).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_pose_graph_optimize(
+        graph: *mut kissm_pose_graph,
+        anchor: u64,
+        bound: f64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Stops a running kissm_pose_graph_optimize() of @p graph; callable from any thread. A request made
+        before the call starts is dropped.
+ @param[in] graph The graph; NULL is fine.*/
+    pub fn kissm_pose_graph_cancel(graph: *mut kissm_pose_graph);
+}
+extern "C" {
+    /** @brief The nodes of the last solution. Any output may be NULL.
+ @param[in] graph The graph.
+ @param[out] out_poses num_nodes 4x4 row-major world-from-node poses (world = the anchor's frame), packed; NaN
+             for a node that is not placed.
+ @param[out] out_placed num_nodes flags: 1 when accepted edges join the node to the anchor.
+ @param[out] out_components num_nodes labels: the smallest node joined to it by accepted and trusted edges (the
+             anchor's component is the placed nodes).
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p graph is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT The graph has no solution (never optimised, changed since, or cancelled).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_pose_graph_poses(
+        graph: *const kissm_pose_graph,
+        out_poses: *mut f64,
+        out_placed: *mut u8,
+        out_components: *mut u64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief The edges of the last solution, in the order they were added. Any output may be NULL.
+ @param[in] graph The graph.
+ @param[out] out_accepted num_edges flags: 1 for a trusted edge and an accepted robust one, 0 for a rejected one
+             and for an edge outside the anchor's component.
+ @param[out] out_residuals num_edges squared errors xi^T I xi at the solution; NaN where a node is not placed.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p graph is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT The graph has no solution (never optimised, changed since, or cancelled).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_pose_graph_edges(
+        graph: *const kissm_pose_graph,
+        out_accepted: *mut u8,
+        out_residuals: *mut f64,
     ) -> i32;
 }
 extern "C" {

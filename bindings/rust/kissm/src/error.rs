@@ -47,7 +47,8 @@ pub enum ErrorKind {
     StructSize,
     /// `KISSM_ERR_OUT_OF_MEMORY`: an allocation failed; nothing was changed.
     OutOfMemory,
-    /// `KISSM_ERR_CANCELLED`: [`CancelHandle::cancel`](crate::CancelHandle::cancel) stopped the call.
+    /// `KISSM_ERR_CANCELLED`: [`CancelHandle::cancel`](crate::CancelHandle::cancel) (or
+    /// [`PoseGraphCancelHandle::cancel`](crate::PoseGraphCancelHandle::cancel)) stopped the call.
     Cancelled,
     /// `KISSM_ERR_FEATURES_MISMATCH`: features computed under a different configuration.
     FeaturesMismatch,

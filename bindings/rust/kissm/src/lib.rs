@@ -81,6 +81,8 @@
 //!   [`Registration::valid`] is `false` and [`Registration::reason`] says why.
 //! - **Threads**: a [`Matcher`] is `Send` (one thread at a time); [`Features`] are `Send + Sync` and can be
 //!   shared by matchers on several threads; a [`CancelHandle`] stops a running call from any thread.
+//! - **Pose graphs**: a [`PoseGraph`] joins many relative poses (registrations, odometry) into one consistent
+//!   set of absolute poses, and rejects the wrong loop closures among its robust edges.
 //! - **Portable features**: [`Features::to_bytes`] and [`Features::from_bytes`] move described clouds
 //!   between processes and machines; registration from loaded features is bitwise the original's.
 //! - Nothing here panics, and no Rust code is ever called back from C.
@@ -128,6 +130,41 @@
 //! # assert!(moved < 0.01, "refining the refined pose moved it by {moved}");
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! # Pose graphs
+//!
+//! A [`PoseGraph`] turns many relative poses (registrations, odometry, loop closures) into one consistent
+//! set of absolute poses in the frame of an anchor node. An edge from `source` to `target` holds the
+//! transform that maps the source's points into the target's frame (a [`Registration::transform`]) and
+//! the 6 x 6 information of its error ([`Refinement::information`]); robust edges (loop closures) may be
+//! rejected by the optimisation, trusted ones (odometry) never are. This example is the pose graph
+//! example of the crate's README (`tests/readme.rs`).
+//!
+//! ```
+//! use kissm::PoseGraph;
+//!
+//! // Four scans around a 1 m square: each is 1 m ahead of the last and turned left by 90 degrees.
+//! let step = [[0.0, -1.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+//! let identity = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+//! let mut information = [[0.0; 6]; 6];                        // rotation then translation, as reg.refinement's
+//! (0..6).for_each(|i| information[i][i] = 1e4);
+//!
+//! let mut graph = PoseGraph::new(4)?;
+//! for i in 0..3 {
+//!     graph.add_edge(i + 1, i, &step, &information, false)?; // odometry, trusted: maps scan i + 1 into scan i
+//! }
+//! graph.add_edge(0, 3, &step, &information, true)?;          // a right loop closure
+//! graph.add_edge(2, 0, &identity, &information, true)?;      // a wrong one
+//! let solution = graph.optimize(0, PoseGraph::DEFAULT_BOUND)?; // Err(kissm::Error) on bad input
+//! assert_eq!(solution.accepted, [true, true, true, true, false]);
+//! println!("{:?}", solution.poses[2]);                        // [[f64; 4]; 4] in scan 0's frame
+//! # // Checks: scan 2 is at (1, 1, 0), turned by 180 degrees.
+//! # let truth = [[-1.0, 0.0, 0.0, 1.0], [0.0, -1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+//! # let error = solution.poses[2].iter().flatten().zip(truth.iter().flatten()).map(|(a, b)| (a - b).abs());
+//! # assert!(error.fold(0.0, f64::max) < 1e-9, "{:?}", solution.poses[2]);
+//! # assert!(solution.placed.iter().all(|&p| p));
+//! # Ok::<(), kissm::Error>(())
+//! ```
 #![deny(missing_docs)]
 #![warn(unsafe_op_in_unsafe_fn)]
 
@@ -137,6 +174,7 @@ mod config;
 mod error;
 mod matcher;
 mod points;
+mod pose_graph;
 mod registration;
 
 use std::mem;
@@ -151,6 +189,7 @@ pub use config::{Config, ConfigBuilder, NonFinitePolicy, Preset, RefineMode, Sup
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher};
 pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};
+pub use pose_graph::{PoseGraph, PoseGraphCancelHandle, PoseGraphSolution};
 pub use registration::{Counts, Reason, Refinement, Registration, Timings};
 
 /// Fewest points a cloud may have; smaller clouds fail with [`ErrorKind::TooFewPoints`].

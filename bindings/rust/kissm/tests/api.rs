@@ -6,7 +6,7 @@ mod common;
 
 use std::io::Write as _;
 
-use common::{moved, scene, Pose};
+use common::{assert_send, assert_sync, moved, scene, NotSync, Pose};
 use kissm::{
     AsPoints, CancelHandle, Cloud, Config, Error, ErrorKind, Features, Format, Matcher, NonFinitePolicy, PointsView,
     Preset, Reason, RefineMode, Refinement, Registration, Suppression, Viewpoint,
@@ -1013,16 +1013,7 @@ fn read_points_formats_and_errors() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-// Compile-time thread-safety contract.
-fn assert_send<T: Send>() {}
-fn assert_sync<T: Sync>() {}
-
-/// Resolves only when `T` is not `Sync` (otherwise the call below is ambiguous and fails to compile).
-trait NotSync<A> {
-    fn check() {}
-}
-impl<T: ?Sized> NotSync<()> for T {}
-impl<T: ?Sized + Sync> NotSync<u8> for T {}
+// Compile-time thread-safety contract: common::{assert_send, assert_sync, NotSync}.
 
 #[test]
 fn thread_safety_contract() {

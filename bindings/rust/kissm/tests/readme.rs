@@ -4,8 +4,9 @@
 //! crate's README.md, of the repository's README.md (its "Rust" section) and of bindings/rust/README.md,
 //! so that a change to any README that the doc test does not carry fails here. Likewise the refinement
 //! example (the doc test under "# Refinement") and the "## Refinement" blocks of this crate's README.md
-//! and of bindings/rust/README.md. The repository's files are only absent outside a source checkout (a
-//! packaged crate); those comparisons alone are skipped then.
+//! and of bindings/rust/README.md, and the pose graph example (the doc test under "# Pose graphs") and the
+//! "## Pose graphs" block of this crate's README.md. The repository's files are only absent outside a
+//! source checkout (a packaged crate); those comparisons alone are skipped then.
 
 mod common;
 
@@ -77,6 +78,9 @@ fn crate_readme_example_is_the_doc_test() {
     let refine = section_doc_test_lines("# Refinement");
     assert!(refine.iter().any(|l| l.contains(".refine(")), "the refinement doc test: {refine:?}");
     assert_same(&refine, &readme_lines(&readme, "## Refinement"), "kissm/README.md's refinement example");
+    let pose_graph = section_doc_test_lines("# Pose graphs");
+    assert!(pose_graph.iter().any(|l| l.contains(".optimize(")), "the pose graph doc test: {pose_graph:?}");
+    assert_same(&pose_graph, &readme_lines(&readme, "## Pose graphs"), "kissm/README.md's pose graph example");
 }
 
 /// The repository's root, or `None` outside a source checkout (a packaged crate, which has no

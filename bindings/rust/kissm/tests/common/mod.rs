@@ -593,3 +593,16 @@ pub fn run_cli_json(cli: &std::path::Path, args: &[&std::ffi::OsStr]) -> Json {
     );
     Json::parse(&String::from_utf8_lossy(&out.stdout)).expect("the tool's --json output parses")
 }
+
+/// Compiles only when `T` is `Send`.
+pub fn assert_send<T: Send>() {}
+/// Compiles only when `T` is `Sync`.
+pub fn assert_sync<T: Sync>() {}
+
+/// `<T as NotSync<_>>::check()` resolves only when `T` is not `Sync` (otherwise the call is ambiguous and fails
+/// to compile).
+pub trait NotSync<A> {
+    fn check() {}
+}
+impl<T: ?Sized> NotSync<()> for T {}
+impl<T: ?Sized + Sync> NotSync<u8> for T {}
