@@ -152,8 +152,9 @@ def refine(
         return matcher.refine(source, target, initial)
 
 
-# The batch API (kissm.batch), a submodule that needs everything above; importing it imports no Dask or Ray.
-from . import batch  # noqa: E402
+# The batch API (kissm.batch), a submodule that needs everything above; importing it imports no Dask or Ray; and
+# multiway registration (kissm.multiway.align), the batch API and the pose graph together.
+from . import batch, multiway  # noqa: E402
 
 __all__ = [
     "FORMATS",
@@ -189,6 +190,7 @@ __all__ = [
     "__version__",
     "as_point_array",
     "batch",
+    "multiway",
     "ground_mask",
     "library_path",
     "read_points",

@@ -1,0 +1,288 @@
+# SPDX-License-Identifier: MIT
+"""Multiway registration: many clouds into one frame with no initial guess (docs/pose-graph.md, "Multiway").
+
+    alignment = kissm.multiway.align(scans, voxel_size=0.004)   # every pair registered, then a pose graph
+    alignment.poses        # (N, 4, 4) world <- scan, world = the first scan's frame; NaN where not placed
+    alignment.placed       # (N,) bool
+    alignment.merged(scans, voxel_size=0.002)                  # one cloud in the first scan's frame
+    alignment.write_g2o("graph.g2o"); alignment.write_tum("poses.txt"); alignment.write_kitti("poses.kitti")
+
+The pairs are registered by :func:`kissm.batch.register_many` (so every executor works and gives the same bits),
+each valid registration becomes a robust edge of a :class:`kissm.PoseGraph` with its transform and calibrated
+information, and the graph's optimisation places every scan that accepted edges join to the first one. A scan
+that cannot be placed is reported as such (NaN pose), never given a guess.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Hashable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from . import batch
+from ._config import RefineMode
+from ._errors import InvalidArgumentError
+from ._pose_graph import PoseGraph
+from ._read import read_points
+from ._result import Result
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Edge:
+    """One valid registration between two scans, as the pose graph judged it."""
+
+    source: int
+    """The source scan's position in :attr:`Alignment.keys`."""
+    target: int
+    """The target scan's position."""
+    transform: np.ndarray
+    """(4, 4) ``T_target_source``: the registration's pose."""
+    information: np.ndarray
+    """(6, 6) its information (rotation first, source frame)."""
+    accepted: bool
+    """Whether the optimisation kept it (False: it disagrees with the rest, or a scan of it is not placed)."""
+    residual: float
+    """Its squared error ``xi^T I xi`` at the solution; NaN where a scan of it is not placed."""
+    result: Result
+    """The registration itself."""
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Alignment:
+    """What :func:`align` found: a pose per scan in the first scan's frame."""
+
+    keys: list[Hashable]
+    """The scans' keys, in order (a sequence's positions, or a mapping's keys); the first is the anchor."""
+    poses: np.ndarray
+    """(N, 4, 4) world <- scan (world = the first scan's frame); NaN for a scan that is not placed."""
+    placed: np.ndarray
+    """(N,) bool: accepted edges join the scan to the first one."""
+    components: np.ndarray
+    """(N,) int64: per scan, the smallest scan position joined to it by accepted edges."""
+    edges: list[Edge]
+    """The valid registrations, in the order their pairs were given."""
+    registrations: int
+    """How many pairs were registered (valid or not)."""
+
+    def merged(self, clouds: Sequence[Any] | Mapping[Hashable, Any], voxel_size: float | None = None) -> np.ndarray:
+        """The placed scans' points in the first scan's frame, as one (M, 3) float64 array; with ``voxel_size``,
+        the centroid of each occupied voxel of that size instead. ``clouds`` as given to :func:`align` (arrays or
+        paths)."""
+        by_key = _as_mapping(clouds)
+        parts = []
+        for position, key in enumerate(self.keys):
+            if not self.placed[position]:
+                continue
+            points = _points(by_key[key], key)
+            pose = self.poses[position]
+            parts.append(points @ pose[:3, :3].T + pose[:3, 3])
+        merged = np.concatenate(parts) if parts else np.zeros((0, 3))
+        if voxel_size is None:
+            return merged
+        if not (voxel_size > 0 and math.isfinite(voxel_size)):
+            raise InvalidArgumentError(f"merged: voxel_size is {voxel_size}; a finite number above 0")
+        cells = np.floor(merged / voxel_size).astype(np.int64)
+        _, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
+        inverse = inverse.reshape(-1)
+        sums = np.zeros((len(counts), 3))
+        np.add.at(sums, inverse, merged)
+        centroids: np.ndarray = sums / counts[:, None]
+        return centroids
+
+    def write_tum(self, path: str | os.PathLike[str], timestamps: Sequence[float] | None = None) -> None:
+        """The placed scans' poses in the TUM format: ``timestamp tx ty tz qx qy qz qw`` per line (the scan's
+        position as its timestamp unless ``timestamps`` gives one per scan); scans not placed are left out."""
+        if timestamps is not None and len(timestamps) != len(self.keys):
+            raise InvalidArgumentError(f"write_tum: {len(timestamps)} timestamps for {len(self.keys)} scans")
+        lines = []
+        for position, pose in enumerate(self.poses):
+            if not self.placed[position]:
+                continue
+            stamp = float(timestamps[position]) if timestamps is not None else float(position)
+            values = (stamp, *(float(v) for v in pose[:3, 3]), *_quaternion(pose[:3, :3]))
+            lines.append(" ".join(repr(v) for v in values))
+        _write(path, lines)
+
+    def write_kitti(self, path: str | os.PathLike[str]) -> None:
+        """Every scan's pose in the KITTI odometry format: the first three rows of the 4x4, row-major, one line per
+        scan in order (``nan`` entries for a scan that is not placed, so that line k stays scan k)."""
+        _write(path, [" ".join(repr(float(v)) for v in pose[:3, :].reshape(-1)) for pose in self.poses])
+
+    def write_g2o(self, path: str | os.PathLike[str]) -> None:
+        """The graph in g2o's format: a ``VERTEX_SE3:QUAT`` per placed scan (its pose) and an ``EDGE_SE3:QUAT`` per
+        accepted edge. g2o's edge from vertex t to vertex s measures ``inv(X_t) X_s`` (our transform) with its
+        error's translation first and its rotation as a quaternion's vector part (half the angle), so the
+        information's blocks are swapped and its rotation rows and columns doubled (docs/pose-graph.md)."""
+        lines = []
+        for position, pose in enumerate(self.poses):
+            if self.placed[position]:
+                lines.append(f"VERTEX_SE3:QUAT {position} {_g2o_pose(pose)}")
+        order = [3, 4, 5, 0, 1, 2]  # g2o: translation, then rotation
+        scale = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])  # d(rotation vector) = 2 d(quaternion vector part)
+        for edge in self.edges:
+            if not edge.accepted:
+                continue
+            info = edge.information[np.ix_(order, order)] * np.outer(scale, scale)
+            upper = [repr(float(info[i, j])) for i in range(6) for j in range(i, 6)]
+            lines.append(f"EDGE_SE3:QUAT {edge.target} {edge.source} {_g2o_pose(edge.transform)} {' '.join(upper)}")
+        _write(path, lines)
+
+
+def align(
+    clouds: Sequence[Any] | Mapping[Hashable, Any],
+    voxel_size: float | None = None,
+    *,
+    pairs: str | Sequence[tuple[Hashable, Hashable]] = "all",
+    executor: Any = None,
+    progress: batch.ProgressLike = None,
+    refine: RefineMode | None = "gicp",
+    bound: float = PoseGraph.DEFAULT_BOUND,
+    threads_per_job: int = 1,
+    **config: Any,
+) -> Alignment:
+    """Register many clouds into the first one's frame with no initial guess.
+
+    ``clouds``: a sequence (keys are the positions) or a mapping (its keys, in order) of what
+    :func:`kissm.batch.register_many` takes: (N, 3) arrays, file paths, :class:`kissm.batch.CloudFile`,
+    :class:`kissm.Features`. The first is the anchor: its frame is the world.
+
+    ``pairs``: ``"all"`` (every pair once, the later cloud as the source: sensible up to some tens of clouds), or
+    the ``(source key, target key)`` pairs to register.
+
+    ``voxel_size``, ``refine`` (``"gicp"`` by default: its information weighs the edges; ``None`` or ``"none"``
+    gives coarse poses, whose edges get an information from the rotation uncertainty alone and are weighed
+    equally otherwise) and any other :class:`kissm.Config` field are the registrations' settings;
+    ``executor``, ``progress`` and ``threads_per_job`` are :func:`kissm.batch.register_many`'s. ``bound`` is the
+    pose graph's (:meth:`kissm.PoseGraph.optimize`).
+
+    Raises :class:`kissm.InvalidArgumentError` for an unknown ``pairs`` value or a pair naming a cloud that is
+    not given, and whatever :func:`kissm.batch.register_many` raises for bad settings or clouds.
+    """
+    by_key = _as_mapping(clouds)
+    keys = list(by_key)
+    if not keys:
+        raise InvalidArgumentError("align: clouds is empty")
+    position = {key: k for k, key in enumerate(keys)}
+    if isinstance(pairs, str):
+        if pairs != "all":
+            raise InvalidArgumentError(f"align: pairs is {pairs!r}; 'all' or a sequence of (source, target) keys")
+        chosen = [(keys[j], keys[i]) for i in range(len(keys)) for j in range(i + 1, len(keys))]
+    else:
+        chosen = [tuple(pair) for pair in pairs]  # type: ignore[misc]
+        for pair in chosen:
+            if len(pair) != 2 or pair[0] not in position or pair[1] not in position:
+                raise InvalidArgumentError(f"align: pair {pair!r} does not name two of the clouds")
+    refine_mode: RefineMode = "none" if refine is None else refine
+    results = (
+        batch.register_many(
+            chosen,
+            by_key,
+            executor,
+            threads_per_job=threads_per_job,
+            progress=progress,
+            voxel_size=voxel_size,
+            refine=refine_mode,
+            **config,
+        )
+        if chosen
+        else []
+    )
+    graph = PoseGraph(len(keys))
+    valid: list[tuple[int, int, np.ndarray, np.ndarray, Result]] = []
+    with graph:
+        for outcome in results:
+            result = outcome.result
+            if result is None or not result.valid:
+                continue
+            source, target = position[outcome.source], position[outcome.target]
+            transform = np.asarray(result.transform, dtype=np.float64)
+            information = _information(result)
+            graph.add_edge(source, target, transform, information, robust=True)
+            valid.append((source, target, transform, information, result))
+        solution = graph.optimize(anchor=0, bound=bound)
+    edges = [
+        Edge(s, t, transform, information, bool(solution.accepted[k]), float(solution.residuals[k]), result)
+        for k, (s, t, transform, information, result) in enumerate(valid)
+    ]
+    return Alignment(
+        keys=keys,
+        poses=solution.poses,
+        placed=solution.placed,
+        components=solution.components,
+        edges=edges,
+        registrations=len(results),
+    )
+
+
+# ---- helpers ---------------------------------------------------------------------------------------------------
+
+
+def _as_mapping(clouds: Sequence[Any] | Mapping[Hashable, Any]) -> Mapping[Hashable, Any]:
+    if isinstance(clouds, Mapping):
+        return clouds
+    if isinstance(clouds, (str, bytes, np.ndarray)) or not isinstance(clouds, Sequence):
+        raise InvalidArgumentError("align: clouds must be a sequence or a mapping of clouds")
+    return dict(enumerate(clouds))
+
+
+def _points(cloud: Any, key: Hashable) -> np.ndarray:
+    if isinstance(cloud, batch.CloudFile):
+        return read_points(cloud.path, cloud.format)
+    if isinstance(cloud, (str, os.PathLike)):
+        return read_points(os.fspath(cloud))
+    points = np.asarray(cloud, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise InvalidArgumentError(f"merged: cloud {key!r} is not an (N, 3) array or a file")
+    return points
+
+
+def _information(result: Result) -> np.ndarray:
+    """The refined information; for a coarse pose, an isotropic one from the solver's rotation uncertainty (and
+    a translation sigma of a noise bound): coarse edges then count alike, and the graph still rejects the ones that
+    disagree by far."""
+    information = np.asarray(result.information, dtype=np.float64)
+    if np.all(np.isfinite(information)):
+        return information
+    sigma_rotation = max(float(result.rotation_uncertainty), 1e-4)
+    sigma_translation = max(float(result.noise_bound), 1e-9)
+    return np.diag([sigma_rotation**-2] * 3 + [sigma_translation**-2] * 3)
+
+
+def _quaternion(rotation: np.ndarray) -> tuple[float, float, float, float]:
+    """(qx, qy, qz, qw) of a rotation matrix, w >= 0."""
+    m = rotation
+    trace = float(np.trace(m))
+    if trace > 0:
+        s = math.sqrt(trace + 1.0) * 2
+        q = (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
+        q = 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s
+    elif m[1, 1] > m[2, 2]:
+        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
+        q = (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s
+    else:
+        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
+        q = (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s
+    x, y, z, w = (float(v) for v in q)
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    sign = -1.0 if w < 0 else 1.0
+    return sign * x / norm, sign * y / norm, sign * z / norm, sign * w / norm
+
+
+def _g2o_pose(pose: np.ndarray) -> str:
+    qx, qy, qz, qw = _quaternion(pose[:3, :3])
+    t = pose[:3, 3]
+    return " ".join(repr(float(v)) for v in (t[0], t[1], t[2], qx, qy, qz, qw))
+
+
+def _write(path: str | os.PathLike[str], lines: list[str]) -> None:
+    with open(path, "w", encoding="utf-8") as f:
+        f.write("".join(line + "\n" for line in lines))
+
+
+__all__ = ["Alignment", "Edge", "align"]

@@ -1,0 +1,163 @@
+# SPDX-License-Identifier: MIT
+"""kissm.multiway.align: many clouds into the first one's frame. The shared multi-scan sets (../shared/data,
+"Multi-scan sets": the KITTI 07 keyframes, the Stanford bunny's 9 scans, the 15 Happy Buddha turntable scans),
+every pair registered: every scan placed, each within 2 degrees and 2 voxels of the ground truth anchored on the
+first scan; a synthetic set from the committed test pair with a scan that cannot be placed; the writers' formats
+read back; errors."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import kissm
+import kissm.multiway
+
+from testdata import VOXEL_SIZE, committed_pair
+
+#: (folder under the data, voxel): the voxels of bench/kissm_bench/data.py's SCAN_SETS.
+SETS = {
+    "kitti07": ("kitti07_keyframes_gtsam_points/multiway", 0.5),
+    "bunny": ("stanford_bunny_scans/multiway", 0.006),
+    "happy": ("stanford_happy_stand_scans", 0.004),
+}
+
+
+def angle_deg(rotation: np.ndarray) -> float:
+    return math.degrees(math.acos(max(-1.0, min(1.0, (float(np.trace(rotation)) - 1.0) / 2.0))))
+
+
+def read_set(folder: Path) -> tuple[list[str], list[kissm.batch.CloudFile], dict[str, np.ndarray]]:
+    with open(folder / "scans.tsv", newline="") as f:
+        rows = list(csv.DictReader(f, delimiter="\t"))
+    poses = {}
+    for line in (folder / "gt_poses.txt").read_text().splitlines():
+        if line.strip():
+            name, *numbers = line.split()
+            pose = np.eye(4)
+            pose[:3, :] = np.array([float(x) for x in numbers]).reshape(3, 4)
+            poses[name] = pose
+    names = [r["scan"] for r in rows]
+    return names, [kissm.batch.CloudFile(str(folder / r["file"]), r["format"]) for r in rows], poses
+
+
+@pytest.mark.parametrize("name", list(SETS))
+def test_every_scan_of_the_shared_sets_is_placed_right(real_data: Path, name: str) -> None:
+    folder, voxel = SETS[name]
+    if not (real_data / folder / "scans.tsv").is_file():
+        pytest.fail(f"the multi-scan set {folder} is missing from {real_data}")
+    names, files, truth = read_set(real_data / folder)
+    alignment = kissm.multiway.align(dict(zip(names, files, strict=True)), voxel, threads_per_job=2)
+    assert alignment.keys == names and alignment.registrations == len(names) * (len(names) - 1) // 2
+    missing = [n for n, placed in zip(names, alignment.placed, strict=True) if not placed]
+    assert alignment.placed.all(), f"not placed: {missing}"
+    for k, scan in enumerate(names):
+        expected = np.linalg.inv(truth[names[0]]) @ truth[scan]
+        error = np.linalg.inv(expected) @ alignment.poses[k]
+        assert angle_deg(error[:3, :3]) < 2.0 and np.linalg.norm(error[:3, 3]) < 2 * voxel, (
+            scan,
+            angle_deg(error[:3, :3]),
+            np.linalg.norm(error[:3, 3]) / voxel,
+        )
+    assert np.array_equal(alignment.poses[0], np.eye(4))
+    assert all(e.result.valid for e in alignment.edges)
+
+
+def synthetic_set() -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The committed pair's source seen from three poses (crops of it, so that each pair overlaps in part) and an
+    unrelated cloud: the clouds and each one's true world <- scan pose."""
+    pair = committed_pair()
+    scene = np.asarray(pair.source, dtype=np.float64)
+    rng = np.random.default_rng(5)
+    clouds, poses = [], []
+    center = scene.mean(axis=0)
+    for k in range(3):
+        angle = 0.4 * k
+        c, s = math.cos(angle), math.sin(angle)
+        pose = np.eye(4)
+        pose[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+        pose[:3, 3] = [1.5 * k, -0.7 * k, 0.1 * k]
+        keep = scene[:, 0] - center[0] < 6.0 - 3.0 * k  # a crop: the scans share most but not all of the scene
+        world = scene[keep]
+        clouds.append((world - pose[:3, 3]) @ pose[:3, :3])  # scan = inv(pose) world
+        poses.append(pose)
+    clouds.append(rng.uniform(-20, 20, size=(3000, 3)))  # unrelated: no valid edge reaches it
+    return clouds, poses
+
+
+def test_a_synthetic_set_and_a_scan_that_cannot_be_placed(tmp_path: Path) -> None:
+    clouds, poses = synthetic_set()
+    alignment = kissm.multiway.align(clouds, VOXEL_SIZE)
+    assert alignment.keys == [0, 1, 2, 3] and alignment.registrations == 6
+    assert alignment.placed.tolist() == [True, True, True, False]
+    assert np.isnan(alignment.poses[3]).all() and alignment.components[3] == 3
+    for k in range(3):
+        expected = np.linalg.inv(poses[0]) @ poses[k]
+        error = np.linalg.inv(expected) @ alignment.poses[k]
+        assert angle_deg(error[:3, :3]) < 1.0 and np.linalg.norm(error[:3, 3]) < VOXEL_SIZE
+    # the merged map: the placed scans' points in the first one's frame
+    merged = alignment.merged(clouds)
+    assert merged.shape == (sum(len(c) for c in clouds[:3]), 3)
+    thinned = alignment.merged(clouds, voxel_size=1.0)
+    assert 0 < len(thinned) < len(merged)
+    # the same call again gives the same bits; so does a thread pool
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(2) as pool:
+        again = kissm.multiway.align(clouds, VOXEL_SIZE, executor=pool)
+    assert again.poses.tobytes() == alignment.poses.tobytes()
+
+    # the writers, read back
+    alignment.write_kitti(tmp_path / "poses.kitti")
+    rows = np.loadtxt(tmp_path / "poses.kitti")
+    assert rows.shape == (4, 12) and np.isnan(rows[3]).all()
+    assert np.allclose(rows[1].reshape(3, 4), alignment.poses[1][:3, :], atol=1e-15)
+    alignment.write_tum(tmp_path / "poses.tum", timestamps=[10.0, 11.0, 12.0, 13.0])
+    tum = np.loadtxt(tmp_path / "poses.tum")
+    assert tum.shape == (3, 8) and tum[:, 0].tolist() == [10.0, 11.0, 12.0]
+    for row, pose in zip(tum, alignment.poses[:3], strict=True):
+        x, y, z, w = row[4:]
+        rotation = np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ]
+        )
+        assert np.allclose(rotation, pose[:3, :3], atol=1e-12) and np.allclose(row[1:4], pose[:3, 3])
+    alignment.write_g2o(tmp_path / "graph.g2o")
+    lines = (tmp_path / "graph.g2o").read_text().splitlines()
+    vertices = [line for line in lines if line.startswith("VERTEX_SE3:QUAT")]
+    edges = [line.split() for line in lines if line.startswith("EDGE_SE3:QUAT")]
+    assert [int(v.split()[1]) for v in vertices] == [0, 1, 2]
+    assert len(edges) == sum(e.accepted for e in alignment.edges) and all(len(e) == 3 + 7 + 21 for e in edges)
+    first = next(e for e in alignment.edges if e.accepted)
+    fields = next(f for f in edges if (int(f[1]), int(f[2])) == (first.target, first.source))
+    upper = np.array([float(v) for v in fields[10:]])
+    info = np.zeros((6, 6))
+    info[np.triu_indices(6)] = upper
+    info = info + np.triu(info, 1).T
+    # translation block as it is, rotation block four times ours (g2o's quaternion vector part is half the angle)
+    assert np.allclose(info[:3, :3], first.information[3:, 3:]) and np.allclose(
+        info[3:, 3:], 4 * first.information[:3, :3]
+    )
+
+
+def test_bad_arguments() -> None:
+    clouds, _ = synthetic_set()
+    with pytest.raises(kissm.InvalidArgumentError, match="pairs"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence")
+    with pytest.raises(kissm.InvalidArgumentError, match="pair"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs=[(0, 5)])
+    with pytest.raises(kissm.InvalidArgumentError, match="empty"):
+        kissm.multiway.align([], VOXEL_SIZE)
+    with pytest.raises(kissm.InvalidArgumentError, match="voxel_size"):
+        kissm.multiway.align(clouds[:2], -1.0)
+    one = kissm.multiway.align(clouds[:1], VOXEL_SIZE)  # one cloud: itself, nothing registered
+    assert one.placed.tolist() == [True] and one.registrations == 0 and np.array_equal(one.poses[0], np.eye(4))
+    with pytest.raises(kissm.InvalidArgumentError, match="voxel_size"):
+        one.merged(clouds[:1], voxel_size=0.0)
