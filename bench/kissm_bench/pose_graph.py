@@ -4,6 +4,12 @@ Levenberg-Marquardt on the same synthetic drives (a spiral of loops: odometry fr
 and a loop closure every 7 poses to the pose 100 ahead, robust), with noise on every edge and, optionally, a share of
 the loop closures replaced by far-off poses with the same confident information.
 
+With --shared-sets it instead aligns the shared multi-scan sets (kissm.multiway.align, every pair, GICP) and adds
+wrong edges to each set's accepted ones: as many as 30% of its valid registrations, between random scans, random
+poses (0.2 rad to a half turn, 50 voxels) with the information of a real edge; over --seeds runs it counts the
+wrong edges accepted, the right ones rejected, and the scans not placed or moved by more than 0.1 degree or 0.1
+voxel from where the right edges alone put them.
+
 Per graph it prints the nodes and edges, kissm's time, GTSAM's time (started from the chained odometry, anchored
 by a prior of sigma 1e-10, tolerances 1e-12), the largest difference between their poses (entries of the 3x4
 matrices; GTSAM is given the edges kissm accepted, whose optimum kissm's must be), and with outliers how many wrong
@@ -104,13 +110,73 @@ def run_gtsam(n: int, edges: list[tuple[int, int, np.ndarray, bool]], keep: np.n
     return elapsed, np.array([result.atPose3(i).matrix() for i in range(n)])
 
 
+def angle_deg(rotation: np.ndarray) -> float:
+    return math.degrees(math.acos(max(-1.0, min(1.0, (float(np.trace(rotation)) - 1.0) / 2.0))))
+
+
+def shared_sets(seeds: int) -> None:
+    """Wrong edges added to the shared multi-scan sets' real ones (the module docstring)."""
+    import kissm.batch
+    import kissm.multiway
+
+    from .common import default_data
+    from .data import SCAN_SETS, read_scan_set
+
+    print(
+        "| set | real edges | wrong per run | runs bent | wrong accepted | right rejected | scans moved or unplaced |"
+    )
+    print("|---|--:|--:|--:|--:|--:|--:|")
+    for scan_set in SCAN_SETS:
+        names, files, formats, _ = read_scan_set(default_data() / scan_set.folder)
+        clouds = {n: kissm.batch.CloudFile(str(f), fmt) for n, f, fmt in zip(names, files, formats, strict=True)}
+        alignment = kissm.multiway.align(clouds, scan_set.voxel, threads_per_job=2)
+        n, voxel = len(names), scan_set.voxel
+        real = [e for e in alignment.edges if e.accepted]
+        count = max(2, round(0.3 * len(alignment.edges)))
+        bent = accepted = rejected = moved = 0
+        for seed in range(seeds):
+            rng = np.random.default_rng(seed)
+            wrong = []
+            for k in range(count):
+                source, target = (int(v) for v in rng.choice(n, size=2, replace=False))
+                axis = rng.normal(size=3)
+                transform = rigid(axis / np.linalg.norm(axis) * rng.uniform(0.2, math.pi), rng.normal(0, 50 * voxel, 3))
+                wrong.append((source, target, transform, real[k % len(real)].information))
+            with kissm.PoseGraph(n) as clean, kissm.PoseGraph(n) as dirty:
+                for e in real:
+                    clean.add_edge(e.source, e.target, e.transform, e.information)
+                    dirty.add_edge(e.source, e.target, e.transform, e.information)
+                for source, target, transform, information in wrong:
+                    dirty.add_edge(source, target, transform, information)
+                reference, solution = clean.optimize(), dirty.optimize()
+            run_accepted = int(np.asarray(solution.accepted[len(real) :]).sum())
+            run_moved = 0
+            for k in range(n):
+                difference = np.linalg.inv(reference.poses[k]) @ solution.poses[k]
+                far = angle_deg(difference[:3, :3]) > 0.1 or np.linalg.norm(difference[:3, 3]) > 0.1 * voxel
+                run_moved += int(not solution.placed[k] or far)
+            accepted += run_accepted
+            rejected += int((~np.asarray(solution.accepted[: len(real)])).sum())
+            moved += run_moved
+            bent += int(run_accepted > 0 or run_moved > 0)
+        print(
+            f"| {scan_set.label} | {len(real)} | {count} | {bent} of {seeds} | {accepted} of {count * seeds} | "
+            f"{rejected} of {len(real) * seeds} | {moved} of {n * seeds} |"
+        )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--nodes", type=int, nargs="+", default=[1000, 10000])
     parser.add_argument("--outliers", type=float, nargs="+", default=[0.0, 0.3], help="share of loop closures wrong")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--shared-sets", action="store_true", help="wrong edges added to the shared multi-scan sets")
+    parser.add_argument("--seeds", type=int, default=20, help="runs per set with --shared-sets")
     args = parser.parse_args()
+    if args.shared_sets:
+        shared_sets(args.seeds)
+        return 0
     print("| nodes | edges | wrong | kissm s | GTSAM LM s | max pose difference | wrong accepted | right rejected |")
     print("|--:|--:|--:|--:|--:|--:|--:|--:|")
     for n in args.nodes:

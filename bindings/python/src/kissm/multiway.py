@@ -68,7 +68,7 @@ class Alignment:
     registrations: int
     """How many pairs were registered (valid or not)."""
 
-    def merged(self, clouds: Sequence[Any] | Mapping[Hashable, Any], voxel_size: float | None = None) -> np.ndarray:
+    def merged(self, clouds: Sequence[Any] | Mapping[Any, Any], voxel_size: float | None = None) -> np.ndarray:
         """The placed scans' points in the first scan's frame, as one (M, 3) float64 array; with ``voxel_size``,
         the centroid of each occupied voxel of that size instead. ``clouds`` as given to :func:`align` (arrays or
         paths)."""
@@ -133,7 +133,7 @@ class Alignment:
 
 
 def align(
-    clouds: Sequence[Any] | Mapping[Hashable, Any],
+    clouds: Sequence[Any] | Mapping[Any, Any],
     voxel_size: float | None = None,
     *,
     pairs: str | Sequence[tuple[Hashable, Hashable]] = "all",
@@ -221,7 +221,7 @@ def align(
 # ---- helpers ---------------------------------------------------------------------------------------------------
 
 
-def _as_mapping(clouds: Sequence[Any] | Mapping[Hashable, Any]) -> Mapping[Hashable, Any]:
+def _as_mapping(clouds: Sequence[Any] | Mapping[Any, Any]) -> Mapping[Any, Any]:
     if isinstance(clouds, Mapping):
         return clouds
     if isinstance(clouds, (str, bytes, np.ndarray)) or not isinstance(clouds, Sequence):
