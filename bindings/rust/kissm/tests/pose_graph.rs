@@ -6,9 +6,6 @@
 
 mod common;
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-
 use common::{assert_send, assert_sync, NotSync, Pose};
 use kissm::{ErrorKind, PoseGraph, PoseGraphCancelHandle, PoseGraphSolution};
 use kissm_sys as sys;
@@ -499,19 +496,7 @@ fn cancel_stops_a_running_optimisation_and_the_graph_stays_usable() {
     assert!(reference.accepted.iter().all(|&a| a) && reference.placed.iter().all(|&p| p));
 
     let cancel = graph.cancel_handle();
-    let done = Arc::new(AtomicBool::new(false));
-    let spammer = {
-        let done = Arc::clone(&done);
-        std::thread::spawn(move || {
-            while !done.load(Ordering::Relaxed) {
-                cancel.cancel();
-                std::thread::yield_now();
-            }
-        })
-    };
-    let outcome = graph.optimize(0, PoseGraph::DEFAULT_BOUND);
-    done.store(true, Ordering::Relaxed);
-    spammer.join().unwrap();
+    let outcome = common::while_cancelling(move || cancel.cancel(), || graph.optimize(0, PoseGraph::DEFAULT_BOUND));
     let err = outcome.expect_err("cancelled while running");
     assert_eq!((err.kind(), err.code()), (ErrorKind::Cancelled, sys::KISSM_ERR_CANCELLED), "{err}");
 

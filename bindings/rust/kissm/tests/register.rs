@@ -5,7 +5,6 @@
 
 mod common;
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use common::{moved, permuted, scene, tiled, Pose, SCENE_VOXEL};
@@ -208,19 +207,7 @@ fn cancel_stops_a_running_call_and_the_matcher_stays_usable() {
     let reference = m.register(&source, &target).expect("a stale cancel request is cleared");
 
     let cancel = m.cancel_handle();
-    let done = Arc::new(AtomicBool::new(false));
-    let spammer = {
-        let done = Arc::clone(&done);
-        std::thread::spawn(move || {
-            while !done.load(Ordering::Relaxed) {
-                cancel.cancel();
-                std::thread::yield_now();
-            }
-        })
-    };
-    let outcome = m.register(&source, &target);
-    done.store(true, Ordering::Relaxed);
-    spammer.join().unwrap();
+    let outcome = common::while_cancelling(move || cancel.cancel(), || m.register(&source, &target));
     let err = outcome.expect_err("cancelled while running");
     assert_eq!(err.kind(), ErrorKind::Cancelled, "{err}");
 

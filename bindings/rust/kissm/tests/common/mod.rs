@@ -606,3 +606,24 @@ pub trait NotSync<A> {
 }
 impl<T: ?Sized> NotSync<()> for T {}
 impl<T: ?Sized + Sync> NotSync<u8> for T {}
+
+/// Runs `work` while another thread calls `cancel` over and over (a request made before a call starts is
+/// dropped, so one request could miss it), and returns what `work` returned.
+pub fn while_cancelling<T>(cancel: impl Fn() + Send + 'static, work: impl FnOnce() -> T) -> T {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let done = Arc::new(AtomicBool::new(false));
+    let spammer = {
+        let done = Arc::clone(&done);
+        std::thread::spawn(move || {
+            while !done.load(Ordering::Relaxed) {
+                cancel();
+                std::thread::yield_now();
+            }
+        })
+    };
+    let outcome = work();
+    done.store(true, Ordering::Relaxed);
+    spammer.join().unwrap();
+    outcome
+}
