@@ -32,6 +32,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/se3.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_tree.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_lm.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_consensus.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph.cpp
 )
 # The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).

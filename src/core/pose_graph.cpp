@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pose_graph_consensus.hpp"
 #include "pose_graph_lm.hpp"
 #include "pose_graph_tree.hpp"
 
@@ -23,6 +24,9 @@ constexpr int kMaxRounds = 200;
 constexpr int kRoundIterations = 10;
 constexpr int kStartIterations = 10; // LM iterations of the least-squares start
 constexpr int kFinalPasses = 20;     // final solves at most
+// The consensus (pose_graph_consensus.cpp) calls an edge disagreeing above this multiple of the bound: its errors
+// compose the edges' own uncertainties along tree paths, which real registrations understate (docs/pose-graph.md).
+constexpr double kConsensusSlack = 10.0;
 
 // The truncated least-squares weight of a squared error r2 at continuation mu (Yang et al. 2020, eq. 14).
 double tls_weight(double r2, double bound, double mu) {
@@ -50,12 +54,19 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
                                       std::size_t anchor, double bound, const std::atomic<int> *cancel) {
     const std::size_t m = edges.size();
     PoseGraphSolution out;
-    std::vector<std::uint8_t> reached;
-    spanning_tree_poses(num_nodes, edges, anchor, out.poses, reached);
+    Consensus consensus = edge_consensus(num_nodes, edges, anchor, kConsensusSlack * bound, cancel);
+    out.poses = std::move(consensus.poses);
+    const std::vector<std::uint8_t> &reached = consensus.reached;
 
-    // Every edge inside the anchor's reach takes part; the robust ones are weighed.
+    // Every edge inside the anchor's reach that agrees with the consensus takes part; the robust ones are weighed.
+    // The others wait until the end, when those that fit the solution after all are taken back.
     std::vector<double> weight(m, 0.0);
-    for (std::size_t e = 0; e < m; ++e) weight[e] = reached[edges[e].source] ? 1.0 : 0.0;
+    std::vector<std::uint8_t> screened(m, 0);
+    for (std::size_t e = 0; e < m; ++e) {
+        if (!reached[edges[e].source]) continue;
+        weight[e] = consensus.agrees[e] ? 1.0 : 0.0;
+        screened[e] = consensus.agrees[e] ? 0 : 1;
+    }
     std::vector<long> variable = variables_of(reached, anchor);
     LmOptions options;
     // The least-squares start of the robust rounds need not be converged (with wrong edges in it, it crawls);
@@ -73,7 +84,7 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
     residuals();
     double worst = 0.0;
     for (std::size_t e = 0; e < m; ++e)
-        if (edges[e].robust && reached[edges[e].source]) worst = std::max(worst, r2[e]);
+        if (edges[e].robust && reached[edges[e].source] && !screened[e]) worst = std::max(worst, r2[e]);
     if (worst > bound) {
         double mu = bound / (2.0 * worst - bound);
         LmOptions round = options;
@@ -83,7 +94,7 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
         for (int k = 0; k < kMaxRounds; ++k) {
             bool binary = true;
             for (std::size_t e = 0; e < m; ++e) {
-                if (!edges[e].robust || !reached[edges[e].source]) continue;
+                if (!edges[e].robust || !reached[edges[e].source] || screened[e]) continue;
                 weight[e] = tls_weight(r2[e], bound, mu);
                 binary = binary && (weight[e] == 0.0 || weight[e] == 1.0);
             }
@@ -108,27 +119,38 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
         variable = variables_of(out.placed, anchor);
         levenberg_marquardt(edges, weight, variable, out.poses, options, cancel);
     };
-    for (int pass = 0;; ++pass) {
-        solve_accepted();
-        std::size_t worst_edge = m;
-        double worst_r2 = bound;
-        auto judged = [&](std::size_t e) {
-            return edges[e].robust && weight[e] > 0.0 && out.placed[edges[e].source] && out.placed[edges[e].target];
-        };
-        for (std::size_t e = 0; e < m; ++e) {
-            if (!judged(e)) continue;
-            const double v = edge_chi2(edges[e], out.poses);
-            if (v > worst_r2) worst_r2 = v, worst_edge = e;
-        }
-        if (worst_edge == m) break;
-        if (pass + 1 >= kFinalPasses) {
-            for (std::size_t e = 0; e < m; ++e)
-                if (judged(e) && edge_chi2(edges[e], out.poses) > bound) weight[e] = 0.0;
+    auto settle = [&] {
+        for (int pass = 0;; ++pass) {
             solve_accepted();
-            break;
+            std::size_t worst_edge = m;
+            double worst_r2 = bound;
+            auto judged = [&](std::size_t e) {
+                return edges[e].robust && weight[e] > 0.0 && out.placed[edges[e].source] && out.placed[edges[e].target];
+            };
+            for (std::size_t e = 0; e < m; ++e) {
+                if (!judged(e)) continue;
+                const double v = edge_chi2(edges[e], out.poses);
+                if (v > worst_r2) worst_r2 = v, worst_edge = e;
+            }
+            if (worst_edge == m) return;
+            if (pass + 1 >= kFinalPasses) {
+                for (std::size_t e = 0; e < m; ++e)
+                    if (judged(e) && edge_chi2(edges[e], out.poses) > bound) weight[e] = 0.0;
+                solve_accepted();
+                return;
+            }
+            weight[worst_edge] = 0.0;
         }
-        weight[worst_edge] = 0.0;
+    };
+    settle();
+    // An edge the consensus set aside that fits the solution within the bound is taken back (the consensus judged
+    // it against tree poses, not against the optimum), and the rest settles again.
+    bool taken_back = false;
+    for (std::size_t e = 0; e < m; ++e) {
+        if (!screened[e] || !out.placed[edges[e].source] || !out.placed[edges[e].target]) continue;
+        if (edge_chi2(edges[e], out.poses) <= bound) weight[e] = 1.0, taken_back = true;
     }
+    if (taken_back) settle();
 
     out.accepted.assign(m, 0);
     out.residual.assign(m, std::numeric_limits<double>::quiet_NaN());

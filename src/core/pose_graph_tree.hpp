@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The graph's shape: a spanning tree from the anchor for the starting poses, and connected components.
+// The graph's shape: union-find over the nodes, and connected components.
 #pragma once
 
 #include <cstddef>
@@ -10,10 +10,8 @@
 
 KISSM_DETAIL_BEGIN
 
-// Poses composed along a maximum spanning tree from the anchor (trusted edges first, then by the log-determinant
-// of the information, ties by edge number); `reached` marks the nodes any edge joins to the anchor.
-void spanning_tree_poses(std::size_t num_nodes, const std::vector<PoseGraphEdge> &edges, std::size_t anchor,
-                         std::vector<Rigid> &poses, std::vector<std::uint8_t> &reached);
+// The root of i's set in a union-find forest (parent[r] == r at a root), halving the path on the way.
+std::size_t union_find_root(std::vector<std::size_t> &parent, std::size_t i);
 
 // Per node, the smallest node joined to it by the edges with use[e] set.
 std::vector<std::uint64_t> components(std::size_t num_nodes, const std::vector<PoseGraphEdge> &edges,
