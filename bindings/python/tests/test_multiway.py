@@ -2,8 +2,8 @@
 """kissm.multiway.align: many clouds into the first one's frame. The shared multi-scan sets (../shared/data,
 "Multi-scan sets": the KITTI 07 keyframes, the Stanford bunny's 9 scans, the 15 Happy Buddha turntable scans),
 every pair registered: every scan placed, each within 2 degrees and 2 voxels of the ground truth anchored on the
-first scan, also with wrong edges injected into their graphs; a synthetic set from the committed test pair with a scan that cannot be placed; the writers' formats
-read back; errors."""
+first scan, also with wrong edges injected into their graphs; the ordered sets as a sequence; a synthetic set from
+the committed test pair with a scan that cannot be placed; the writers' formats read back; errors."""
 
 from __future__ import annotations
 
@@ -201,10 +201,58 @@ def test_a_synthetic_set_and_a_scan_that_cannot_be_placed(tmp_path: Path) -> Non
     )
 
 
+@pytest.mark.parametrize(("name", "gap", "per_scan"), [("kitti07", 2, 5), ("happy", 5, 10)])
+def test_sequence_places_the_ordered_sets(real_data: Path, name: str, gap: int, per_scan: int) -> None:
+    """pairs="sequence": consecutive pairs, then loop candidates from the chained odometry. KITTI's keyframes and
+    Happy's turntable (whose last scan, at 336 degrees, closes the loop onto the first) are in acquisition order:
+    every scan placed within 2 degrees and 2 voxels, with a fraction of the pairs of "all"."""
+    folder, voxel = SETS[name]
+    names, files, truth = read_set(real_data / folder)
+    alignment = kissm.multiway.align(
+        dict(zip(names, files, strict=True)),
+        voxel,
+        pairs="sequence",
+        loop_gap=gap,
+        loops_per_scan=per_scan,
+        threads_per_job=2,
+    )
+    n = len(names)
+    assert n - 1 < alignment.registrations < n * (n - 1) // 2
+    assert alignment.placed.all()
+    loops = [(e.source, e.target) for e in alignment.edges if e.source - e.target >= gap]
+    assert loops and all(e.accepted for e in alignment.edges)
+    for k, scan in enumerate(names):
+        expected = np.linalg.inv(truth[names[0]]) @ truth[scan]
+        error = np.linalg.inv(expected) @ alignment.poses[k]
+        assert angle_deg(error[:3, :3]) < 2.0 and np.linalg.norm(error[:3, 3]) < 2 * voxel, scan
+    if name == "happy":
+        assert (n - 1, 0) in loops  # the closure
+
+
+def test_sequence_loop_candidates_from_priors() -> None:
+    """With priors, loop candidates are the pairs at least loop_gap apart within loop_radius, the nearest
+    loops_per_scan per cloud; NaN priors get none."""
+    positions = np.array([[0.0, 0, 0], [10, 0, 0], [20, 0, 0], [10.5, 0, 0], [0.2, 0, 0], [np.nan, 0, 0]])
+    pairs = kissm.multiway._loop_candidates(positions, 1.0, 2, 5, drift=0.0)
+    assert pairs == [(1, 3), (0, 4)]
+    assert kissm.multiway._loop_candidates(positions, 100.0, 2, 1, drift=0.0) == [(0, 2), (1, 3), (0, 4)]
+    assert kissm.multiway._loop_candidates(positions, 100.0, 4, 5, drift=0.0) == [(0, 4)]
+
+
 def test_bad_arguments() -> None:
     clouds, _ = synthetic_set()
     with pytest.raises(kissm.InvalidArgumentError, match="pairs"):
-        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence")
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequential")
+    with pytest.raises(kissm.InvalidArgumentError, match="priors"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, priors=np.zeros((2, 4, 4)))  # read by "sequence" only
+    with pytest.raises(kissm.InvalidArgumentError, match="priors"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", priors=np.zeros((3, 4, 4)))
+    with pytest.raises(kissm.InvalidArgumentError, match="loop_gap"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", loop_gap=0)
+    with pytest.raises(kissm.InvalidArgumentError, match="loop_radius"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", loop_radius=float("nan"))
+    with pytest.raises(kissm.InvalidArgumentError, match="loops_per_scan"):
+        kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", loops_per_scan=-1)
     with pytest.raises(kissm.InvalidArgumentError, match="pair"):
         kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs=[(0, 5)])
     with pytest.raises(kissm.InvalidArgumentError, match="empty"):

@@ -26,6 +26,7 @@ import numpy as np
 from . import batch
 from ._config import RefineMode
 from ._errors import InvalidArgumentError
+from ._matcher import Features
 from ._pose_graph import PoseGraph
 from ._read import read_points
 from ._result import Result
@@ -137,6 +138,10 @@ def align(
     voxel_size: float | None = None,
     *,
     pairs: str | Sequence[tuple[Hashable, Hashable]] = "all",
+    priors: Any = None,
+    loop_radius: float | None = None,
+    loop_gap: int = 10,
+    loops_per_scan: int = 5,
     executor: Any = None,
     progress: batch.ProgressLike = None,
     refine: RefineMode | None = "gicp",
@@ -150,8 +155,16 @@ def align(
     :func:`kissm.batch.register_many` takes: (N, 3) arrays, file paths, :class:`kissm.batch.CloudFile`,
     :class:`kissm.Features`. The first is the anchor: its frame is the world.
 
-    ``pairs``: ``"all"`` (every pair once, the later cloud as the source: sensible up to some tens of clouds), or
-    the ``(source key, target key)`` pairs to register.
+    ``pairs``: ``"all"`` (every pair once, the later cloud as the source: sensible up to some tens of clouds),
+    ``"sequence"`` (clouds in acquisition order: each with the next, then loop candidates, so the work grows with
+    the number of clouds, not its square), or the ``(source key, target key)`` pairs to register.
+
+    Loop candidates of ``"sequence"``: pairs at least ``loop_gap`` clouds apart whose positions lie within
+    ``loop_radius`` (default 30 voxels) of each other, at most ``loops_per_scan`` per cloud (the nearest first).
+    The positions are ``priors`` ((N, 4, 4) world <- scan poses, e.g. GNSS or a SLAM run; rows of NaN for clouds
+    without one) when given; otherwise the consecutive registrations chained into a dead-reckoned path, with the
+    radius grown by 5% of the path length between the two clouds for the drift (a break in the chain, an
+    invalid consecutive pair, starts a new piece; pieces get no candidates between them).
 
     ``voxel_size``, ``refine`` (``"gicp"`` by default: its information weighs the edges; ``None`` or ``"none"``
     gives coarse poses, whose edges get an information from the rotation uncertainty alone and are weighed
@@ -167,19 +180,41 @@ def align(
     if not keys:
         raise InvalidArgumentError("align: clouds is empty")
     position = {key: k for k, key in enumerate(keys)}
+    sequence = pairs == "sequence"
     if isinstance(pairs, str):
-        if pairs != "all":
-            raise InvalidArgumentError(f"align: pairs is {pairs!r}; 'all' or a sequence of (source, target) keys")
-        chosen = [(keys[j], keys[i]) for i in range(len(keys)) for j in range(i + 1, len(keys))]
+        if pairs not in ("all", "sequence"):
+            raise InvalidArgumentError(
+                f"align: pairs is {pairs!r}; 'all', 'sequence' or a sequence of (source, target) keys"
+            )
+        if pairs == "all":
+            chosen = [(keys[j], keys[i]) for i in range(len(keys)) for j in range(i + 1, len(keys))]
+        else:
+            chosen = [(keys[i + 1], keys[i]) for i in range(len(keys) - 1)]
     else:
         chosen = [tuple(pair) for pair in pairs]  # type: ignore[misc]
         for pair in chosen:
             if len(pair) != 2 or pair[0] not in position or pair[1] not in position:
                 raise InvalidArgumentError(f"align: pair {pair!r} does not name two of the clouds")
+    prior_positions = _check_sequence_options(sequence, priors, len(keys), loop_radius, loop_gap, loops_per_scan)
     refine_mode: RefineMode = "none" if refine is None else refine
-    results = (
-        batch.register_many(
-            chosen,
+
+    def register(wanted: list[tuple[Hashable, Hashable]], clouds_now: Mapping[Any, Any]) -> list[batch.PairResult]:
+        if not wanted:
+            return []
+        return batch.register_many(
+            wanted,
+            clouds_now,
+            executor,
+            threads_per_job=threads_per_job,
+            progress=progress,
+            voxel_size=voxel_size,
+            refine=refine_mode,
+            **config,
+        )
+
+    if sequence and len(keys) > 1:
+        # Two rounds over the same clouds: described once, then the features serve both.
+        described = batch.describe_many(
             by_key,
             executor,
             threads_per_job=threads_per_job,
@@ -188,9 +223,28 @@ def align(
             refine=refine_mode,
             **config,
         )
-        if chosen
-        else []
-    )
+        # A cloud that cannot be described is left out of every pair (it ends not placed), as a pair with it would
+        # end as an error in "all".
+        usable = {key: value for key, value in described.items() if isinstance(value, Features)}
+        results = register([p for p in chosen if p[0] in usable and p[1] in usable], usable)
+        steps = {position[r.target]: r.result for r in results}
+        if loop_radius is not None:
+            radius = loop_radius
+        elif voxel_size is not None:
+            radius = 30.0 * float(voxel_size)
+        else:
+            raise InvalidArgumentError("align: pairs='sequence' needs loop_radius when voxel_size is not given")
+        loops = _loop_candidates(
+            prior_positions if prior_positions is not None else _dead_reckoned(steps, len(keys)),
+            radius,
+            loop_gap,
+            loops_per_scan,
+            drift=0.0 if prior_positions is not None else _DRIFT,
+        )
+        wanted = [(keys[j], keys[i]) for i, j in loops if keys[i] in usable and keys[j] in usable]
+        results += register(wanted, usable)
+    else:
+        results = register(chosen, by_key)
     graph = PoseGraph(len(keys))
     valid: list[tuple[int, int, np.ndarray, np.ndarray, Result]] = []
     with graph:
@@ -216,6 +270,80 @@ def align(
         edges=edges,
         registrations=len(results),
     )
+
+
+# ---- sequence candidates ---------------------------------------------------------------------------------------
+
+#: The radius of a loop candidate grows by this share of the dead-reckoned path between the two clouds: odometry
+#: from registrations drifts by about 1% of the distance (the KITTI odometry benchmark's error scale); 5% leaves room.
+_DRIFT = 0.05
+
+
+def _check_sequence_options(
+    sequence: bool, priors: Any, n: int, loop_radius: float | None, loop_gap: int, loops_per_scan: int
+) -> np.ndarray | None:
+    """The priors' positions ((N, 3), NaN rows for clouds without one), after checking the sequence options."""
+    if not sequence:
+        if priors is not None:
+            raise InvalidArgumentError("align: priors are read by pairs='sequence' only")
+        return None
+    if loop_radius is not None and not (math.isfinite(loop_radius) and loop_radius > 0):
+        raise InvalidArgumentError(f"align: loop_radius is {loop_radius}; a finite number above 0")
+    if isinstance(loop_gap, bool) or not isinstance(loop_gap, int) or loop_gap < 1:
+        raise InvalidArgumentError(f"align: loop_gap is {loop_gap!r}; an integer of at least 1")
+    if isinstance(loops_per_scan, bool) or not isinstance(loops_per_scan, int) or loops_per_scan < 0:
+        raise InvalidArgumentError(f"align: loops_per_scan is {loops_per_scan!r}; an integer of at least 0")
+    if priors is None:
+        return None
+    poses = np.asarray(priors, dtype=np.float64)
+    if poses.shape != (n, 4, 4):
+        raise InvalidArgumentError(f"align: priors has shape {poses.shape}; ({n}, 4, 4), one pose per cloud")
+    positions: np.ndarray = poses[:, :3, 3].copy()
+    positions[~np.isfinite(positions).all(axis=1)] = np.nan
+    return positions
+
+
+def _dead_reckoned(steps: Mapping[int, Result | None], n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The consecutive registrations (steps[k]: cloud k+1 into k) chained: positions (N, 3), the path length (N,)
+    and the piece (N,): a missing or invalid registration starts a new piece in a frame of its own."""
+    positions, path, piece = np.zeros((n, 3)), np.zeros(n), np.zeros(n, dtype=np.int64)
+    pose = np.eye(4)
+    for k in range(n - 1):
+        result = steps.get(k)
+        if result is not None and result.valid:
+            step = np.asarray(result.transform, dtype=np.float64)
+            pose = pose @ step
+            path[k + 1] = path[k] + float(np.linalg.norm(step[:3, 3]))
+            piece[k + 1] = piece[k]
+        else:
+            pose = np.eye(4)
+            piece[k + 1] = piece[k] + 1
+        positions[k + 1] = pose[:3, 3]
+    return positions, path, piece
+
+
+def _loop_candidates(
+    where: np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray], radius: float, gap: int, per_scan: int, drift: float
+) -> list[tuple[int, int]]:
+    """Pairs (i, j), j >= i + gap, whose positions lie within radius (+ drift x the path between them) of each
+    other, at most per_scan for each j (the nearest first, then the lower i), ordered by j then i."""
+    if isinstance(where, tuple):
+        positions, path, piece = where
+    else:
+        positions = where
+        path, piece = np.zeros(len(where)), np.zeros(len(where), dtype=np.int64)
+    known = np.isfinite(positions).all(axis=1)
+    out: list[tuple[int, int]] = []
+    for j in range(gap, len(positions)):
+        if not known[j] or per_scan == 0:
+            continue
+        earlier = j - gap + 1
+        distance = np.linalg.norm(positions[:earlier] - positions[j], axis=1)
+        allowed = radius + drift * np.abs(path[j] - path[:earlier])
+        near = known[:earlier] & (piece[:earlier] == piece[j]) & (distance <= allowed)
+        chosen = sorted(zip(distance[near].tolist(), np.flatnonzero(near).tolist(), strict=True))[:per_scan]
+        out.extend(sorted((int(i), j) for _, i in chosen))
+    return out
 
 
 # ---- helpers ---------------------------------------------------------------------------------------------------
