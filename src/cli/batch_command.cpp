@@ -3,8 +3,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <set>
 #include <string>
 #include <vector>
@@ -13,6 +11,7 @@
 
 #include "batch/batch_pairs.hpp"
 #include "batch/batch_progress.hpp"
+#include "batch/batch_resume.hpp"
 #include "batch/batch_run.hpp"
 #include "cli_args.hpp"
 #include "commands.hpp"
@@ -59,41 +58,6 @@ bool parse_batch_options(const std::vector<std::string> &args, BatchOptions *out
     return true;
 }
 
-// The finished pairs of an existing results file (--resume), checked against the pairs file; the file is cut
-// back to its complete lines. Empty when the file does not exist.
-std::vector<DoneRecord> resume_from(const std::string &path, const PairsTable &table, bool quiet) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return {};
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    in.close();
-    const std::string name = "'" + one_line(path) + "'";
-    const ResultsScan scan = scan_results(text, name);
-    std::set<int64_t> seen;
-    for (const DoneRecord &d : scan.done) {
-        const std::string where = name + " line " + std::to_string(d.line);
-        if (d.pair < 1 || d.pair > static_cast<int64_t>(table.rows.size())) {
-            throw UsageError(where + " is pair " + std::to_string(d.pair) + ", but the pairs file has " +
-                             std::to_string(table.rows.size()) + " (results of another pairs file?)");
-        }
-        const PairRow &row = table.rows[static_cast<size_t>(d.pair - 1)];
-        if (d.source != row.source || d.target != row.target) {
-            throw UsageError(where + ": pair " + std::to_string(d.pair) + " is '" + one_line(d.source) + "' to '" +
-                             one_line(d.target) + "', but the pairs file's is '" + one_line(row.source) + "' to '" +
-                             one_line(row.target) + "' (results of another pairs file?)");
-        }
-        if (!seen.insert(d.pair).second) throw UsageError(where + " repeats pair " + std::to_string(d.pair));
-    }
-    if (scan.dropped_partial) {
-        std::error_code ec;
-        std::filesystem::resize_file(path, scan.keep_bytes, ec);
-        if (ec) throw UsageError("cannot cut the partial last line off " + name + ": " + ec.message());
-        if (!quiet)
-            std::fprintf(stderr, "kissm: dropped the partial last line of %s (a run stopped while writing it)\n",
-                         name.c_str());
-    }
-    return scan.done;
-}
-
 bool exists_non_empty(const std::string &path) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
@@ -113,7 +77,7 @@ int run_batch_command(const BatchOptions &given) {
                          "' exists and is not empty: --resume completes it, or remove it to start again");
     }
     const std::vector<DoneRecord> done =
-        opt.resume ? resume_from(opt.out, table, opt.quiet) : std::vector<DoneRecord>();
+        opt.resume ? resume_results(opt.out, table.rows, "pairs file", opt.quiet) : std::vector<DoneRecord>();
     std::vector<bool> is_done(table.rows.size(), false);
     BatchCounts earlier;
     for (const DoneRecord &d : done) {

@@ -27,12 +27,16 @@ int run_refine(const std::vector<std::string> &args);
 int run_demo(const std::vector<std::string> &args);
 int run_ground(const std::vector<std::string> &args);
 int run_batch(const std::vector<std::string> &args);
+int run_simulate(const std::vector<std::string> &args);
+int run_align(const std::vector<std::string> &args);
 
 void print_register_help(std::FILE *out);
 void print_refine_help(std::FILE *out);
 void print_demo_help(std::FILE *out);
 void print_ground_help(std::FILE *out);
 void print_batch_help(std::FILE *out);
+void print_simulate_help(std::FILE *out);
+void print_align_help(std::FILE *out);
 
 // A log callback printing the library's messages to stderr (for --verbose).
 void log_to_stderr(void *user_data, int32_t level, const char *message);

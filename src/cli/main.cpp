@@ -6,6 +6,9 @@
 //   kissm demo [--out DIR] [--threads N] [--seed S]     synthetic LiDAR scene, registered end to end
 //   kissm ground IN --voxel V [--out-ground G.ply] [--out-rest R.ply]   a scan's ground points
 //   kissm batch PAIRS.tsv --voxel V --out RESULTS.jsonl [--jobs N] [--resume]   many pairs, one JSON line each
+//   kissm simulate OUTDIR --scans N [--seed S] [--spacing M]   a long simulated drive with loops, as a scan set
+//   kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|FILE] [--map M.ply] [--g2o G.g2o]
+//       many scans into one frame: pairs registered as batch does, then a pose graph
 //
 // Exit status: 0 success, 1 the registration ran but gave no trustworthy pose, 2 usage or input error
 // (with one "kissm: ..." line on stderr).
@@ -44,6 +47,14 @@ void print_usage(std::FILE *out) {
                  "  kissm batch PAIRS.tsv --voxel V --out RESULTS.jsonl [--jobs N] [--resume] [options]\n"
                  "      Register every pair of a tab-separated pairs file (source, target, optional gt),\n"
                  "      describing each cloud once; one JSON line per pair, appended as it finishes.\n"
+                 "  kissm simulate OUTDIR --scans N [--seed S] [--spacing M] [--threads T] [-q]\n"
+                 "      Simulate a long LiDAR drive with loops through a synthetic city: the scans, their exact\n"
+                 "      poses and the true loop closures, as a multi-scan set (scans.tsv, gt_poses.txt).\n"
+                 "  kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|FILE] [--jobs N]\n"
+                 "              [--resume] [--map MAP.ply] [--g2o G.g2o] [options]\n"
+                 "      Put many scans into the first one's frame with no initial guess: register the pairs as\n"
+                 "      batch does, then optimise a pose graph of the valid ones; one pose per scan. Exit 1\n"
+                 "      when some scans are not placed (the outputs are still written).\n"
                  "  kissm help [COMMAND]      this text, or a command's options (same as COMMAND --help)\n"
                  "  kissm --version           print the version\n"
                  "\n"
@@ -71,6 +82,10 @@ int run(const std::vector<std::string> &args) {
             print_ground_help(stdout);
         } else if (rest[0] == "batch") {
             print_batch_help(stdout);
+        } else if (rest[0] == "simulate") {
+            print_simulate_help(stdout);
+        } else if (rest[0] == "align") {
+            print_align_help(stdout);
         } else {
             throw UsageError("no help for unknown command '" + one_line(rest[0]) + "' (try 'kissm --help')");
         }
@@ -85,6 +100,8 @@ int run(const std::vector<std::string> &args) {
     if (command == "demo") return run_demo(rest);
     if (command == "ground") return run_ground(rest);
     if (command == "batch") return run_batch(rest);
+    if (command == "simulate") return run_simulate(rest);
+    if (command == "align") return run_align(rest);
     if (!command.empty() && command[0] == '-') {
         throw UsageError("unknown option '" + one_line(command) + "' (try 'kissm --help')");
     }

@@ -44,17 +44,34 @@ struct Ground {
     double rough_road = 0.0, rough_off_road = 0.0; // amplitude of each wave
     double hmin = 0, hmax = 0;                     // bounds of h within the scene's extent
     double max_gradient = 0; // bound of |grad h| away from the kerbs (which add at most curb_height)
+    // A city's streets (city_layout.hpp): when there are any, these rectangles of road replace the demo's
+    // main street and cross street as what lies below the kerbs; the demo leaves them empty.
+    static constexpr int kMaxRoads = 16;
+    int roads = 0;
+    double road_x0[kMaxRoads] = {}, road_x1[kMaxRoads] = {}, road_y0[kMaxRoads] = {}, road_y1[kMaxRoads] = {};
 
     static constexpr double kKerbWidth = 0.08; // horizontal extent of the kerb's slope
 
     static double kerb(double d) { return d <= 0.0 ? 0.0 : (d >= kKerbWidth ? 1.0 : d / kKerbWidth); }
 
+    // How far (x, y) lies outside the nearest of the city's road rectangles (<= 0 on a road). The kerb is
+    // monotone, so the kerb of the least distance is the least kerb, as the demo's min of two kerbs.
+    double outside_roads(double x, double y) const {
+        double d = kInf;
+        for (int i = 0; i < roads; ++i) {
+            d = std::min(d,
+                         std::max(std::max(road_x0[i] - x, x - road_x1[i]), std::max(road_y0[i] - y, y - road_y1[i])));
+        }
+        return d;
+    }
+
     double height(double x, double y) const {
         constexpr double c = 1.0 / (2.0 * kPi); // radians to cycles
         const double base = a1 * wave(c * (k1x * x + p1)) * wave(c * (k1y * y + q1) + 0.25) +
                             a2 * wave(c * (k2x * x + k2y * y + p2)) + gx * x + gy * y;
-        const double off_road =
-            std::min(kerb(std::max(road_lo - y, y - road_hi)), kerb(std::fabs(x - cross_x) - cross_half_width));
+        const double off_road = roads == 0 ? std::min(kerb(std::max(road_lo - y, y - road_hi)),
+                                                      kerb(std::fabs(x - cross_x) - cross_half_width))
+                                           : kerb(outside_roads(x, y));
         double rough = 0.0;
         for (int i = 0; i < kRoughWaves; ++i) rough += wave(c * (rough_kx[i] * x + rough_ky[i] * y + rough_phase[i]));
         return base + curb_height * off_road + (rough_road + (rough_off_road - rough_road) * off_road) * rough;

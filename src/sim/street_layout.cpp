@@ -12,6 +12,8 @@ namespace {
 
 constexpr double kSceneExtent = 200.0; // metres from the world origin that the ground bounds cover
 
+} // namespace
+
 Ground make_ground(Rng &rng) {
     Ground g;
     g.a1 = rng.uniform(0.08, 0.15);
@@ -37,20 +39,14 @@ Ground make_ground(Rng &rng) {
     return g;
 }
 
-// Fixes the streets (for the kerbs) and the bounds used by the ray marcher.
-void finish_ground(Ground &g, const Layout &lay, double curb_height) {
-    g.road_lo = lay.road_lo();
-    g.road_hi = lay.road_hi();
-    const double cross_x = lay.cross_x, cross_half_width = lay.cross_half_width;
-    g.cross_x = cross_x;
-    g.cross_half_width = cross_half_width;
-    g.curb_height = curb_height;
+void bound_ground(Ground &g, double extent) {
+    const double curb_height = g.curb_height;
     const double slope = std::fabs(g.gx) + std::fabs(g.gy);
     const double rough = Ground::kRoughWaves * std::max(g.rough_road, g.rough_off_road);
     double rough_gradient = 0.0;
     for (int i = 0; i < Ground::kRoughWaves; ++i) rough_gradient += std::hypot(g.rough_kx[i], g.rough_ky[i]);
-    g.hmin = -(g.a1 + g.a2 + slope * kSceneExtent + rough);
-    g.hmax = g.a1 + g.a2 + slope * kSceneExtent + curb_height + rough;
+    g.hmin = -(g.a1 + g.a2 + slope * extent + rough);
+    g.hmax = g.a1 + g.a2 + slope * extent + curb_height + rough;
     // The kerb ramps also scale the roughness amplitude; both effects are bounded by the step allowance
     // (curb_height + rough) that hit_ground subtracts before each step.
     g.max_gradient = kWaveSlope * (g.a1 * std::hypot(g.k1x, g.k1y) + g.a2 * std::hypot(g.k2x, g.k2y) +
@@ -58,7 +54,6 @@ void finish_ground(Ground &g, const Layout &lay, double curb_height) {
                      std::hypot(g.gx, g.gy);
 }
 
-// A car at (cx, cy) heading along yaw: a body and a cabin, or a van.
 void add_car(Scene &s, Rng &rng, double cx, double cy, double yaw, double length) {
     const double ground = s.ground.height(cx, cy);
     const double width = rng.uniform(1.7, 1.9);
@@ -72,6 +67,19 @@ void add_car(Scene &s, Rng &rng, double cx, double cy, double yaw, double length
     const double shift = length * rng.uniform(-0.12, 0.05);
     s.add_box(cx + shift * std::cos(yaw), cy + shift * std::sin(yaw), body_top - 0.05, ground + rng.uniform(1.4, 1.6),
               cabin, width - 0.15, yaw);
+}
+
+namespace {
+
+// Fixes the streets (for the kerbs) and the bounds used by the ray marcher.
+void finish_ground(Ground &g, const Layout &lay, double curb_height) {
+    g.road_lo = lay.road_lo();
+    g.road_hi = lay.road_hi();
+    const double cross_x = lay.cross_x, cross_half_width = lay.cross_half_width;
+    g.cross_x = cross_x;
+    g.cross_half_width = cross_half_width;
+    g.curb_height = curb_height;
+    bound_ground(g, kSceneExtent);
 }
 
 void add_tree(Scene &s, Rng &rng, double x, double y) {
@@ -152,11 +160,12 @@ int add_facade_details(Scene &s, Rng &rng, double cx, double cy, double g, doubl
     return added;
 }
 
-// Buildings along one side of the main street.
-void add_street_buildings(Scene &s, Rng &rng, const Layout &lay, const StreetSide &street, DemoSceneStats &stats) {
+} // namespace
+
+void add_street_buildings(Scene &s, Rng &rng, const Layout &lay, const StreetSide &street, double x_begin, double x_end,
+                          DemoSceneStats &stats) {
     const double side = street.sign;
     const double sidewalk_edge = street.kerb + street.sidewalk;
-    const double x_begin = lay.end_x < 0.0 ? lay.end_x : -95.0, x_end = lay.end_x < 0.0 ? 95.0 : lay.end_x;
     double x = x_begin + rng.uniform(0.0, 3.0);
     while (x < x_end) {
         const double width = std::min(rng.uniform(8.0, 24.0), std::max(x_end - x, 4.0));
@@ -214,6 +223,8 @@ void add_street_buildings(Scene &s, Rng &rng, const Layout &lay, const StreetSid
     }
 }
 
+namespace {
+
 // A building of depth (along x) by length (along y) and the given height at (cx, cy), slightly yawed, with
 // facade details on the face whose outward normal is (front, 0) (front = +1 or -1).
 void add_block_facing_x(Scene &s, Rng &rng, double cx, double cy, double depth, double length, double height,
@@ -257,12 +268,14 @@ void add_end_buildings(Scene &s, Rng &rng, const Layout &lay, DemoSceneStats &st
     }
 }
 
-void add_street_furniture(Scene &s, Rng &rng, Layout &lay, DemoSceneStats &stats) {
+} // namespace
+
+void add_kerbside_furniture(Scene &s, Rng &rng, Layout &lay, double x_lo, double x_hi, DemoSceneStats &stats) {
     for (StreetSide &street : lay.sides) {
         const double side = street.sign;
         // Street lights at the kerb with an arm over the road.
         if (street.poles) {
-            for (double x = -90.0 + rng.uniform(0.0, 20.0); x < 90.0; x += rng.uniform(16.0, 32.0)) {
+            for (double x = x_lo + rng.uniform(0.0, 20.0); x < x_hi; x += rng.uniform(16.0, 32.0)) {
                 if (lay.in_cross_street(x, 1.0) || lay.beyond_end(x)) continue;
                 const double y = side * (street.kerb + 0.6);
                 const double g = s.ground.height(x, y);
@@ -277,7 +290,7 @@ void add_street_furniture(Scene &s, Rng &rng, Layout &lay, DemoSceneStats &stats
         // Trees on the sidewalk, away from the poles.
         if (street.trees) {
             const double offset = std::min(2.2, 0.6 * street.sidewalk);
-            for (double x = -90.0 + rng.uniform(0.0, 10.0); x < 90.0; x += rng.uniform(6.0, 14.0)) {
+            for (double x = x_lo + rng.uniform(0.0, 10.0); x < x_hi; x += rng.uniform(6.0, 14.0)) {
                 if (!rng.chance(0.7) || lay.in_cross_street(x, 2.0) || lay.beyond_end(x)) continue;
                 bool near_pole = false;
                 for (double px : street.pole_x) near_pole = near_pole || std::fabs(px - x) < 2.5;
@@ -287,8 +300,8 @@ void add_street_furniture(Scene &s, Rng &rng, Layout &lay, DemoSceneStats &stats
             }
         }
         // Parked cars along the kerb.
-        double x = -90.0 + rng.uniform(0.0, 5.0);
-        while (x < 90.0) {
+        double x = x_lo + rng.uniform(0.0, 5.0);
+        while (x < x_hi) {
             const double length = rng.uniform(3.9, 4.9);
             if (rng.chance(street.parking) && !lay.in_cross_street(x + 0.5 * length, 2.5) && !lay.beyond_end(x - 3.0) &&
                 !lay.beyond_end(x + length + 3.0)) {
@@ -300,15 +313,26 @@ void add_street_furniture(Scene &s, Rng &rng, Layout &lay, DemoSceneStats &stats
             }
         }
     }
-    // Clutter on the main street's sidewalks and along the cross street.
-    for (int i = 0; i < 90; ++i) {
+}
+
+void add_sidewalk_clutter(Scene &s, Rng &rng, const Layout &lay, double x_lo, double x_hi, int count,
+                          DemoSceneStats &stats) {
+    for (int i = 0; i < count; ++i) {
         const StreetSide &street = lay.sides[rng.uniform_int(0, 1)];
-        const double x = rng.uniform(-75.0, 75.0);
+        const double x = rng.uniform(x_lo, x_hi);
         const double y = street.sign * (street.kerb + rng.uniform(0.3, street.sidewalk - 0.2));
         if (lay.in_cross_street(x, 0.0) || lay.beyond_end(x - 2.0)) continue;
         add_clutter(s, rng, x, y);
         ++stats.clutter;
     }
+}
+
+namespace {
+
+// The demo's lights, trees, parked cars and clutter: along the main street, then clutter along the cross street.
+void add_street_furniture(Scene &s, Rng &rng, Layout &lay, DemoSceneStats &stats) {
+    add_kerbside_furniture(s, rng, lay, -90.0, 90.0, stats);
+    add_sidewalk_clutter(s, rng, lay, -75.0, 75.0, 90, stats);
     for (int i = 0; i < 25; ++i) {
         const double x = lay.cross_x + rng.sign() * rng.uniform(lay.cross_half_width + 0.3, lay.cross_half_width + 3.0);
         const double y = rng.sign() * rng.uniform(12.0, 70.0);
@@ -319,9 +343,7 @@ void add_street_furniture(Scene &s, Rng &rng, Layout &lay, DemoSceneStats &stats
 
 } // namespace
 
-void build_street(Rng &rng, Scene &s, Layout &lay, DemoSceneStats &stats) {
-    s.ground = make_ground(rng);
-
+void draw_cross_section(Rng &rng, Layout &lay) {
     // An asymmetric street: a narrow and a wide side, lights on one side (sometimes both), parking mostly on
     // one side, trees where there is room.
     const int narrow = rng.uniform_int(0, 1);
@@ -334,12 +356,18 @@ void build_street(Rng &rng, Scene &s, Layout &lay, DemoSceneStats &stats) {
         street.trees = k == narrow ? rng.chance(0.4) : rng.chance(0.8);
         street.parking = k == narrow ? rng.uniform(0.0, 0.5) : rng.uniform(0.6, 0.85);
     }
+}
+
+void build_street(Rng &rng, Scene &s, Layout &lay, DemoSceneStats &stats) {
+    s.ground = make_ground(rng);
+    draw_cross_section(rng, lay);
     lay.cross_x = rng.sign() * rng.uniform(22.0, 38.0);
     lay.cross_half_width = rng.uniform(5.0, 7.0);
     lay.end_x = (lay.cross_x < 0.0 ? 1.0 : -1.0) * rng.uniform(35.0, 55.0);
     finish_ground(s.ground, lay, rng.uniform(0.12, 0.18));
 
-    for (const StreetSide &street : lay.sides) add_street_buildings(s, rng, lay, street, stats);
+    const double x_begin = lay.end_x < 0.0 ? lay.end_x : -95.0, x_end = lay.end_x < 0.0 ? 95.0 : lay.end_x;
+    for (const StreetSide &street : lay.sides) add_street_buildings(s, rng, lay, street, x_begin, x_end, stats);
     add_cross_street_buildings(s, rng, lay, stats);
     add_end_buildings(s, rng, lay, stats);
     add_street_furniture(s, rng, lay, stats);

@@ -52,6 +52,30 @@ struct Layout {
 // The ground, the street's cross-section and everything that stands still: buildings, walls, street
 // furniture, parked cars. Fills lay and counts into stats.
 void build_street(Rng &rng, Scene &s, Layout &lay, DemoSceneStats &stats);
+
+// The pieces build_street is made of, for the city (city_layout.hpp), which furnishes each stretch of its
+// streets between two crossings with them, in the street's own frame (along x, centre line y = 0). A layout
+// whose cross_x and end_x lie far away has neither a cross street nor an end.
+//
+// The ground's waves, slope and roughness (no streets yet: set them, curb_height, then bound_ground).
+Ground make_ground(Rng &rng);
+// The ray marcher's height bounds and gradient bound for points up to `extent` metres from the origin along x
+// and along y (uses curb_height).
+void bound_ground(Ground &g, double extent);
+// Each side's kerb, sidewalk, lights, trees and parking (lay.sides).
+void draw_cross_section(Rng &rng, Layout &lay);
+// Buildings (wings, facade details, hedges, porches, walls across the gaps) along one side, from x_begin to
+// about x_end.
+void add_street_buildings(Scene &s, Rng &rng, const Layout &lay, const StreetSide &street, double x_begin, double x_end,
+                          DemoSceneStats &stats);
+// Street lights, trees and parked cars along both kerbs from x_lo to x_hi (a parked car may end up to a car
+// length past x_hi).
+void add_kerbside_furniture(Scene &s, Rng &rng, Layout &lay, double x_lo, double x_hi, DemoSceneStats &stats);
+// `count` tries at a bin, bollard, cabinet, bush or sign post on either sidewalk between x_lo and x_hi.
+void add_sidewalk_clutter(Scene &s, Rng &rng, const Layout &lay, double x_lo, double x_hi, int count,
+                          DemoSceneStats &stats);
+// A car at (cx, cy) heading along yaw: a body and a cabin, or a van.
+void add_car(Scene &s, Rng &rng, double cx, double cy, double yaw, double length);
 // Lorries and vans stopped in the street (in both scans), clear of the sensor poses a and b.
 void add_stopped_vehicles(Scene &s, Rng &rng, const Layout &lay, const Pose &a, const Pose &b, DemoSceneStats &stats);
 // Vehicles and pedestrians seen in one scan only (they moved between the two scans).

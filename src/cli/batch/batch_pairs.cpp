@@ -5,22 +5,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 
 #include "cli_args.hpp"
 
 namespace kissm_cli {
 namespace {
-
-std::vector<std::string> split_tabs(const std::string &line) {
-    std::vector<std::string> fields;
-    size_t start = 0;
-    for (;;) {
-        const size_t tab = line.find('\t', start);
-        fields.push_back(line.substr(start, tab == std::string::npos ? std::string::npos : tab - start));
-        if (tab == std::string::npos) return fields;
-        start = tab + 1;
-    }
-}
 
 std::string trimmed(const std::string &s) {
     const size_t a = s.find_first_not_of(" \t");
@@ -28,27 +18,12 @@ std::string trimmed(const std::string &s) {
     return s.substr(a, s.find_last_not_of(" \t") - a + 1);
 }
 
-bool is_blank_or_comment(const std::string &line) {
-    const std::string t = trimmed(line);
-    return t.empty() || t[0] == '#';
-}
-
-// A column's position in the header, or -1; a UsageError when the header names it twice.
-int column_of(const std::vector<std::string> &header, const char *column, const std::string &where) {
-    int at = -1;
-    for (size_t i = 0; i < header.size(); ++i) {
-        if (trimmed(header[i]) != column) continue;
-        if (at >= 0) throw UsageError(where + ": the header names the column '" + column + "' twice");
-        at = static_cast<int>(i);
-    }
-    return at;
-}
-
-// Reads one results record's members. Only the members --resume needs are kept; the others are checked to
-// be JSON and skipped. Every method returns false on anything that is not JSON.
+// Reads one results record's members. Only the members --resume needs are kept (and with_poses, the ones
+// `kissm align` builds its graph from); the others are checked to be JSON and skipped. Every method returns false on
+// anything that is not JSON.
 class RecordReader {
 public:
-    explicit RecordReader(const std::string &text) : s_(text) {}
+    RecordReader(const std::string &text, bool with_poses) : s_(text), with_poses_(with_poses) {}
 
     bool read(DoneRecord *out) {
         bool have_pair = false, have_source = false, have_target = false, have_status = false, have_valid = false;
@@ -74,6 +49,14 @@ public:
             } else if (key == "valid") {
                 if (!bool_value(&out->valid)) return false;
                 have_valid = true;
+            } else if (with_poses_ && key == "transform") {
+                if (!matrix_or_skip(4, 4, &out->transform)) return false;
+            } else if (with_poses_ && key == "information") {
+                if (!matrix_or_skip(6, 6, &out->information)) return false;
+            } else if (with_poses_ && key == "rotation_uncertainty") {
+                if (!number_or_skip(&out->rotation_uncertainty)) return false;
+            } else if (with_poses_ && key == "noise_bound") {
+                if (!number_or_skip(&out->noise_bound)) return false;
             } else if (!skip_value(0)) {
                 return false;
             }
@@ -119,14 +102,54 @@ private:
         *v = std::strtoll(s_.c_str() + start, nullptr, 10);
         return true;
     }
-    bool number_value() {
+    bool number_value(double *v = nullptr) {
         skip_space();
         const char *begin = s_.c_str() + at_;
         char *end = nullptr;
-        std::strtod(begin, &end);
+        const double parsed = std::strtod(begin, &end);
         if (end == begin) return false;
         at_ += static_cast<size_t>(end - begin);
+        if (v) *v = parsed;
         return true;
+    }
+    // A number, or null as NaN (the writer's spelling of a non-finite number). The writer prints the shortest
+    // text that reads back to the same double, so strtod gives the very bits the run had.
+    bool number_or_null(double *v) {
+        if (literal("null")) {
+            *v = std::numeric_limits<double>::quiet_NaN();
+            return true;
+        }
+        return number_value(v);
+    }
+    // A rows x cols list of lists of numbers (or nulls) into *out, row-major. Anything else that is JSON
+    // (null, another shape) is skipped and leaves *out empty: a record is judged by batch's rules alone.
+    bool matrix_or_skip(int rows, int cols, std::vector<double> *out) {
+        const size_t start = at_;
+        std::vector<double> values;
+        bool ok = consume('[');
+        for (int r = 0; ok && r < rows; ++r) {
+            ok = (r == 0 || consume(',')) && consume('[');
+            for (int c = 0; ok && c < cols; ++c) {
+                double v = 0.0;
+                ok = (c == 0 || consume(',')) && number_or_null(&v);
+                values.push_back(v);
+            }
+            ok = ok && consume(']');
+        }
+        if (ok && consume(']')) {
+            *out = values;
+            return true;
+        }
+        at_ = start;
+        out->clear();
+        return skip_value(0);
+    }
+    bool number_or_skip(double *v) {
+        const size_t start = at_;
+        if (number_or_null(v)) return true;
+        at_ = start;
+        *v = std::numeric_limits<double>::quiet_NaN();
+        return skip_value(0);
     }
     static int hex_digit(char c) {
         if (c >= '0' && c <= '9') return c - '0';
@@ -210,10 +233,37 @@ private:
     }
 
     const std::string &s_;
+    bool with_poses_ = false;
     size_t at_ = 0;
 };
 
 } // namespace
+
+std::vector<std::string> split_tab_fields(const std::string &line) {
+    std::vector<std::string> fields;
+    size_t start = 0;
+    for (;;) {
+        const size_t tab = line.find('\t', start);
+        fields.push_back(line.substr(start, tab == std::string::npos ? std::string::npos : tab - start));
+        if (tab == std::string::npos) return fields;
+        start = tab + 1;
+    }
+}
+
+bool is_blank_or_comment_line(const std::string &line) {
+    const std::string t = trimmed(line);
+    return t.empty() || t[0] == '#';
+}
+
+int header_column(const std::vector<std::string> &header, const char *column, const std::string &where) {
+    int at = -1;
+    for (size_t i = 0; i < header.size(); ++i) {
+        if (trimmed(header[i]) != column) continue;
+        if (at >= 0) throw UsageError(where + ": the header names the column '" + column + "' twice");
+        at = static_cast<int>(i);
+    }
+    return at;
+}
 
 PairsTable parse_pairs(const std::string &text, const std::string &name) {
     PairsTable table;
@@ -228,14 +278,14 @@ PairsTable parse_pairs(const std::string &text, const std::string &name) {
         start = end + 1;
         ++line_no;
         if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (is_blank_or_comment(line)) continue;
+        if (is_blank_or_comment_line(line)) continue;
         const std::string where = name + " line " + std::to_string(line_no);
-        std::vector<std::string> fields = split_tabs(line);
+        std::vector<std::string> fields = split_tab_fields(line);
         if (header.empty()) {
             header = fields;
-            source_col = column_of(header, "source", where);
-            target_col = column_of(header, "target", where);
-            gt_col = column_of(header, "gt", where);
+            source_col = header_column(header, "source", where);
+            target_col = header_column(header, "target", where);
+            gt_col = header_column(header, "gt", where);
             if (source_col < 0 || target_col < 0) {
                 throw UsageError(where + ": the header has no '" + (source_col < 0 ? "source" : "target") +
                                  "' column (expected tab-separated column names: source, target and optionally gt)");
@@ -279,7 +329,7 @@ std::string resolve_pair_path(const std::string &pairs_file, const std::string &
     return (std::filesystem::path(pairs_file).parent_path() / p).string();
 }
 
-ResultsScan scan_results(const std::string &text, const std::string &name) {
+ResultsScan scan_results(const std::string &text, const std::string &name, bool with_poses) {
     ResultsScan scan;
     size_t start = 0, line_no = 0;
     while (start < text.size()) {
@@ -289,7 +339,8 @@ ResultsScan scan_results(const std::string &text, const std::string &name) {
         ++line_no;
         DoneRecord record;
         record.line = line_no;
-        const bool ok = newline != std::string::npos && RecordReader(text.substr(start, end - start)).read(&record);
+        const bool ok =
+            newline != std::string::npos && RecordReader(text.substr(start, end - start), with_poses).read(&record);
         if (!ok) {
             if (last) {
                 scan.dropped_partial = true;

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,11 @@ struct PairRow {
     size_t line = 0;   // line number in the file, for messages
     std::string source, target;
     std::string gt; // the ground-truth transform file; empty when the row (or the file) has none
+    // `kissm align`'s rows name scans, not files: source and target are the scans' names (what the results
+    // record), and these their files (already resolved) and KISSM_FORMAT_* formats. Empty for `kissm batch`,
+    // whose source and target are the paths, resolved against the pairs file and read with the run's formats.
+    std::string source_file, target_file;
+    int32_t source_file_format = 0, target_file_format = 0;
 };
 
 struct PairsTable {
@@ -31,6 +37,12 @@ struct PairsTable {
 PairsTable parse_pairs(const std::string &text, const std::string &name);
 // The same from a file (a UsageError when it cannot be read).
 PairsTable read_pairs_file(const std::string &path);
+// The table pieces parse_pairs uses, shared with `kissm align`'s scans file: a line's tab-separated fields; a
+// blank or '#' comment line; a column's position in the header (-1 when absent; a UsageError at `where` when
+// it is named twice).
+std::vector<std::string> split_tab_fields(const std::string &line);
+bool is_blank_or_comment_line(const std::string &line);
+int header_column(const std::vector<std::string> &header, const char *column, const std::string &where);
 // `path` as written in the pairs file: absolute as is, relative against the pairs file's folder (so that a
 // pairs file and its clouds can move together, and the result does not depend on the working directory).
 std::string resolve_pair_path(const std::string &pairs_file, const std::string &path);
@@ -42,6 +54,13 @@ struct DoneRecord {
     bool error = false; // "status": "error" (a per-pair input error); otherwise it ran
     bool valid = false;
     size_t line = 0; // line number in the results file
+    // Read only with scan_results(..., with_poses = true) (`kissm align` builds its pose graph from them):
+    // "transform" (16 row-major numbers) and "information" (36), empty when the member is absent, null or not
+    // such a matrix (a null entry reads as NaN); "rotation_uncertainty" and "noise_bound", NaN when absent or
+    // null.
+    std::vector<double> transform, information;
+    double rotation_uncertainty = std::numeric_limits<double>::quiet_NaN();
+    double noise_bound = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct ResultsScan {
@@ -53,7 +72,8 @@ struct ResultsScan {
 // Scans a results file's text. A record is one line holding a JSON object with at least "pair" (an integer),
 // "source", "target" and "status" (strings) and "valid" (a boolean). The last line is dropped (a run killed
 // while writing it) when it has no newline or is not such a record; any other line that is not is a
-// UsageError naming it (a file that is not batch results is never truncated).
-ResultsScan scan_results(const std::string &text, const std::string &name);
+// UsageError naming it (a file that is not batch results is never truncated). with_poses: also read the
+// records' pose members (DoneRecord); a member that is not the expected shape is skipped as any other.
+ResultsScan scan_results(const std::string &text, const std::string &name, bool with_poses = false);
 
 } // namespace kissm_cli

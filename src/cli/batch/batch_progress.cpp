@@ -2,6 +2,7 @@
 #include "batch_progress.hpp"
 
 #include <cstdio>
+#include <utility>
 
 #if defined(_WIN32)
 #  include <io.h>
@@ -44,8 +45,8 @@ std::string progress_text(size_t done, size_t total, double elapsed_s) {
     return buf;
 }
 
-BatchProgress::BatchProgress(size_t total, bool enabled)
-    : total_(total), enabled_(enabled), tty_(enabled && KISSM_ISATTY(KISSM_FILENO(stderr))),
+BatchProgress::BatchProgress(size_t total, bool enabled, std::string label)
+    : total_(total), label_(std::move(label)), enabled_(enabled), tty_(enabled && KISSM_ISATTY(KISSM_FILENO(stderr))),
       start_(std::chrono::steady_clock::now()), last_print_(start_) {}
 
 double BatchProgress::elapsed_s() const {
@@ -63,7 +64,7 @@ void BatchProgress::pair_done() {
 }
 
 void BatchProgress::print() {
-    const std::string text = "kissm batch: " + progress_text(done_, total_, elapsed_s());
+    const std::string text = label_ + ": " + progress_text(done_, total_, elapsed_s());
     if (tty_) {
         // Spaces over what is left of a longer previous line.
         const size_t pad = last_width_ > text.size() ? last_width_ - text.size() : 0;

@@ -11,8 +11,8 @@ namespace kissm_cli {
 
 class BatchProgress {
 public:
-    // total: the pairs this run registers; enabled false (--quiet) prints nothing.
-    BatchProgress(size_t total, bool enabled);
+    // total: the pairs this run registers; enabled false (--quiet) prints nothing; label starts the line.
+    BatchProgress(size_t total, bool enabled, std::string label = "kissm batch");
     void pair_done(); // the caller serialises the calls
     void finish();    // the last state (on a terminal), and ends the line
     double elapsed_s() const;
@@ -21,6 +21,7 @@ private:
     void print();
 
     size_t total_, done_ = 0;
+    std::string label_;
     bool enabled_, tty_;
     bool printed_ = false;
     size_t last_width_ = 0;

@@ -108,15 +108,26 @@ private:
     std::map<Key, Entry> entries_;
 };
 
-FeatureCache::Key cloud_key(const std::string &pairs_file, const std::string &path, int32_t format) {
-    return {std::filesystem::path(resolve_pair_path(pairs_file, path)).lexically_normal().string(), format};
+FeatureCache::Key cloud_key(const std::string &path, int32_t format) {
+    return {std::filesystem::path(path).lexically_normal().string(), format};
+}
+
+// A row's clouds: its own files and formats when it has them (`kissm align`'s scans), else its paths resolved
+// against the pairs file, with the run's formats.
+FeatureCache::Key source_key(const BatchRun &run, const PairRow &row) {
+    if (!row.source_file.empty()) return cloud_key(row.source_file, row.source_file_format);
+    return cloud_key(resolve_pair_path(run.pairs_file, row.source), run.source_format);
+}
+FeatureCache::Key target_key(const BatchRun &run, const PairRow &row) {
+    if (!row.target_file.empty()) return cloud_key(row.target_file, row.target_file_format);
+    return cloud_key(resolve_pair_path(run.pairs_file, row.target), run.target_format);
 }
 
 // Appends the lines, one write and flush each (a killed run loses no finished pair and leaves at most one
 // partial line), counts them and keeps the progress line.
 class ResultSink {
 public:
-    ResultSink(const BatchRun &run) : run_(run), progress_(run.pending.size(), run.progress) {}
+    ResultSink(const BatchRun &run) : run_(run), progress_(run.pending.size(), run.progress, run.progress_label) {}
 
     // False once a write failed (the jobs then stop taking pairs).
     bool ok() const { return !failed_.load(); }
@@ -167,11 +178,9 @@ PairOutcome register_pair(const BatchRun &run, const PairRow &row, FeatureCache 
         return failed("gt: " + error);
     }
     // The source first, then the target: the message names the first that fails, whichever job runs the pair.
-    const kissm_features *source =
-        cache.acquire(cloud_key(run.pairs_file, row.source, run.source_format), matcher, &error);
+    const kissm_features *source = cache.acquire(source_key(run, row), matcher, &error);
     if (!source) return failed("source '" + one_line(row.source) + "': " + error);
-    const kissm_features *target =
-        cache.acquire(cloud_key(run.pairs_file, row.target, run.target_format), matcher, &error);
+    const kissm_features *target = cache.acquire(target_key(run, row), matcher, &error);
     if (!target) return failed("target '" + one_line(row.target) + "': " + error);
     kissm_result result{};
     int32_t status = kissm_result_init(&result, sizeof result);
@@ -230,8 +239,8 @@ std::string batch_line_error(const PairRow &row, bool has_gt_column, const std::
 BatchCounts run_batch_pairs(const BatchRun &run) {
     FeatureCache cache;
     for (const PairRow &row : run.pending) {
-        cache.add_reference(cloud_key(run.pairs_file, row.source, run.source_format));
-        cache.add_reference(cloud_key(run.pairs_file, row.target, run.target_format));
+        cache.add_reference(source_key(run, row));
+        cache.add_reference(target_key(run, row));
     }
     std::vector<MatcherPtr> matchers;
     const size_t jobs = std::min(static_cast<size_t>(run.jobs), std::max<size_t>(run.pending.size(), 1));
@@ -255,8 +264,8 @@ BatchCounts run_batch_pairs(const BatchRun &run) {
                 o = {batch_line_error(row, run.has_gt_column, e.what()), true, false};
             }
             sink.add(o.line, o.error, o.valid);
-            cache.release(cloud_key(run.pairs_file, row.source, run.source_format));
-            cache.release(cloud_key(run.pairs_file, row.target, run.target_format));
+            cache.release(source_key(run, row));
+            cache.release(target_key(run, row));
         }
     };
     std::vector<std::thread> threads;

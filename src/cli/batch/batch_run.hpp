@@ -24,7 +24,8 @@ struct BatchRun {
     bool has_gt_column = false;
     std::vector<PairRow> pending; // in the pairs file's order
     int32_t jobs = 1;
-    bool progress = true; // the progress line on stderr
+    bool progress = true;                       // the progress line on stderr
+    std::string progress_label = "kissm batch"; // what starts it
     std::FILE *out = nullptr;
     std::string out_name; // for messages
 };

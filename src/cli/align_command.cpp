@@ -1,0 +1,275 @@
+// SPDX-License-Identifier: MIT
+// kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|FILE] [--jobs N] [--resume] [outputs]
+// [register's options]: the pairs registered by `kissm batch`'s runner into a results file, then a pose graph of
+// the valid ones (align/), as Python's kissm.multiway.align.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <kissm.h>
+
+#include "align/align_graph.hpp"
+#include "align/align_map.hpp"
+#include "align/align_pairs.hpp"
+#include "align/align_scans.hpp"
+#include "align/align_writers.hpp"
+#include "batch/batch_pairs.hpp"
+#include "batch/batch_resume.hpp"
+#include "batch/batch_run.hpp"
+#include "cli_args.hpp"
+#include "commands.hpp"
+#include "json_writer.hpp"
+#include "pair_command.hpp"
+
+namespace kissm_cli {
+namespace {
+
+struct AlignOptions {
+    PairOptions pair; // register's settings; pair.files holds the scans file
+    std::string out, results, map, g2o, tum, kitti;
+    std::string pairs = "all"; // all, sequence or a pairs file
+    bool have_window = false;
+    SequenceOptions sequence;
+    double map_voxel = 0.0; // 0: every point
+    double bound = KISSM_POSE_GRAPH_DEFAULT_BOUND;
+    int32_t jobs = 1;
+    bool resume = false;
+    bool quiet = false;
+};
+
+bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out) {
+    AlignOptions opt;
+    // GICP by default, as Python's multiway.align: its information weighs the edges.
+    opt.pair.refine_mode = KISSM_REFINE_GICP;
+    ArgCursor cur("align", args);
+    while (cur.next()) {
+        const std::string name = cur.current();
+        if (!cur.is_option()) {
+            opt.pair.files.push_back(name);
+        } else if (cur.is_help()) {
+            print_align_help(stdout);
+            return false;
+        } else if (name == "--out") {
+            opt.out = cur.value();
+        } else if (name == "--results") {
+            opt.results = cur.value();
+        } else if (name == "--pairs") {
+            opt.pairs = cur.value();
+            if (opt.pairs.empty()) throw UsageError("--pairs: expected all, sequence or a pairs file");
+        } else if (name == "--window") {
+            opt.sequence.window = parse_int32(name, cur.value(), 1, 1000000);
+            opt.have_window = true;
+        } else if (name == "--map") {
+            opt.map = cur.value();
+        } else if (name == "--map-voxel") {
+            opt.map_voxel = parse_positive(name, cur.value());
+        } else if (name == "--g2o") {
+            opt.g2o = cur.value();
+        } else if (name == "--tum") {
+            opt.tum = cur.value();
+        } else if (name == "--kitti") {
+            opt.kitti = cur.value();
+        } else if (name == "--bound") {
+            opt.bound = parse_positive(name, cur.value());
+        } else if (name == "--jobs") {
+            opt.jobs = parse_int32(name, cur.value(), 1, 1024);
+        } else if (!cur.take_flag("--resume", &opt.resume) && !cur.take_flag("--quiet", &opt.quiet, "-q") &&
+                   !take_pair_option(PairCommand::Register, cur, false, &opt.pair)) {
+            cur.unknown();
+        }
+    }
+    const std::string see = " (see 'kissm align --help')";
+    if (opt.pair.files.size() != 1) {
+        throw UsageError("align expects 1 scans file, got " + std::to_string(opt.pair.files.size()) + see);
+    }
+    require_voxel("align", opt.pair);
+    if (opt.out.empty()) throw UsageError("align needs --out FILE, the poses (one line per scan)" + see);
+    if (opt.have_window && opt.pairs != "sequence") throw UsageError("--window applies to --pairs sequence only");
+    if (opt.map_voxel > 0.0 && opt.map.empty()) throw UsageError("--map-voxel needs --map FILE");
+    // Every scan is a source of some pair and a target of another: one format for all.
+    if (opt.pair.source_format != opt.pair.target_format) {
+        throw UsageError("align: --format-src and --format-tgt do not apply (every scan is both); use --format or the "
+                         "scans file's format column");
+    }
+    if (opt.results.empty()) opt.results = opt.out + ".pairs.jsonl";
+    const std::string results = std::filesystem::path(opt.results).lexically_normal().string();
+    for (const std::string *output : {&opt.out, &opt.map, &opt.g2o, &opt.tum, &opt.kitti}) {
+        if (!output->empty() && std::filesystem::path(*output).lexically_normal().string() == results) {
+            throw UsageError("'" + one_line(*output) + "' is the results file too; give the outputs other names");
+        }
+    }
+    *out = opt;
+    return true;
+}
+
+std::vector<ScanPair> chosen_pairs(const AlignOptions &opt, const std::vector<Scan> &scans) {
+    if (opt.pairs == "all") return all_pairs(scans.size());
+    if (opt.pairs == "sequence") return sequence_candidates(scans.size(), opt.sequence);
+    return pairs_from_file(opt.pairs, scans);
+}
+
+bool exists_non_empty(const std::string &path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    return !ec && size > 0;
+}
+
+// Registers the pairs the results file does not hold yet, appending their lines (batch's runner and format).
+// Returns how many ran.
+size_t register_pending(const AlignOptions &opt, const kissm_config &config, const std::vector<PairRow> &rows) {
+    if (!opt.resume && exists_non_empty(opt.results)) {
+        throw UsageError("'" + one_line(opt.results) +
+                         "' exists and is not empty: --resume completes it, or remove it to start again");
+    }
+    const std::vector<DoneRecord> done =
+        opt.resume ? resume_results(opt.results, rows, "pair list", opt.quiet) : std::vector<DoneRecord>();
+    std::vector<bool> is_done(rows.size(), false);
+    for (const DoneRecord &d : done) is_done[static_cast<size_t>(d.pair - 1)] = true;
+
+    BatchRun run;
+    run.config = config;
+    run.pairs_file = opt.pair.files[0];
+    for (const PairRow &row : rows) {
+        if (!is_done[static_cast<size_t>(row.index - 1)]) run.pending.push_back(row);
+    }
+    run.jobs = opt.jobs;
+    run.progress = !opt.quiet;
+    run.progress_label = "kissm align";
+    run.out_name = opt.results;
+    std::FILE *file = std::fopen(opt.results.c_str(), "ab");
+    if (!file) throw UsageError("cannot write the pair results to '" + one_line(opt.results) + "'");
+    std::setvbuf(file, nullptr, _IOFBF, 1 << 16); // each line leaves in one write, as batch's
+    run.out = file;
+    try {
+        run_batch_pairs(run);
+    } catch (...) {
+        std::fclose(file);
+        throw;
+    }
+    if (std::fclose(file) != 0) throw UsageError("cannot write the pair results to '" + one_line(opt.results) + "'");
+    return run.pending.size();
+}
+
+// Every record of the results file, with the poses the graph needs.
+std::vector<DoneRecord> read_all_records(const std::string &path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw UsageError("cannot read the pair results '" + one_line(path) + "'");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return scan_results(text, "'" + one_line(path) + "'", true).done;
+}
+
+int run_align_command(const AlignOptions &given) {
+    AlignOptions opt = given;
+    // One matcher thread per job unless --threads says otherwise: the jobs are the parallelism.
+    if (!opt.pair.have_threads) opt.pair.threads = 1;
+    const kissm_config config = pair_config(PairCommand::Register, opt.pair);
+    const std::vector<Scan> scans = read_scans_file(opt.pair.files[0], opt.pair.source_format);
+    const std::vector<ScanPair> pairs = chosen_pairs(opt, scans);
+    const std::vector<PairRow> rows = pair_rows(pairs, scans);
+
+    const auto start = std::chrono::steady_clock::now();
+    const size_t ran = register_pending(opt, config, rows);
+    const double seconds = elapsed_ms(start) / 1000.0;
+
+    // The graph is built from every record, in pair order: the same poses after a resume and at any --jobs.
+    const Alignment a = solve_alignment(scans.size(), pairs, read_all_records(opt.results), opt.bound);
+    if (!opt.quiet) {
+        for (const std::string &message : a.skipped) std::fprintf(stderr, "kissm: align: %s\n", message.c_str());
+    }
+    write_text_file(opt.out, poses_table(scans, a), "--out");
+    if (!opt.tum.empty()) write_text_file(opt.tum, tum_text(a), "--tum");
+    if (!opt.kitti.empty()) write_text_file(opt.kitti, kitti_text(a), "--kitti");
+    if (!opt.g2o.empty()) write_text_file(opt.g2o, g2o_text(a), "--g2o");
+    if (!opt.map.empty()) write_merged_map(opt.map, scans, a, opt.map_voxel);
+
+    size_t placed = 0, accepted = 0;
+    std::set<uint64_t> components;
+    for (size_t k = 0; k < scans.size(); ++k) {
+        placed += a.placed[k] ? 1 : 0;
+        components.insert(a.components[k]);
+    }
+    for (const AlignEdge &edge : a.edges) accepted += edge.accepted ? 1 : 0;
+    if (!opt.quiet) {
+        std::fprintf(stderr,
+                     "kissm align: %zu scans: %zu placed, %zu component%s; %zu pairs: %zu valid (%zu edges accepted, "
+                     "%zu rejected), %zu not valid, %zu error%s; ran %zu in %.2f s; poses in %s\n",
+                     scans.size(), placed, components.size(), components.size() == 1 ? "" : "s", pairs.size(), a.valid,
+                     accepted, a.edges.size() - accepted, a.invalid, a.errors, a.errors == 1 ? "" : "s", ran, seconds,
+                     opt.out.c_str());
+    }
+    return placed == scans.size() ? kExitOk : kExitInvalid;
+}
+
+} // namespace
+
+void print_align_help(std::FILE *out) {
+    std::fprintf(out,
+                 "usage: kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|FILE] [--jobs N]\n"
+                 "                   [--resume] [--map MAP.ply] [--g2o G.g2o] [options]\n"
+                 "\n"
+                 "Puts many scans into the first one's frame with no initial guess: registers the chosen pairs as\n"
+                 "`kissm batch` does (each scan described once, --jobs at a time, one JSON line per pair kept in a\n"
+                 "results file so that a killed run resumes), makes every valid registration a robust edge of a\n"
+                 "pose graph (its transform and information) and optimises it from the first scan. A scan that\n"
+                 "accepted edges do not join to the first one is reported as not placed, never given a guess.\n"
+                 "The same settings give the same poses as Python's kissm.multiway.align, bit for bit.\n"
+                 "\n"
+                 "SCANS.tsv: tab-separated; blank and '#' lines ignored; the first other line names the columns:\n"
+                 "scan (a name) and file (relative to SCANS.tsv's folder, or absolute) required, format optional\n"
+                 "(%s;\n"
+                 "empty = --format's, default auto); other columns are ignored.\n"
+                 "\n"
+                 "Align options:\n"
+                 "  --out FILE              the poses (required): a header line, then per scan in SCANS.tsv's order\n"
+                 "                          scan, placed (1/0), component (the smallest scan position joined to\n"
+                 "                          it; 0 when placed), T00 ... T23: the first 3 rows of T_world_scan\n"
+                 "                          (world = the first scan's frame), shortest round-trip numbers, nan\n"
+                 "                          where not placed\n"
+                 "  --pairs all|sequence|FILE  the pairs registered (default all): all = every pair once, the\n"
+                 "                          later scan the source; sequence = each scan with the --window K scans\n"
+                 "                          after it (default 1: consecutive pairs); FILE = a tab-separated file\n"
+                 "                          with source and target columns naming scans (blank and '#' ignored)\n"
+                 "  --window K              for --pairs sequence, 1..1000000 (default 1)\n"
+                 "  --results FILE          the pair results, `kissm batch`'s lines named by scan (default\n"
+                 "                          POSES.tsv.pairs.jsonl). An existing non-empty FILE is refused unless\n"
+                 "                          --resume\n"
+                 "  --resume                keep FILE's finished pairs, run the others; the poses are the same\n"
+                 "                          bytes as an uninterrupted run's\n"
+                 "  --jobs N                pairs registered at once, 1..1024 (default 1)\n"
+                 "  --threads N             each job's worker threads (default 1 here; 0 = all hardware threads)\n"
+                 "  --map FILE.ply          the placed scans' points in the world frame (binary PLY)\n"
+                 "  --map-voxel V           with --map: one centroid per occupied voxel of size V instead\n"
+                 "  --g2o FILE              the graph in g2o's format (placed scans, accepted edges)\n"
+                 "  --tum FILE              the placed scans' poses in the TUM format (the position as timestamp)\n"
+                 "  --kitti FILE            every scan's pose in the KITTI format (nan where not placed)\n"
+                 "  --bound B               the pose graph's rejection bound on an edge's squared error\n"
+                 "                          (default %g, the 99.9%% chi-square quantile for 6 dof)\n"
+                 "  -q, --quiet             no progress line and no summary on stderr\n"
+                 "\n"
+                 "Registration: every option of `kissm register` but the output ones, as in `kissm batch`:\n"
+                 "--voxel or --preset, --refine (default gicp here: its information weighs the edges; with\n"
+                 "none, an edge's information comes from its rotation uncertainty and noise bound), the validity\n"
+                 "settings, --suppression, --rotation-dof, --up, ... ('kissm register --help'); --format applies\n"
+                 "to the scans without a format (--format-src and --format-tgt do not apply).\n"
+                 "\n"
+                 "Progress (pairs, rate, ETA) and a summary (scans placed, components, edges accepted and\n"
+                 "rejected) go to stderr; nothing to stdout.\n"
+                 "\n"
+                 "Exit status: 0 every scan placed, 1 some scans not placed (the outputs are still written),\n"
+                 "2 usage or input error (bad options, an unreadable or malformed scans or pairs file, an unknown\n"
+                 "scan, the results file exists without --resume or holds another pair list's results).\n",
+                 format_names(), KISSM_POSE_GRAPH_DEFAULT_BOUND);
+}
+
+int run_align(const std::vector<std::string> &args) {
+    AlignOptions opt;
+    if (!parse_align_options(args, &opt)) return kExitOk;
+    return run_align_command(opt);
+}
+
+} // namespace kissm_cli
