@@ -16,6 +16,7 @@ import pytest
 
 import kissm
 import kissm.multiway
+from kissm._candidates import loop_candidates
 
 from testdata import VOXEL_SIZE, committed_pair
 
@@ -233,10 +234,10 @@ def test_sequence_loop_candidates_from_priors() -> None:
     """With priors, loop candidates are the pairs at least loop_gap apart within loop_radius, the nearest
     loops_per_scan per cloud; NaN priors get none."""
     positions = np.array([[0.0, 0, 0], [10, 0, 0], [20, 0, 0], [10.5, 0, 0], [0.2, 0, 0], [np.nan, 0, 0]])
-    pairs = kissm.multiway._loop_candidates(positions, 1.0, 2, 5, drift=0.0)
+    pairs = loop_candidates(positions, 1.0, 2, 5, drift=0.0)
     assert pairs == [(1, 3), (0, 4)]
-    assert kissm.multiway._loop_candidates(positions, 100.0, 2, 1, drift=0.0) == [(0, 2), (1, 3), (0, 4)]
-    assert kissm.multiway._loop_candidates(positions, 100.0, 4, 5, drift=0.0) == [(0, 4)]
+    assert loop_candidates(positions, 100.0, 2, 1, drift=0.0) == [(0, 2), (1, 3), (0, 4)]
+    assert loop_candidates(positions, 100.0, 4, 5, drift=0.0) == [(0, 4)]
 
 
 def test_bad_arguments() -> None:
@@ -263,3 +264,28 @@ def test_bad_arguments() -> None:
     assert one.placed.tolist() == [True] and one.registrations == 0 and np.array_equal(one.poses[0], np.eye(4))
     with pytest.raises(kissm.InvalidArgumentError, match="voxel_size"):
         one.merged(clouds[:1], voxel_size=0.0)
+
+
+def test_two_sessions_merge_into_one_frame(real_data: Path) -> None:
+    """Happy's turntable as two sessions, the even scans (48 degrees apart) and the odd ones: each session's
+    odometry trusted, the sessions found each other through the coarse grid and the nearby candidates; every scan
+    of both placed within 2 degrees and 2 voxels in the frame of the first session's first scan."""
+    folder, voxel = SETS["happy"]
+    names, files, truth = read_set(real_data / folder)
+    even = {n: f for k, (n, f) in enumerate(zip(names, files, strict=True)) if k % 2 == 0}
+    odd = {n: f for k, (n, f) in enumerate(zip(names, files, strict=True)) if k % 2 == 1}
+    alignment = kissm.multiway.align_sessions([even, odd], voxel, stride=3, loop_gap=3, threads_per_job=2)
+    assert alignment.keys == [(0, n) for n in even] + [(1, n) for n in odd]
+    assert alignment.placed.all()
+    across = [e for e in alignment.edges if alignment.keys[e.source][0] != alignment.keys[e.target][0]]
+    assert across and any(e.accepted for e in across)
+    anchor = truth[alignment.keys[0][1]]
+    for k, (_, scan) in enumerate(alignment.keys):
+        error = np.linalg.inv(np.linalg.inv(anchor) @ truth[scan]) @ alignment.poses[k]
+        assert angle_deg(error[:3, :3]) < 2.0 and np.linalg.norm(error[:3, 3]) < 2 * voxel, scan
+    merged = alignment.merged(kissm.multiway.session_clouds([even, odd]), voxel_size=voxel)
+    assert merged.shape[1] == 3 and len(merged) > 1000
+    with pytest.raises(kissm.InvalidArgumentError, match="stride"):
+        kissm.multiway.align_sessions([even, odd], voxel, stride=0)
+    with pytest.raises(kissm.InvalidArgumentError, match="sessions"):
+        kissm.multiway.align_sessions([], voxel)

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._candidates import DRIFT, check_sequence_options, dead_reckoned, loop_candidates
 from ._config import RefineMode
 from ._errors import InvalidArgumentError
 from ._matcher import Features
@@ -195,67 +196,188 @@ def align(
         for pair in chosen:
             if len(pair) != 2 or pair[0] not in position or pair[1] not in position:
                 raise InvalidArgumentError(f"align: pair {pair!r} does not name two of the clouds")
-    prior_positions = _check_sequence_options(sequence, priors, len(keys), loop_radius, loop_gap, loops_per_scan)
-    refine_mode: RefineMode = "none" if refine is None else refine
-
-    def register(wanted: list[tuple[Hashable, Hashable]], clouds_now: Mapping[Any, Any]) -> list[batch.PairResult]:
-        if not wanted:
-            return []
-        return batch.register_many(
-            wanted,
-            clouds_now,
-            executor,
-            threads_per_job=threads_per_job,
-            progress=progress,
-            voxel_size=voxel_size,
-            refine=refine_mode,
-            **config,
-        )
-
+    prior_positions = check_sequence_options(sequence, priors, len(keys), loop_radius, loop_gap, loops_per_scan)
+    runner = _Runner(executor, progress, threads_per_job, voxel_size, refine, config)
     if sequence and len(keys) > 1:
         # Two rounds over the same clouds: described once, then the features serve both.
-        described = batch.describe_many(
-            by_key,
-            executor,
-            threads_per_job=threads_per_job,
-            progress=progress,
-            voxel_size=voxel_size,
-            refine=refine_mode,
-            **config,
-        )
-        # A cloud that cannot be described is left out of every pair (it ends not placed), as a pair with it would
-        # end as an error in "all".
-        usable = {key: value for key, value in described.items() if isinstance(value, Features)}
-        results = register([p for p in chosen if p[0] in usable and p[1] in usable], usable)
+        usable = runner.describe(by_key)
+        results = runner.register([p for p in chosen if p[0] in usable and p[1] in usable], usable)
         steps = {position[r.target]: r.result for r in results}
-        if loop_radius is not None:
-            radius = loop_radius
-        elif voxel_size is not None:
-            radius = 30.0 * float(voxel_size)
-        else:
-            raise InvalidArgumentError("align: pairs='sequence' needs loop_radius when voxel_size is not given")
-        loops = _loop_candidates(
-            prior_positions if prior_positions is not None else _dead_reckoned(steps, len(keys)),
-            radius,
+        loops = loop_candidates(
+            prior_positions if prior_positions is not None else dead_reckoned(steps, len(keys)),
+            runner.radius(loop_radius),
             loop_gap,
             loops_per_scan,
-            drift=0.0 if prior_positions is not None else _DRIFT,
+            drift=0.0 if prior_positions is not None else DRIFT,
         )
         wanted = [(keys[j], keys[i]) for i, j in loops if keys[i] in usable and keys[j] in usable]
-        results += register(wanted, usable)
+        results += runner.register(wanted, usable)
     else:
-        results = register(chosen, by_key)
-    graph = PoseGraph(len(keys))
+        results = runner.register(chosen, by_key)
+    edges = [(position[r.source], position[r.target], r.result, True) for r in results]
+    return _solve(keys, edges, bound, len(results))
+
+
+def session_clouds(sessions: Sequence[Sequence[Any] | Mapping[Any, Any]]) -> dict[tuple[int, Hashable], Any]:
+    """The clouds of several sessions as one mapping keyed ``(session, key)``: :func:`align_sessions`'s keys, and
+    what :meth:`Alignment.merged` takes for its result."""
+    flat: dict[tuple[int, Hashable], Any] = {}
+    for s, session in enumerate(sessions):
+        for key, cloud in _as_mapping(session).items():
+            flat[(s, key)] = cloud
+    return flat
+
+
+def align_sessions(
+    sessions: Sequence[Sequence[Any] | Mapping[Any, Any]],
+    voxel_size: float | None = None,
+    *,
+    stride: int = 10,
+    loop_radius: float | None = None,
+    loop_gap: int = 10,
+    loops_per_scan: int = 5,
+    executor: Any = None,
+    progress: batch.ProgressLike = None,
+    refine: RefineMode | None = "gicp",
+    bound: float = PoseGraph.DEFAULT_BOUND,
+    threads_per_job: int = 1,
+    **config: Any,
+) -> Alignment:
+    """Merge sessions (drives, robots, survey days), each a sequence of clouds in acquisition order, into the frame
+    of the first session's first cloud, with no initial guess between them.
+
+    Each session's consecutive registrations are its odometry: **trusted** edges (a valid one is taken as right).
+    Within a session, loop candidates as ``align(pairs="sequence")`` finds them from the chained odometry (robust
+    edges). Across sessions, two rounds of robust candidates: every ``stride``-th cloud of a later session with every
+    ``stride``-th cloud of each earlier one (a coarse grid that finds where the sessions meet), then, once the graph
+    has placed a later session, its clouds with the earlier sessions' clouds within ``loop_radius`` (default 30
+    voxels) of them by the merged poses, at most ``loops_per_scan`` per cloud. One optimisation over everything.
+
+    The result's keys are ``(session, key)``; a session no accepted edge joins to the first is not placed (NaN
+    poses). For :meth:`Alignment.merged`, pass :func:`session_clouds` of the sessions. Other arguments as
+    :func:`align`'s.
+    """
+    if isinstance(sessions, (str, bytes, Mapping)) or not isinstance(sessions, Sequence) or not sessions:
+        raise InvalidArgumentError("align_sessions: sessions must be a non-empty sequence of sessions")
+    if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1:
+        raise InvalidArgumentError(f"align_sessions: stride is {stride!r}; an integer of at least 1")
+    members = [list(_as_mapping(session)) for session in sessions]
+    if any(not m for m in members):
+        raise InvalidArgumentError("align_sessions: a session has no clouds")
+    by_key = session_clouds(sessions)
+    keys = list(by_key)
+    position: dict[Any, int] = {key: k for k, key in enumerate(keys)}
+    check_sequence_options(True, None, len(keys), loop_radius, loop_gap, loops_per_scan)
+    runner = _Runner(executor, progress, threads_per_job, voxel_size, refine, config)
+    radius = runner.radius(loop_radius)
+    usable = runner.describe(by_key)
+
+    def pair(s: int, j: int, t: int, i: int) -> list[tuple[Hashable, Hashable]]:
+        """[(cloud j of session s, cloud i of session t)], or [] when either could not be described."""
+        source, target = (s, members[s][j]), (t, members[t][i])
+        return [(source, target)] if source in usable and target in usable else []
+
+    odometry: dict[Any, tuple[int, int]] = {}  # (source, target) -> (session, position of the target)
+    for s, m in enumerate(members):
+        for k in range(len(m) - 1):
+            odometry.update((p, (s, k)) for p in pair(s, k + 1, s, k))
+    results = runner.register(list(odometry), usable)
+    steps: dict[tuple[int, int], Result | None] = {odometry[(r.source, r.target)]: r.result for r in results}
+    wanted: list[tuple[Hashable, Hashable]] = []
+    for s, m in enumerate(members):
+        reckoned = dead_reckoned({k: steps.get((s, k)) for k in range(len(m) - 1)}, len(m))
+        for i, j in loop_candidates(reckoned, radius, loop_gap, loops_per_scan, DRIFT):
+            wanted += pair(s, j, s, i)
+        for t in range(s):
+            for j in range(0, len(m), stride):
+                for i in range(0, len(members[t]), stride):
+                    wanted += pair(s, j, t, i)
+    results += runner.register(wanted, usable)
+
+    def edges() -> list[tuple[int, int, Result | None, bool]]:
+        return [
+            (position[r.source], position[r.target], r.result, (r.source, r.target) not in odometry) for r in results
+        ]
+
+    alignment = _solve(keys, edges(), bound, len(results))
+    # The second round across sessions, from the merged poses: each placed cloud of a later session with the nearest
+    # placed clouds of earlier sessions.
+    done = {(r.source, r.target) for r in results}
+    placed = [int(k) for k in np.flatnonzero(alignment.placed)]
+    where = alignment.poses[:, :3, 3]
+    wanted = []
+    for k in placed:
+        session = keys[k][0]
+        earlier = [e for e in placed if keys[e][0] < session]
+        if not earlier:
+            continue
+        distance = np.linalg.norm(where[earlier] - where[k], axis=1)
+        near = sorted((float(d), int(e)) for d, e in zip(distance, earlier, strict=True) if d <= radius)
+        for _, e in near[:loops_per_scan]:
+            candidate = (keys[k], keys[e])
+            if candidate not in done and candidate[0] in usable and candidate[1] in usable:
+                wanted.append(candidate)
+    if wanted:
+        results += runner.register(wanted, usable)
+        alignment = _solve(keys, edges(), bound, len(results))
+    return alignment
+
+
+class _Runner:
+    """The registrations' settings and engine, shared by the rounds of one alignment."""
+
+    def __init__(
+        self,
+        executor: Any,
+        progress: batch.ProgressLike,
+        threads_per_job: int,
+        voxel_size: float | None,
+        refine: RefineMode | None,
+        config: dict[str, Any],
+    ) -> None:
+        self.executor, self.progress, self.threads_per_job = executor, progress, threads_per_job
+        self.voxel_size = voxel_size
+        self.refine: RefineMode = "none" if refine is None else refine
+        self.config = config
+
+    def settings(self) -> dict[str, Any]:
+        return {
+            "threads_per_job": self.threads_per_job,
+            "progress": self.progress,
+            "voxel_size": self.voxel_size,
+            "refine": self.refine,
+            **self.config,
+        }
+
+    def describe(self, clouds: Mapping[Any, Any]) -> dict[Any, Features]:
+        """Every cloud's features; a cloud that cannot be described is left out of every pair (it ends not
+        placed), as a pair with it would end as an error in "all"."""
+        described = batch.describe_many(clouds, self.executor, **self.settings())
+        return {key: value for key, value in described.items() if isinstance(value, Features)}
+
+    def register(self, wanted: list[tuple[Hashable, Hashable]], clouds: Mapping[Any, Any]) -> list[batch.PairResult]:
+        return batch.register_many(wanted, clouds, self.executor, **self.settings()) if wanted else []
+
+    def radius(self, loop_radius: float | None) -> float:
+        if loop_radius is not None:
+            return loop_radius
+        if self.voxel_size is None:
+            raise InvalidArgumentError("align: loop candidates need loop_radius when voxel_size is not given")
+        return 30.0 * float(self.voxel_size)
+
+
+def _solve(
+    keys: list[Any], registrations: list[tuple[int, int, Result | None, bool]], bound: float, count: int
+) -> Alignment:
+    """The pose graph of the valid registrations (source, target, result, robust), in order, from the first key."""
     valid: list[tuple[int, int, np.ndarray, np.ndarray, Result]] = []
-    with graph:
-        for outcome in results:
-            result = outcome.result
+    with PoseGraph(len(keys)) as graph:
+        for source, target, result, robust in registrations:
             if result is None or not result.valid:
                 continue
-            source, target = position[outcome.source], position[outcome.target]
             transform = np.asarray(result.transform, dtype=np.float64)
             information = _information(result)
-            graph.add_edge(source, target, transform, information, robust=True)
+            graph.add_edge(source, target, transform, information, robust=robust)
             valid.append((source, target, transform, information, result))
         solution = graph.optimize(anchor=0, bound=bound)
     edges = [
@@ -268,82 +390,8 @@ def align(
         placed=solution.placed,
         components=solution.components,
         edges=edges,
-        registrations=len(results),
+        registrations=count,
     )
-
-
-# ---- sequence candidates ---------------------------------------------------------------------------------------
-
-#: The radius of a loop candidate grows by this share of the dead-reckoned path between the two clouds: odometry
-#: from registrations drifts by about 1% of the distance (the KITTI odometry benchmark's error scale); 5% leaves room.
-_DRIFT = 0.05
-
-
-def _check_sequence_options(
-    sequence: bool, priors: Any, n: int, loop_radius: float | None, loop_gap: int, loops_per_scan: int
-) -> np.ndarray | None:
-    """The priors' positions ((N, 3), NaN rows for clouds without one), after checking the sequence options."""
-    if not sequence:
-        if priors is not None:
-            raise InvalidArgumentError("align: priors are read by pairs='sequence' only")
-        return None
-    if loop_radius is not None and not (math.isfinite(loop_radius) and loop_radius > 0):
-        raise InvalidArgumentError(f"align: loop_radius is {loop_radius}; a finite number above 0")
-    if isinstance(loop_gap, bool) or not isinstance(loop_gap, int) or loop_gap < 1:
-        raise InvalidArgumentError(f"align: loop_gap is {loop_gap!r}; an integer of at least 1")
-    if isinstance(loops_per_scan, bool) or not isinstance(loops_per_scan, int) or loops_per_scan < 0:
-        raise InvalidArgumentError(f"align: loops_per_scan is {loops_per_scan!r}; an integer of at least 0")
-    if priors is None:
-        return None
-    poses = np.asarray(priors, dtype=np.float64)
-    if poses.shape != (n, 4, 4):
-        raise InvalidArgumentError(f"align: priors has shape {poses.shape}; ({n}, 4, 4), one pose per cloud")
-    positions: np.ndarray = poses[:, :3, 3].copy()
-    positions[~np.isfinite(positions).all(axis=1)] = np.nan
-    return positions
-
-
-def _dead_reckoned(steps: Mapping[int, Result | None], n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The consecutive registrations (steps[k]: cloud k+1 into k) chained: positions (N, 3), the path length (N,)
-    and the piece (N,): a missing or invalid registration starts a new piece in a frame of its own."""
-    positions, path, piece = np.zeros((n, 3)), np.zeros(n), np.zeros(n, dtype=np.int64)
-    pose = np.eye(4)
-    for k in range(n - 1):
-        result = steps.get(k)
-        if result is not None and result.valid:
-            step = np.asarray(result.transform, dtype=np.float64)
-            pose = pose @ step
-            path[k + 1] = path[k] + float(np.linalg.norm(step[:3, 3]))
-            piece[k + 1] = piece[k]
-        else:
-            pose = np.eye(4)
-            piece[k + 1] = piece[k] + 1
-        positions[k + 1] = pose[:3, 3]
-    return positions, path, piece
-
-
-def _loop_candidates(
-    where: np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray], radius: float, gap: int, per_scan: int, drift: float
-) -> list[tuple[int, int]]:
-    """Pairs (i, j), j >= i + gap, whose positions lie within radius (+ drift x the path between them) of each
-    other, at most per_scan for each j (the nearest first, then the lower i), ordered by j then i."""
-    if isinstance(where, tuple):
-        positions, path, piece = where
-    else:
-        positions = where
-        path, piece = np.zeros(len(where)), np.zeros(len(where), dtype=np.int64)
-    known = np.isfinite(positions).all(axis=1)
-    out: list[tuple[int, int]] = []
-    for j in range(gap, len(positions)):
-        if not known[j] or per_scan == 0:
-            continue
-        earlier = j - gap + 1
-        distance = np.linalg.norm(positions[:earlier] - positions[j], axis=1)
-        allowed = radius + drift * np.abs(path[j] - path[:earlier])
-        near = known[:earlier] & (piece[:earlier] == piece[j]) & (distance <= allowed)
-        chosen = sorted(zip(distance[near].tolist(), np.flatnonzero(near).tolist(), strict=True))[:per_scan]
-        out.extend(sorted((int(i), j) for _, i in chosen))
-    return out
 
 
 # ---- helpers ---------------------------------------------------------------------------------------------------
@@ -413,4 +461,4 @@ def _write(path: str | os.PathLike[str], lines: list[str]) -> None:
         f.write("".join(line + "\n" for line in lines))
 
 
-__all__ = ["Alignment", "Edge", "align"]
+__all__ = ["Alignment", "Edge", "align", "align_sessions", "session_clouds"]
