@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // `kissm align`'s pose graph: each valid pair record a robust edge, optimised from the first scan, as Python's
-// kissm.multiway.align does (docs/pose-graph.md, "Multiway registration"): the same edges in the same order
+// kissm.multiway.align does (docs/multiway.md): the same edges in the same order
 // give the same bits.
 #pragma once
 

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Multiway registration: many clouds into one frame with no initial guess (docs/pose-graph.md, "Multiway").
+"""Multiway registration: many clouds into one frame with no initial guess (docs/multiway.md).
 
     alignment = kissm.multiway.align(scans, voxel_size=0.004)   # every pair registered, then a pose graph
     alignment.poses        # (N, 4, 4) world <- scan, world = the first scan's frame; NaN where not placed
@@ -164,7 +164,7 @@ def align(
     ``loop_radius`` (default 30 voxels) of each other, at most ``loops_per_scan`` per cloud (the nearest first).
     The positions are ``priors`` ((N, 4, 4) world <- scan poses, e.g. GNSS or a SLAM run; rows of NaN for clouds
     without one) when given; otherwise the consecutive registrations chained into a dead-reckoned path, with the
-    radius grown by 5% of the path length between the two clouds for the drift (a break in the chain, an
+    radius grown by 2% of the path length between the two clouds for the drift (a break in the chain, an
     invalid consecutive pair, starts a new piece; pieces get no candidates between them).
 
     ``voxel_size``, ``refine`` (``"gicp"`` by default: its information weighs the edges; ``None`` or ``"none"``
