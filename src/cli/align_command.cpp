@@ -2,6 +2,7 @@
 // kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|FILE] [--jobs N] [--resume] [outputs]
 // [register's options]: the pairs registered by `kissm batch`'s runner into a results file, then a pose graph of
 // the valid ones (align/), as Python's kissm.multiway.align.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -34,6 +35,8 @@ struct AlignOptions {
     std::string out, results, map, g2o, tum, kitti;
     std::string pairs = "all"; // all, sequence or a pairs file
     bool have_window = false;
+    bool have_loop_radius = false;
+    std::string loop_option; // the first loop option given, for the message when --pairs is not sequence
     SequenceOptions sequence;
     double map_voxel = 0.0; // 0: every point
     double bound = KISSM_POSE_GRAPH_DEFAULT_BOUND;
@@ -64,6 +67,16 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
         } else if (name == "--window") {
             opt.sequence.window = parse_int32(name, cur.value(), 1, 1000000);
             opt.have_window = true;
+        } else if (name == "--loop-gap") {
+            opt.sequence.loop_gap = parse_int32(name, cur.value(), 1, 1000000);
+            if (opt.loop_option.empty()) opt.loop_option = name;
+        } else if (name == "--loops-per-scan") {
+            opt.sequence.loops_per_scan = parse_int32(name, cur.value(), 0, 1000000);
+            if (opt.loop_option.empty()) opt.loop_option = name;
+        } else if (name == "--loop-radius") {
+            opt.sequence.loop_radius = parse_positive(name, cur.value());
+            opt.have_loop_radius = true;
+            if (opt.loop_option.empty()) opt.loop_option = name;
         } else if (name == "--map") {
             opt.map = cur.value();
         } else if (name == "--map-voxel") {
@@ -90,6 +103,15 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
     require_voxel("align", opt.pair);
     if (opt.out.empty()) throw UsageError("align needs --out FILE, the poses (one line per scan)" + see);
     if (opt.have_window && opt.pairs != "sequence") throw UsageError("--window applies to --pairs sequence only");
+    if (!opt.loop_option.empty() && opt.pairs != "sequence") {
+        throw UsageError(opt.loop_option + " applies to --pairs sequence only");
+    }
+    if (opt.pairs == "sequence" && opt.sequence.loops_per_scan > 0 && opt.sequence.window > 1 &&
+        opt.sequence.window >= opt.sequence.loop_gap) {
+        throw UsageError("--window " + std::to_string(opt.sequence.window) +
+                         " with loop candidates needs --loop-gap above " + std::to_string(opt.sequence.window) +
+                         " (a candidate would repeat a window pair), or --loops-per-scan 0");
+    }
     if (opt.map_voxel > 0.0 && opt.map.empty()) throw UsageError("--map-voxel needs --map FILE");
     // Every scan is a source of some pair and a target of another: one format for all.
     if (opt.pair.source_format != opt.pair.target_format) {
@@ -119,23 +141,38 @@ bool exists_non_empty(const std::string &path) {
     return !ec && size > 0;
 }
 
-// Registers the pairs the results file does not hold yet, appending their lines (batch's runner and format).
-// Returns how many ran.
-size_t register_pending(const AlignOptions &opt, const kissm_config &config, const std::vector<PairRow> &rows) {
-    if (!opt.resume && exists_non_empty(opt.results)) {
-        throw UsageError("'" + one_line(opt.results) +
-                         "' exists and is not empty: --resume completes it, or remove it to start again");
+// Every record of the results file, with the poses the graph needs (none when the file does not exist and
+// `missing_ok`).
+std::vector<DoneRecord> read_all_records(const std::string &path, bool missing_ok = false) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        if (missing_ok) return {};
+        throw UsageError("cannot read the pair results '" + one_line(path) + "'");
     }
-    const std::vector<DoneRecord> done =
-        opt.resume ? resume_results(opt.results, rows, "pair list", opt.quiet) : std::vector<DoneRecord>();
-    std::vector<bool> is_done(rows.size(), false);
-    for (const DoneRecord &d : done) is_done[static_cast<size_t>(d.pair - 1)] = true;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return scan_results(text, "'" + one_line(path) + "'", true).done;
+}
 
+// The records of pairs 1..rows.size() the results file holds (--resume, checked against `rows`: a record beyond
+// them or of another pair is a UsageError, the file untouched; a partial last line is cut off).
+std::vector<bool> done_pairs(const AlignOptions &opt, const std::vector<PairRow> &rows) {
+    std::vector<bool> is_done(rows.size(), false);
+    if (!opt.resume) return is_done;
+    for (const DoneRecord &d : resume_results(opt.results, rows, "pair list", opt.quiet)) {
+        is_done[static_cast<size_t>(d.pair - 1)] = true;
+    }
+    return is_done;
+}
+
+// Registers rows[from..] that are not done, appending their lines to the results file (batch's runner and
+// format). Returns how many ran.
+size_t register_pending(const AlignOptions &opt, const kissm_config &config, const std::vector<PairRow> &rows,
+                        const std::vector<bool> &is_done, size_t from = 0) {
     BatchRun run;
     run.config = config;
     run.pairs_file = opt.pair.files[0];
-    for (const PairRow &row : rows) {
-        if (!is_done[static_cast<size_t>(row.index - 1)]) run.pending.push_back(row);
+    for (size_t k = from; k < rows.size(); ++k) {
+        if (k >= is_done.size() || !is_done[k]) run.pending.push_back(rows[k]);
     }
     run.jobs = opt.jobs;
     run.progress = !opt.quiet;
@@ -155,12 +192,48 @@ size_t register_pending(const AlignOptions &opt, const kissm_config &config, con
     return run.pending.size();
 }
 
-// Every record of the results file, with the poses the graph needs.
-std::vector<DoneRecord> read_all_records(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw UsageError("cannot read the pair results '" + one_line(path) + "'");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return scan_results(text, "'" + one_line(path) + "'", true).done;
+// Registers the pairs the results file does not hold yet. --pairs sequence with loop candidates runs two
+// rounds: round 1's pairs (1..n1), then the loop candidates its records give (n1+1..), appended to *pairs.
+// Round 2's list depends on round 1's records only: a resumed run whose file holds all of round 1 finds the
+// same list before it checks the file, one that does not completes round 1 first. Returns how many ran.
+size_t register_all(const AlignOptions &opt, const kissm_config &config, const std::vector<Scan> &scans,
+                    std::vector<ScanPair> *pairs) {
+    if (!opt.resume && exists_non_empty(opt.results)) {
+        throw UsageError("'" + one_line(opt.results) +
+                         "' exists and is not empty: --resume completes it, or remove it to start again");
+    }
+    const bool loops = opt.pairs == "sequence" && opt.sequence.loops_per_scan > 0;
+    if (!loops) {
+        const std::vector<PairRow> rows = pair_rows(*pairs, scans);
+        return register_pending(opt, config, rows, done_pairs(opt, rows));
+    }
+    const std::vector<ScanPair> round1 = *pairs;
+    bool round1_done = false;
+    if (opt.resume) {
+        const std::vector<DoneRecord> records = read_all_records(opt.results, true);
+        std::vector<bool> seen(round1.size(), false);
+        for (const DoneRecord &d : records) {
+            if (d.pair >= 1 && d.pair <= static_cast<int64_t>(round1.size())) {
+                seen[static_cast<size_t>(d.pair - 1)] = true;
+            }
+        }
+        round1_done = std::find(seen.begin(), seen.end(), false) == seen.end();
+        if (round1_done) {
+            // The names are checked with round 2's rows below (resume_results).
+            const std::vector<ScanPair> round2 = sequence_loops(scans.size(), round1, records, opt.sequence);
+            pairs->insert(pairs->end(), round2.begin(), round2.end());
+        }
+    }
+    std::vector<PairRow> rows = pair_rows(*pairs, scans);
+    size_t ran = register_pending(opt, config, rows, done_pairs(opt, rows));
+    if (!round1_done) {
+        const std::vector<ScanPair> round2 =
+            sequence_loops(scans.size(), round1, read_all_records(opt.results), opt.sequence);
+        pairs->insert(pairs->end(), round2.begin(), round2.end());
+        rows = pair_rows(*pairs, scans);
+        if (!round2.empty()) ran += register_pending(opt, config, rows, {}, round1.size());
+    }
+    return ran;
 }
 
 int run_align_command(const AlignOptions &given) {
@@ -169,11 +242,11 @@ int run_align_command(const AlignOptions &given) {
     if (!opt.pair.have_threads) opt.pair.threads = 1;
     const kissm_config config = pair_config(PairCommand::Register, opt.pair);
     const std::vector<Scan> scans = read_scans_file(opt.pair.files[0], opt.pair.source_format);
-    const std::vector<ScanPair> pairs = chosen_pairs(opt, scans);
-    const std::vector<PairRow> rows = pair_rows(pairs, scans);
+    if (opt.pairs == "sequence" && !opt.have_loop_radius) opt.sequence.loop_radius = 30.0 * config.voxel_size;
+    std::vector<ScanPair> pairs = chosen_pairs(opt, scans);
 
     const auto start = std::chrono::steady_clock::now();
-    const size_t ran = register_pending(opt, config, rows);
+    const size_t ran = register_all(opt, config, scans, &pairs);
     const double seconds = elapsed_ms(start) / 1000.0;
 
     // The graph is built from every record, in pair order: the same poses after a resume and at any --jobs.
@@ -231,10 +304,18 @@ void print_align_help(std::FILE *out) {
                  "                          (world = the first scan's frame), shortest round-trip numbers, nan\n"
                  "                          where not placed\n"
                  "  --pairs all|sequence|FILE  the pairs registered (default all): all = every pair once, the\n"
-                 "                          later scan the source; sequence = each scan with the --window K scans\n"
-                 "                          after it (default 1: consecutive pairs); FILE = a tab-separated file\n"
-                 "                          with source and target columns naming scans (blank and '#' ignored)\n"
-                 "  --window K              for --pairs sequence, 1..1000000 (default 1)\n"
+                 "                          later scan the source; sequence = scans in acquisition order: each\n"
+                 "                          with the --window K scans after it (default 1: consecutive pairs),\n"
+                 "                          then loop candidates (below); FILE = a tab-separated file with\n"
+                 "                          source and target columns naming scans (blank and '#' ignored)\n"
+                 "  --window K              for --pairs sequence, 1..1000000 (default 1); above 1 with loop\n"
+                 "                          candidates, below --loop-gap (dead reckoning chains the k+1 -> k\n"
+                 "                          pairs only)\n"
+                 "  --loop-gap N            sequence: a loop candidate's scans are at least N apart (default 10)\n"
+                 "  --loops-per-scan N      sequence: at most N loop candidates per scan, the nearest (default 5;\n"
+                 "                          0 = none: the first round only)\n"
+                 "  --loop-radius R         sequence: candidates lie within R of each other (default 30 x the\n"
+                 "                          voxel), plus 2%% of the path between them\n"
                  "  --results FILE          the pair results, `kissm batch`'s lines named by scan (default\n"
                  "                          POSES.tsv.pairs.jsonl). An existing non-empty FILE is refused unless\n"
                  "                          --resume\n"
@@ -250,6 +331,12 @@ void print_align_help(std::FILE *out) {
                  "  --bound B               the pose graph's rejection bound on an edge's squared error\n"
                  "                          (default %g, the 99.9%% chi-square quantile for 6 dof)\n"
                  "  -q, --quiet             no progress line and no summary on stderr\n"
+                 "\n"
+                 "Loop candidates (Python's pairs=\"sequence\"): the valid consecutive registrations (scan k+1 into\n"
+                 "k) chained into dead-reckoned positions (an invalid or missing one starts a new piece); then for\n"
+                 "each scan j, the scans i <= j - N of its piece within R + 2%% of the path from i to j, the\n"
+                 "--loops-per-scan nearest, are registered in a second round (pairs numbered after the first's)\n"
+                 "and join the graph after the first round's edges.\n"
                  "\n"
                  "Registration: every option of `kissm register` but the output ones, as in `kissm batch`:\n"
                  "--voxel or --preset, --refine (default gicp here: its information weighs the edges; with\n"

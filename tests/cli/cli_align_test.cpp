@@ -4,7 +4,8 @@
 //
 //   cli_align_test KISSM_BINARY WORK_DIR CASE
 //
-// CASE: align_usage | align_run | align_resume | align_realdata. The scans of align_run and align_resume are
+// CASE: align_usage | align_run | align_resume | align_realdata (loop candidates of --pairs sequence in the last
+// three). The scans of align_run and align_resume are
 // made here from the committed cloud of tests/data (KISSM_TEST_DATA): four overlapping slabs of it, each moved by
 // a known pose, so every scan's pose in the first one's frame is known exactly. align_realdata aligns the five
 // KITTI 07 keyframes of ../shared/data (KISSM_DATA_DIR; 77 when absent). POSIX only (77 elsewhere).
@@ -303,6 +304,18 @@ void test_align_usage() {
         expect_usage_error(with({"--pairs", "sequence", "--window", bad}), "--window");
     }
     expect_usage_error(with({"--window", "2"}), "--window applies to --pairs sequence only");
+    // Loop candidates' options: their ranges, --pairs sequence only, a window that would repeat them.
+    expect_usage_error(with({"--pairs", "sequence", "--loop-gap", "0"}), "--loop-gap");
+    expect_usage_error(with({"--pairs", "sequence", "--loop-gap", "x"}), "--loop-gap");
+    expect_usage_error(with({"--pairs", "sequence", "--loop-radius", "-1"}), "--loop-radius");
+    expect_usage_error(with({"--pairs", "sequence", "--loop-radius", "0"}), "--loop-radius");
+    expect_usage_error(with({"--pairs", "sequence", "--loops-per-scan", "-1"}), "--loops-per-scan");
+    expect_usage_error(with({"--loop-gap", "2"}), "--loop-gap applies to --pairs sequence only");
+    expect_usage_error(with({"--pairs", "all", "--loops-per-scan", "0"}),
+                       "--loops-per-scan applies to --pairs sequence only");
+    expect_usage_error(with({"--loop-radius", "3"}), "--loop-radius applies to --pairs sequence only");
+    expect_usage_error(with({"--pairs", "sequence", "--window", "3", "--loop-gap", "3"}),
+                       "--window 3 with loop candidates needs --loop-gap above 3");
     expect_usage_error(with({"--jobs", "0"}), "--jobs");
     expect_usage_error(with({"--map-voxel", "0.1"}), "--map-voxel needs --map FILE");
     expect_usage_error(with({"--map", work("m.ply"), "--map-voxel", "0"}), "--map-voxel");
@@ -463,6 +476,53 @@ void test_align_run() {
     CHECK_EQ_INT(seq2.code, 0);
     CHECK_EQ_INT(lines_of(read_file(work("seq2.tsv.pairs.jsonl"))).size(), 5);
 
+    // Loop candidates: gap 2 gives c-a, d-a and d-b (every scan lies within 30 voxels of the others), numbered
+    // after the consecutive pairs, all valid and accepted; one per scan keeps the nearest of a and b for d.
+    const Run loops = run({"align", scans, "--voxel", kVoxel, "--out", work("loops.tsv"), "--pairs", "sequence",
+                           "--loop-gap", "2", "--g2o", work("loops.g2o")});
+    CHECK_MSG(loops.code == 0, "loops: exit %d: %s", loops.code, loops.err.c_str());
+    CHECK_MSG(contains(loops.err, "4 placed, 1 component; 6 pairs: 6 valid (6 edges accepted, 0 rejected)"), "%s",
+              loops.err.c_str());
+    check_placed(read_file(work("loops.tsv")), scene, "--pairs sequence --loop-gap 2");
+    const std::vector<std::string> loop_lines = lines_of(read_file(work("loops.tsv.pairs.jsonl")));
+    const char *const loop_order[6] = {"b a", "c b", "d c", "c a", "d a", "d b"};
+    REQUIRE(loop_lines.size() == 6);
+    for (size_t k = 0; k < 6; ++k) {
+        std::string error;
+        const Json j = json_parse(loop_lines[k], &error);
+        CHECK_MSG(j.at("pair").as_double() == static_cast<double>(k + 1) &&
+                      j.at("source").text + " " + j.at("target").text == loop_order[k],
+                  "loop pair %zu: %s", k + 1, loop_lines[k].c_str());
+    }
+    const std::vector<std::string> loop_g2o = lines_of(read_file(work("loops.g2o")));
+    REQUIRE(loop_g2o.size() == 4 + 6);
+    CHECK(starts_with(loop_g2o[7], "EDGE_SE3:QUAT 0 2 ") && starts_with(loop_g2o[9], "EDGE_SE3:QUAT 1 3 "));
+    const Run nearest = run({"align", scans, "--voxel", kVoxel, "--out", work("nearest.tsv"), "--pairs", "sequence",
+                             "--loop-gap", "2", "--loops-per-scan", "1", "-q"});
+    CHECK_EQ_INT(nearest.code, 0);
+    const std::vector<std::string> nearest_lines = lines_of(read_file(work("nearest.tsv.pairs.jsonl")));
+    REQUIRE(nearest_lines.size() == 5);
+    CHECK(contains(nearest_lines[3], "\"pair\": 4, \"source\": \"c\", \"target\": \"a\""));
+    CHECK(contains(nearest_lines[4], "\"pair\": 5, \"source\": \"d\", \"target\": \"b\""));
+    // A radius nothing meets: no candidate, the consecutive pairs only.
+    const Run none = run({"align", scans, "--voxel", kVoxel, "--out", work("none.tsv"), "--pairs", "sequence",
+                          "--loop-gap", "2", "--loop-radius", "0.01", "-q"});
+    CHECK_EQ_INT(none.code, 0);
+    CHECK_EQ_INT(lines_of(read_file(work("none.tsv.pairs.jsonl"))).size(), 3);
+    // --loops-per-scan 0: the first round only, the bytes of the plain sequence run.
+    const Run zero = run({"align", scans, "--voxel", kVoxel, "--out", work("zero.tsv"), "--pairs", "sequence",
+                          "--loop-gap", "2", "--loops-per-scan", "0", "-q"});
+    CHECK_EQ_INT(zero.code, 0);
+    CHECK(read_file(work("zero.tsv")) == read_file(work("seq.tsv")));
+    CHECK(read_file(work("zero.tsv.pairs.jsonl")) == read_file(work("seq.tsv.pairs.jsonl")));
+    // With a window below the gap: the window's pairs, then the candidates (d-a only at gap 3).
+    const Run window = run({"align", scans, "--voxel", kVoxel, "--out", work("window.tsv"), "--pairs", "sequence",
+                            "--window", "2", "--loop-gap", "3", "-q"});
+    CHECK_EQ_INT(window.code, 0);
+    const std::vector<std::string> window_lines = lines_of(read_file(work("window.tsv.pairs.jsonl")));
+    REQUIRE(window_lines.size() == 6);
+    CHECK(contains(window_lines[5], "\"pair\": 6, \"source\": \"d\", \"target\": \"a\""));
+
     // A pairs file (a star on c, one pair the other way round), its own --results.
     write_file(work("star.tsv"), "# star\nsource\ttarget\na\tc\nb\tc\nd\tc\n");
     const Run star = run({"align", scans, "--voxel", kVoxel, "--out", work("star.tsv.out"), "--pairs", work("star.tsv"),
@@ -527,6 +587,49 @@ void test_align_resume() {
     CHECK(read_file(out) == poses && read_file(out + ".pairs.jsonl") == complete);
     expect_usage_error({"align", scans, "--voxel", kVoxel, "--out", out}, "exists and is not empty");
     CHECK(read_file(out + ".pairs.jsonl") == complete);
+
+    // --pairs sequence with loop candidates (3 consecutive pairs, then 3 loops): killed in round 2 (pairs 1-4
+    // done, part of 5), after round 1 (1-3), and in round 1 (1-2, part of 3): the same bytes each time.
+    const std::vector<std::string> loop_args = {"align",    scans,        "--voxel", kVoxel, "--pairs",
+                                                "sequence", "--loop-gap", "2",       "--g2o"};
+    const auto loop_run = [&](const std::string &poses_file, const std::vector<std::string> &extra) {
+        std::vector<std::string> args = loop_args;
+        args.push_back(poses_file + ".g2o");
+        args.insert(args.end(), {"--out", poses_file});
+        args.insert(args.end(), extra.begin(), extra.end());
+        return run(args);
+    };
+    const std::string lref = work("lref.tsv"), lout = work("lout.tsv");
+    CHECK_EQ_INT(loop_run(lref, {"-q"}).code, 0);
+    const std::string loop_poses = read_file(lref), loop_results = read_file(lref + ".pairs.jsonl");
+    const std::vector<std::string> ll = lines_of(loop_results);
+    REQUIRE(ll.size() == 6);
+    for (size_t k = 0; k < 6; ++k) REQUIRE(starts_with(ll[k], "{\"pair\": " + std::to_string(k + 1) + ","));
+    const struct {
+        std::string file;
+        const char *ran;
+    } kills[] = {{ll[0] + "\n" + ll[1] + "\n" + ll[2] + "\n" + ll[3] + "\n" + ll[4].substr(0, 40), "; ran 2 in "},
+                 {ll[0] + "\n" + ll[1] + "\n" + ll[2] + "\n", "; ran 3 in "},
+                 {ll[2] + "\n" + ll[0] + "\n" + ll[5].substr(0, 60), "; ran 4 in "},
+                 {ll[5] + "\n" + ll[1] + "\n" + ll[0] + "\n" + ll[2] + "\n", "; ran 2 in "}};
+    for (const auto &kill : kills) {
+        write_file(lout + ".pairs.jsonl", kill.file);
+        const Run r = loop_run(lout, {"--resume"});
+        CHECK_MSG(r.code == 0, "loop resume: exit %d: %s", r.code, r.err.c_str());
+        CHECK_MSG(contains(r.err, kill.ran), "expected '%s': %s", kill.ran, r.err.c_str());
+        CHECK(read_file(lout) == loop_poses);
+        CHECK(read_file(lout + ".g2o") == read_file(lref + ".g2o"));
+        CHECK(sorted_lines(read_file(lout + ".pairs.jsonl")) == sorted_lines(loop_results));
+    }
+    // Round 2's records without all of round 1's, or beyond round 2's list: another pair list's results.
+    write_file(lout + ".pairs.jsonl", ll[0] + "\n" + ll[4] + "\n");
+    expect_usage_error(
+        {"align", scans, "--voxel", kVoxel, "--pairs", "sequence", "--loop-gap", "2", "--out", lout, "--resume"},
+        "results of another pair list?");
+    write_file(lout + ".pairs.jsonl", loop_results);
+    expect_usage_error({"align", scans, "--voxel", kVoxel, "--pairs", "sequence", "--loop-gap", "2", "--loops-per-scan",
+                        "1", "--out", lout, "--resume"},
+                       "results of another pair list?");
 }
 
 // The five KITTI 07 keyframes of ../shared/data: every one placed within 2 degrees and 2 voxels of the ground
@@ -567,6 +670,18 @@ void test_align_realdata() {
     worst_error(rows, truth, &deg, &m);
     CHECK_MSG(deg < 2.0 && m < 2 * 0.5, "worst error %g deg, %g m", deg, m);
     std::fprintf(stderr, "kitti07 multiway: worst error %.3f deg, %.3f m; %s", deg, m, r.err.c_str());
+
+    // A sequence with loop candidates 2 apart: the 4 consecutive pairs and 2 loops, all 5 placed.
+    const Run loops = run({"align", (set / "scans.tsv").string(), "--voxel", "0.5", "--out", work("kitti_loops.tsv"),
+                           "--pairs", "sequence", "--loop-gap", "2", "--jobs", "2"});
+    CHECK_MSG(loops.code == 0, "loops: exit %d: %s", loops.code, loops.err.c_str());
+    CHECK_MSG(contains(loops.err, "5 scans: 5 placed, 1 component; 6 pairs: 6 valid"), "%s", loops.err.c_str());
+    parse_poses(read_file(work("kitti_loops.tsv")), 5, &rows);
+    REQUIRE(rows.size() == 5);
+    for (const PoseRow &row : rows) CHECK_MSG(row.placed, "loops: scan %s not placed", row.scan.c_str());
+    worst_error(rows, truth, &deg, &m);
+    CHECK_MSG(deg < 2.0 && m < 2 * 0.5, "loops: worst error %g deg, %g m", deg, m);
+    std::fprintf(stderr, "kitti07 sequence, loop gap 2: worst error %.3f deg, %.3f m; %s", deg, m, loops.err.c_str());
 }
 
 } // namespace
