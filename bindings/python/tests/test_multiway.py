@@ -289,3 +289,24 @@ def test_two_sessions_merge_into_one_frame(real_data: Path) -> None:
         kissm.multiway.align_sessions([even, odd], voxel, stride=0)
     with pytest.raises(kissm.InvalidArgumentError, match="sessions"):
         kissm.multiway.align_sessions([], voxel)
+
+
+def test_sessions_that_cannot_be_placed_are_not() -> None:
+    """A later session of unrelated clouds is not placed (NaN poses, its own component), and the first session's
+    poses are right; a session whose first cloud meets the first session is placed up to its unrelated cloud."""
+    clouds, poses = synthetic_set()
+    rng = np.random.default_rng(9)
+    noise = [rng.uniform(-20, 20, size=(3000, 3)) for _ in range(2)]
+    alignment = kissm.multiway.align_sessions([clouds[:3], noise], VOXEL_SIZE, stride=1, loop_gap=2)
+    assert alignment.keys == [(0, 0), (0, 1), (0, 2), (1, 0), (1, 1)]
+    assert alignment.placed.tolist() == [True, True, True, False, False]
+    assert np.isnan(alignment.poses[3:]).all() and set(alignment.components[3:].tolist()) <= {3, 4}
+    for k in range(3):
+        expected = np.linalg.inv(poses[0]) @ poses[k]
+        error = np.linalg.inv(expected) @ alignment.poses[k]
+        assert angle_deg(error[:3, :3]) < 1.0 and np.linalg.norm(error[:3, 3]) < VOXEL_SIZE
+    mixed = kissm.multiway.align_sessions([clouds[:2], clouds[2:]], VOXEL_SIZE, stride=1, loop_gap=2)
+    assert mixed.placed.tolist() == [True, True, True, False]
+    expected = np.linalg.inv(poses[0]) @ poses[2]
+    error = np.linalg.inv(expected) @ mixed.poses[2]
+    assert angle_deg(error[:3, :3]) < 1.0 and np.linalg.norm(error[:3, 3]) < VOXEL_SIZE
