@@ -24,6 +24,7 @@ import argparse
 import math
 import statistics
 import time
+from typing import Any
 
 import kissm
 import numpy as np
@@ -83,6 +84,20 @@ def run_kissm(n: int, edges: list[tuple[int, int, np.ndarray, bool]]) -> tuple[f
         return time.perf_counter() - start, solution
 
 
+def gtsam_lm(graph: Any, initial: Any, n: int) -> tuple[float, np.ndarray]:
+    """GTSAM's Levenberg-Marquardt (tolerances 1e-12, at most 100 iterations): its time and the n poses."""
+    import gtsam  # benchmarks and tests only
+
+    params = gtsam.LevenbergMarquardtParams()
+    params.setRelativeErrorTol(1e-12)
+    params.setAbsoluteErrorTol(1e-12)
+    params.setMaxIterations(100)
+    start = time.perf_counter()
+    result = gtsam.LevenbergMarquardtOptimizer(graph, initial, params).optimize()
+    elapsed = time.perf_counter() - start
+    return elapsed, np.array([result.atPose3(i).matrix() for i in range(n)])
+
+
 def run_gtsam(n: int, edges: list[tuple[int, int, np.ndarray, bool]], keep: np.ndarray) -> tuple[float, np.ndarray]:
     import gtsam  # benchmarks and tests only
 
@@ -101,14 +116,7 @@ def run_gtsam(n: int, edges: list[tuple[int, int, np.ndarray, bool]], keep: np.n
     for i in range(1, n):  # the edge i -> i - 1 states inv(X_{i-1}) X_i
         x = x @ odometry[i]
         initial.insert(i, gtsam.Pose3(x))
-    params = gtsam.LevenbergMarquardtParams()
-    params.setRelativeErrorTol(1e-12)
-    params.setAbsoluteErrorTol(1e-12)
-    params.setMaxIterations(100)
-    start = time.perf_counter()
-    result = gtsam.LevenbergMarquardtOptimizer(graph, initial, params).optimize()
-    elapsed = time.perf_counter() - start
-    return elapsed, np.array([result.atPose3(i).matrix() for i in range(n)])
+    return gtsam_lm(graph, initial, n)
 
 
 def run_gtsam_real(n: int, edges: list[tuple[int, int, np.ndarray, np.ndarray]]) -> tuple[float, np.ndarray]:
@@ -135,14 +143,7 @@ def run_gtsam_real(n: int, edges: list[tuple[int, int, np.ndarray, np.ndarray]])
     initial = gtsam.Values()
     for i in range(n):
         initial.insert(i, gtsam.Pose3(poses[i]))
-    params = gtsam.LevenbergMarquardtParams()
-    params.setRelativeErrorTol(1e-12)
-    params.setAbsoluteErrorTol(1e-12)
-    params.setMaxIterations(100)
-    start = time.perf_counter()
-    result = gtsam.LevenbergMarquardtOptimizer(graph, initial, params).optimize()
-    elapsed = time.perf_counter() - start
-    return elapsed, np.array([result.atPose3(i).matrix() for i in range(n)])
+    return gtsam_lm(graph, initial, n)
 
 
 def angle_deg(rotation: np.ndarray) -> float:
