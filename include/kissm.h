@@ -1140,6 +1140,195 @@ KISSM_API int32_t kissm_pose_graph_edges(const kissm_pose_graph *graph, uint8_t 
 /** @} */
 
 /* ------------------------------------------------------------------------------------------------ */
+/* Multiway alignment: many scans into one frame                                                    */
+/* ------------------------------------------------------------------------------------------------ */
+
+/**
+ * @defgroup align Multiway alignment
+ * @brief Many scans registered into the first one's frame with no initial guess: pairs chosen by a policy,
+ *        registered from their features, their valid poses made edges of a pose graph and optimised
+ *        (docs/multiway.md). kissm_align_features() is the whole job in one call, as Python's
+ *        kissm.multiway.align and `kissm align` run it: the same features, settings and pairs give the same bits
+ *        in all three. kissm_sequence_loops() is its loop-candidate rule alone, for a job of one's own.
+ * @{
+ */
+
+/** @name Pair policies (kissm_align_options.pairs) */
+/** @{ */
+/** Every pair once, the later scan the source: (j, i) for i < j, i outer. Sensible up to some tens of scans. */
+#define KISSM_PAIRS_ALL 0
+/** Scans in acquisition order: each with the next (k+1, k), then the loop candidates kissm_sequence_loops() gives
+ * for those registrations (or for kissm_align_options.priors), so the work grows with the scans, not their square. */
+#define KISSM_PAIRS_SEQUENCE 1
+/** The pairs of kissm_align_options.pair_list, in its order. */
+#define KISSM_PAIRS_LIST 2
+/** @} */
+
+/**
+ * @brief Settings of kissm_align_features(). Fill it with kissm_align_options_init(), then change what you need.
+ *        The arrays it points to are read during the call only.
+ */
+typedef struct kissm_align_options {
+    /** sizeof(kissm_align_options) as the caller knows it; set by kissm_align_options_init(). */
+    uint32_t struct_size;
+    /** A KISSM_PAIRS_* policy. Default #KISSM_PAIRS_ALL. */
+    int32_t pairs;
+    /** #KISSM_PAIRS_LIST: num_pairs (source, target) scan positions, packed; otherwise NULL. Default NULL. */
+    const uint64_t *pair_list;
+    /** #KISSM_PAIRS_LIST: the number of pairs, 0 to 100,000,000; otherwise 0. Default 0. */
+    uint64_t num_pairs;
+    /** #KISSM_PAIRS_SEQUENCE: NULL, or num_scans 4x4 row-major world <- scan poses (GNSS, a SLAM run) whose
+     * positions choose the loop candidates instead of the chained registrations; a pose with a non-finite
+     * translation marks a scan without one. Otherwise NULL. Default NULL. */
+    const double *priors;
+    /** #KISSM_PAIRS_SEQUENCE: a loop candidate's scans lie within this distance (the clouds' unit) of each other;
+     * > 0, finite, or 0 for 30 voxels (the matcher's voxel_size). Default 0. */
+    double loop_radius;
+    /** #KISSM_PAIRS_SEQUENCE: a loop candidate's scans are at least this many apart in the sequence; 1 to
+     * 1,000,000. Default 10. */
+    int32_t loop_gap;
+    /** #KISSM_PAIRS_SEQUENCE: at most this many candidates per scan (the nearest); 0 (none) to 1,000,000.
+     * Default 5. */
+    int32_t loops_per_scan;
+    /** The pose graph's bound (kissm_pose_graph_optimize()); finite, > 0. Default
+     * #KISSM_POSE_GRAPH_DEFAULT_BOUND. */
+    double bound;
+    /* New fields are only ever appended here. */
+} kissm_align_options;
+
+/**
+ * @brief Writes the documented defaults into the first struct_size bytes of *options and sets
+ *        options->struct_size = struct_size.
+ * @param[out] options The struct to fill.
+ * @param[in] struct_size Pass sizeof(kissm_align_options).
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p options is NULL.
+ * @retval KISSM_ERR_STRUCT_SIZE @p struct_size is smaller than this struct, or above 65536.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_align_options_init(kissm_align_options *options, uint32_t struct_size);
+
+/** @brief The outcome of kissm_align_features(): the scans' poses and every registration with its edge. */
+typedef struct kissm_alignment kissm_alignment;
+
+/**
+ * @brief Registers the pairs the policy chooses, makes each valid pose a robust edge of a pose graph and optimises
+ *        it from scan 0: every scan joined to scan 0 by accepted edges gets its pose in scan 0's frame, the others
+ *        none (NaN), never a guess.
+ *
+ * Each registration is kissm_register_features() with @p matcher's settings; set refine_mode to
+ * #KISSM_REFINE_GICP for edges weighed by their information (a coarse pose's edge gets an isotropic one from its
+ * rotation_uncertainty, at least 1e-4 rad, and a translation sigma of its noise_bound). The pairs run on the
+ * matcher's threads, one pair per thread; the result does not depend on their number. kissm_cancel() on @p matcher
+ * stops the call; the matcher's progress callback is not called (its log callback is not either).
+ * @param[in,out] matcher The registrations' settings; the features must have been computed under its descriptor
+ *                settings (else #KISSM_ERR_FEATURES_MISMATCH, before any registration).
+ * @param[in] features num_scans features, in order (scan 0 is the anchor); a NULL entry is a scan that could not
+ *            be described: no pair with it is registered, and it is not placed.
+ * @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ * @param[in] options The pair policy and its settings; NULL for the defaults.
+ * @param[out] out_alignment The outcome, for kissm_alignment_destroy(); NULL on an error.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p matcher, @p features or @p out_alignment is NULL, or a policy's array is.
+ * @retval KISSM_ERR_INVALID_ARGUMENT An option is out of its range, a listed pair names a scan out of range or
+ *         pairs a scan with itself, or an option is given that the policy does not read.
+ * @retval KISSM_ERR_STRUCT_SIZE options->struct_size is not this struct's, or above 65536.
+ * @retval KISSM_ERR_FEATURES_MISMATCH Some features were not computed under @p matcher's descriptor settings.
+ * @retval KISSM_ERR_CANCELLED kissm_cancel() stopped it.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_align_features(kissm_matcher *matcher, const kissm_features *const *features,
+                                       uint64_t num_scans, const kissm_align_options *options,
+                                       kissm_alignment **out_alignment);
+/**
+ * @brief Destroys an alignment.
+ * @param[in] alignment From kissm_align_features(); NULL is fine.
+ */
+KISSM_API void kissm_alignment_destroy(kissm_alignment *alignment);
+/**
+ * @brief Number of scans of an alignment.
+ * @param[in] alignment The alignment.
+ * @return The number of scans; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_alignment_num_scans(const kissm_alignment *alignment);
+/**
+ * @brief Number of registrations an alignment ran (the pairs with features on both sides, in the order they ran).
+ * @param[in] alignment The alignment.
+ * @return The number of registrations; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_alignment_num_registrations(const kissm_alignment *alignment);
+/**
+ * @brief The scans' poses, as kissm_pose_graph_poses() gives them. Any output may be NULL.
+ * @param[in] alignment The alignment.
+ * @param[out] out_poses num_scans 4x4 row-major world <- scan poses (world = scan 0's frame), packed; NaN for a
+ *             scan that is not placed.
+ * @param[out] out_placed num_scans flags: 1 when accepted edges join the scan to scan 0.
+ * @param[out] out_components num_scans labels: the smallest scan joined to it by accepted edges.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p alignment is NULL.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_alignment_poses(const kissm_alignment *alignment, double *out_poses, uint8_t *out_placed,
+                                        uint64_t *out_components);
+/**
+ * @brief One registration of an alignment and its edge. Any output may be NULL.
+ * @param[in] alignment The alignment.
+ * @param[in] index 0 to kissm_alignment_num_registrations() - 1.
+ * @param[out] out_source The source scan (the one the transform moves).
+ * @param[out] out_target The target scan.
+ * @param[out] out_result The registration, as kissm_register_features() wrote it (struct_size set by
+ *             kissm_result_init()).
+ * @param[out] out_edge -1 when the registration is not an edge (not valid), 0 for a rejected edge, 1 for an
+ *             accepted one.
+ * @param[out] out_information The edge's 6x6 information as the graph weighed it; NaN when not an edge.
+ * @param[out] out_residual The edge's squared error xi^T I xi at the solution; NaN when not an edge or a scan of
+ *             it is not placed.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p alignment is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p index is out of range (nothing written).
+ * @retval KISSM_ERR_STRUCT_SIZE out_result->struct_size is too small or above 65536 (nothing written).
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_alignment_registration(const kissm_alignment *alignment, uint64_t index, uint64_t *out_source,
+                                               uint64_t *out_target, kissm_result *out_result, int32_t *out_edge,
+                                               double out_information[36], double *out_residual);
+
+/**
+ * @brief The loop candidates of a sequence of scans: pairs far apart in the sequence but near in space, the rule of
+ *        #KISSM_PAIRS_SEQUENCE (and of Python's and the CLI's sequences).
+ *
+ * The scans' positions are @p priors' translations when given; otherwise the consecutive registrations chained
+ * from scan 0, and then the radius grows by 2% of the path between the two scans (the odometry's drift), and an
+ * invalid step starts a new piece of the sequence in a frame of its own, with no candidates across pieces. For
+ * each scan j from @p gap on, the scans i <= j - gap within the radius, the @p per_scan nearest (by distance, then
+ * i), are written as pairs (j, i) by increasing i; then j + 1.
+ * @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ * @param[in] steps NULL when @p priors is given; else num_scans - 1 4x4 row-major transforms, packed: step k is
+ *            T_k_(k+1), scan k+1 into scan k (kissm_result.transform of the pair (k+1, k)).
+ * @param[in] step_valid NULL (every step valid) or num_scans - 1 flags, 1 valid, 0 not (its transform is not read).
+ * @param[in] priors NULL, or num_scans 4x4 row-major world <- scan poses; a non-finite translation marks a scan
+ *            without a position.
+ * @param[in] radius Finite, > 0 (the clouds' unit).
+ * @param[in] gap 1 to 1,000,000.
+ * @param[in] per_scan 0 to 1,000,000.
+ * @param[out] out_pairs capacity (source, target) pairs, packed; may be NULL to count only. At most
+ *             num_scans x per_scan pairs are written.
+ * @param[in] capacity The pairs @p out_pairs has room for.
+ * @param[out] out_count The number of candidates.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p out_count is NULL, or both @p steps and @p priors are (with num_scans > 1).
+ * @retval KISSM_ERR_INVALID_ARGUMENT An argument is out of its range, both @p steps and @p priors are given,
+ *         @p step_valid holds a flag other than 0 and 1, or @p capacity is below the count (*out_count is set,
+ *         nothing else written).
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_sequence_loops(uint64_t num_scans, const double *steps, const uint8_t *step_valid,
+                                       const double *priors, double radius, uint64_t gap, uint64_t per_scan,
+                                       uint64_t *out_pairs, uint64_t capacity, uint64_t *out_count);
+
+/** @} */
+
+/* ------------------------------------------------------------------------------------------------ */
 /* ABI self-check for bindings                                                                      */
 /* ------------------------------------------------------------------------------------------------ */
 
@@ -1149,9 +1338,10 @@ KISSM_API int32_t kissm_pose_graph_edges(const kissm_pose_graph *graph, uint8_t 
  * @{
  */
 
-#define KISSM_STRUCT_CONFIG 1 /**< kissm_config */
-#define KISSM_STRUCT_POINTS 2 /**< kissm_points */
-#define KISSM_STRUCT_RESULT 3 /**< kissm_result */
+#define KISSM_STRUCT_CONFIG 1        /**< kissm_config */
+#define KISSM_STRUCT_POINTS 2        /**< kissm_points */
+#define KISSM_STRUCT_RESULT 3        /**< kissm_result */
+#define KISSM_STRUCT_ALIGN_OPTIONS 4 /**< kissm_align_options */
 
 /**
  * @brief sizeof() of a public struct as compiled into the library.

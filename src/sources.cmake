@@ -34,6 +34,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_lm.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_consensus.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/loop_candidates.cpp
 )
 # The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).
 set(KISSM_CAPI_SOURCES
@@ -47,4 +48,5 @@ set(KISSM_CAPI_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/capi/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/files.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/pose_graph.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/align.cpp
 )

@@ -41,6 +41,7 @@ STRUCTS = [
     ("kissm_config", "KISSM_STRUCT_CONFIG", "KISSM_LAYOUT_CONFIG", True),
     ("kissm_points", "KISSM_STRUCT_POINTS", "KISSM_LAYOUT_POINTS", False),
     ("kissm_result", "KISSM_STRUCT_RESULT", "KISSM_LAYOUT_RESULT", True),
+    ("kissm_align_options", "KISSM_STRUCT_ALIGN_OPTIONS", "KISSM_LAYOUT_ALIGN_OPTIONS", True),
 ]
 
 _ROW = re.compile(r"X\((\w+), (\w+), ([^,]+), (\d+), (\d+)\)")

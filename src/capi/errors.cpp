@@ -62,8 +62,9 @@ void check_struct_size(const char *label, uint32_t given, const StructSizes &siz
             if (given == sizes.published[i]) return; // an older caller's layout
             older += (i ? ", " : "") + std::to_string(sizes.published[i]);
         }
-        fail(ErrorKind::StructSize, head + "; this kissm takes an earlier release's size (" + older + ") or at least " +
-                                        std::to_string(sizes.known) + " (" + set_it + ")");
+        const std::string earlier = sizes.num_published ? "an earlier release's size (" + older + ") or " : "";
+        fail(ErrorKind::StructSize,
+             head + "; this kissm takes " + earlier + "at least " + std::to_string(sizes.known) + " (" + set_it + ")");
     }
     if (given_struct != nullptr && given > sizes.known && !tail_is_zero(given_struct, sizes.known, given))
         fail(ErrorKind::StructSize, head + " with non-zero fields beyond the " + std::to_string(sizes.known) +
@@ -148,6 +149,7 @@ uint32_t kissm_abi_sizeof(int32_t which) {
     case KISSM_STRUCT_CONFIG: return sizeof(kissm_config);
     case KISSM_STRUCT_POINTS: return sizeof(kissm_points);
     case KISSM_STRUCT_RESULT: return sizeof(kissm_result);
+    case KISSM_STRUCT_ALIGN_OPTIONS: return sizeof(kissm_align_options);
     default: return 0;
     }
 }

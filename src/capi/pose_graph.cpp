@@ -57,6 +57,49 @@ void require_solution(const kissm_pose_graph *graph) {
 
 } // namespace
 
+KISSM_DETAIL_BEGIN
+namespace capi {
+
+void add_pose_graph_edge(kissm_pose_graph &graph, uint64_t source, uint64_t target, const double transform[16],
+                         const double information[36], int32_t robust) {
+    require_non_null(transform, "transform");
+    require_non_null(information, "information");
+    core::PoseGraphEdge e;
+    e.source = node_index(source, graph, "source");
+    e.target = node_index(target, graph, "target");
+    if (e.source == e.target)
+        core::fail(core::ErrorKind::InvalidArgument,
+                   "source and target are both " + std::to_string(source) + "; an edge joins two nodes");
+    rigid_transform(transform, "transform", e.measured.R, e.measured.t);
+    e.information = information_matrix(information);
+    if (robust != 0 && robust != 1)
+        core::fail(core::ErrorKind::InvalidArgument, "robust is " + std::to_string(robust) + "; 0 or 1");
+    e.robust = robust == 1;
+    graph.edges.push_back(e);
+    graph.solved = false;
+}
+
+void write_pose_graph_poses(const core::PoseGraphSolution &s, std::size_t num_nodes, double *out_poses,
+                            uint8_t *out_placed, uint64_t *out_components) {
+    for (std::size_t i = 0; i < num_nodes; ++i) {
+        if (out_poses != nullptr) {
+            double *m = out_poses + 16 * i;
+            for (int r = 0; r < 3; ++r) {
+                for (int c = 0; c < 3; ++c) m[4 * r + c] = s.poses[i].R(r, c);
+                m[4 * r + 3] = s.poses[i].t[r];
+            }
+            const double last = s.placed[i] ? 1.0 : std::nan("");
+            m[12] = m[13] = m[14] = s.placed[i] ? 0.0 : std::nan("");
+            m[15] = last;
+        }
+        if (out_placed != nullptr) out_placed[i] = s.placed[i];
+        if (out_components != nullptr) out_components[i] = s.component[i];
+    }
+}
+
+} // namespace capi
+KISSM_DETAIL_END
+
 extern "C" {
 
 int32_t kissm_pose_graph_create(uint64_t num_nodes, kissm_pose_graph **out_graph) {
@@ -81,21 +124,7 @@ int32_t kissm_pose_graph_add_edge(kissm_pose_graph *graph, uint64_t source, uint
                                   const double information[36], int32_t robust, uint64_t *out_edge) {
     return guarded("kissm_pose_graph_add_edge", [&] {
         require_non_null(graph, "graph");
-        require_non_null(transform, "transform");
-        require_non_null(information, "information");
-        core::PoseGraphEdge e;
-        e.source = node_index(source, *graph, "source");
-        e.target = node_index(target, *graph, "target");
-        if (e.source == e.target)
-            core::fail(core::ErrorKind::InvalidArgument,
-                       "source and target are both " + std::to_string(source) + "; an edge joins two nodes");
-        rigid_transform(transform, "transform", e.measured.R, e.measured.t);
-        e.information = information_matrix(information);
-        if (robust != 0 && robust != 1)
-            core::fail(core::ErrorKind::InvalidArgument, "robust is " + std::to_string(robust) + "; 0 or 1");
-        e.robust = robust == 1;
-        graph->edges.push_back(e);
-        graph->solved = false;
+        add_pose_graph_edge(*graph, source, target, transform, information, robust);
         if (out_edge != nullptr) *out_edge = graph->edges.size() - 1;
         return ok();
     });
@@ -124,21 +153,7 @@ int32_t kissm_pose_graph_poses(const kissm_pose_graph *graph, double *out_poses,
     return guarded("kissm_pose_graph_poses", [&] {
         require_non_null(graph, "graph");
         require_solution(graph);
-        const core::PoseGraphSolution &s = graph->solution;
-        for (std::size_t i = 0; i < graph->num_nodes; ++i) {
-            if (out_poses != nullptr) {
-                double *m = out_poses + 16 * i;
-                for (int r = 0; r < 3; ++r) {
-                    for (int c = 0; c < 3; ++c) m[4 * r + c] = s.poses[i].R(r, c);
-                    m[4 * r + 3] = s.poses[i].t[r];
-                }
-                const double last = s.placed[i] ? 1.0 : std::nan("");
-                m[12] = m[13] = m[14] = s.placed[i] ? 0.0 : std::nan("");
-                m[15] = last;
-            }
-            if (out_placed != nullptr) out_placed[i] = s.placed[i];
-            if (out_components != nullptr) out_components[i] = s.component[i];
-        }
+        write_pose_graph_poses(graph->solution, graph->num_nodes, out_poses, out_placed, out_components);
         return ok();
     });
 }

@@ -72,6 +72,11 @@ PIN(KISSM_FORMAT_BIN_XYZ, 6)
 PIN(KISSM_STRUCT_CONFIG, 1)
 PIN(KISSM_STRUCT_POINTS, 2)
 PIN(KISSM_STRUCT_RESULT, 3)
+PIN(KISSM_STRUCT_ALIGN_OPTIONS, 4)
+
+PIN(KISSM_PAIRS_ALL, 0)
+PIN(KISSM_PAIRS_SEQUENCE, 1)
+PIN(KISSM_PAIRS_LIST, 2)
 
 /* The version string is a string literal. */
 const char kissm_header_test_version[] = KISSM_VERSION_STRING;
@@ -105,6 +110,17 @@ struct kissm_header_test_api {
     uint64_t (*cloud_count)(const kissm_cloud *);
     const double *(*cloud_data)(const kissm_cloud *);
     int32_t (*cloud_points)(const kissm_cloud *, kissm_points *);
+    int32_t (*align_options_init)(kissm_align_options *, uint32_t);
+    int32_t (*align_features)(kissm_matcher *, const kissm_features *const *, uint64_t, const kissm_align_options *,
+                              kissm_alignment **);
+    void (*alignment_destroy)(kissm_alignment *);
+    uint64_t (*alignment_num_scans)(const kissm_alignment *);
+    uint64_t (*alignment_num_registrations)(const kissm_alignment *);
+    int32_t (*alignment_poses)(const kissm_alignment *, double *, uint8_t *, uint64_t *);
+    int32_t (*alignment_registration)(const kissm_alignment *, uint64_t, uint64_t *, uint64_t *, kissm_result *,
+                                      int32_t *, double *, double *);
+    int32_t (*sequence_loops)(uint64_t, const double *, const uint8_t *, const double *, double, uint64_t, uint64_t,
+                              uint64_t *, uint64_t, uint64_t *);
     uint32_t (*abi_sizeof)(int32_t);
 };
 
@@ -136,6 +152,14 @@ const struct kissm_header_test_api kissm_header_test_api = {
     .cloud_count = kissm_cloud_count,
     .cloud_data = kissm_cloud_data,
     .cloud_points = kissm_cloud_points,
+    .align_options_init = kissm_align_options_init,
+    .align_features = kissm_align_features,
+    .alignment_destroy = kissm_alignment_destroy,
+    .alignment_num_scans = kissm_alignment_num_scans,
+    .alignment_num_registrations = kissm_alignment_num_registrations,
+    .alignment_poses = kissm_alignment_poses,
+    .alignment_registration = kissm_alignment_registration,
+    .sequence_loops = kissm_sequence_loops,
     .abi_sizeof = kissm_abi_sizeof,
 };
 
@@ -157,4 +181,5 @@ const kissm_progress_fn kissm_header_test_progress_fn = never_cancel;
 /* The structs are complete types usable in C declarations and initialisers. */
 kissm_config kissm_header_test_config;
 kissm_result kissm_header_test_result;
+kissm_align_options kissm_header_test_align_options;
 const kissm_points kissm_header_test_points = {NULL, 0, 0, KISSM_SCALAR_FLOAT64, 0};

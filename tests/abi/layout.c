@@ -49,6 +49,8 @@ _Static_assert(0 KISSM_LAYOUT_POINTS(LAYOUT_ADD_SIZE) == sizeof(kissm_points),
                "kissm_points has a field that tests/abi/layout_table.h does not list");
 _Static_assert(0 KISSM_LAYOUT_RESULT(LAYOUT_ADD_SIZE) == sizeof(kissm_result),
                "kissm_result has a field that tests/abi/layout_table.h does not list");
+_Static_assert(0 KISSM_LAYOUT_ALIGN_OPTIONS(LAYOUT_ADD_SIZE) == sizeof(kissm_align_options),
+               "kissm_align_options has a field that tests/abi/layout_table.h does not list");
 #else
 #  define KISSM_LAYOUT_64 0
 #endif
@@ -87,7 +89,7 @@ static void test_library_agrees_with_header(void) {
         CHECK_MSG(kissm_abi_sizeof(kStructs[i].id) == kStructs[i].size, "kissm_abi_sizeof(%s) = %u, header: %zu",
                   kStructs[i].name, (unsigned)kissm_abi_sizeof(kStructs[i].id), kStructs[i].size);
     CHECK_EQ_INT(kissm_abi_sizeof(0), 0);
-    CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_RESULT + 1), 0);
+    CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_ALIGN_OPTIONS + 1), 0);
     CHECK_EQ_INT(kissm_abi_sizeof(-1), 0);
     CHECK_EQ_INT(kissm_abi_version(), KISSM_ABI_VERSION);
     CHECK_EQ_INT(kissm_version_number(), KISSM_VERSION_NUMBER);
@@ -113,6 +115,7 @@ static void test_no_padding(void) {
     /* struct_size comes first in the growable structs. */
     CHECK_EQ_INT(offsetof(kissm_config, struct_size), 0);
     CHECK_EQ_INT(offsetof(kissm_result, struct_size), 0);
+    CHECK_EQ_INT(offsetof(kissm_align_options, struct_size), 0);
 }
 
 /* ---------------------------------------------------------------------------------------------- */

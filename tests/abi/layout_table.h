@@ -9,7 +9,7 @@
  * Python and Rust tests compare their own declarations with.
  *
  * These numbers are the ABI. A published row never changes: new fields are appended at the end of
- * kissm_config and kissm_result only (they carry struct_size); kissm_points is frozen. See
+ * kissm_config, kissm_result and kissm_align_options only (they carry struct_size); kissm_points is frozen. See
  * docs/abi-policy.md. */
 #ifndef KISSM_TEST_ABI_LAYOUT_TABLE_H
 #define KISSM_TEST_ABI_LAYOUT_TABLE_H
@@ -18,7 +18,8 @@
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
   X(kissm_config, KISSM_STRUCT_CONFIG, 304)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 1264)
+  X(kissm_result, KISSM_STRUCT_RESULT, 1264)                                                                           \
+  X(kissm_align_options, KISSM_STRUCT_ALIGN_OPTIONS, 56)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -123,6 +124,18 @@
   X(kissm_result, ambiguity, double, 1248, 8)                                                                          \
   X(kissm_result, confidence, double, 1256, 8)
 
-#define KISSM_LAYOUT_FIELDS(X) KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X)
+#define KISSM_LAYOUT_ALIGN_OPTIONS(X)                                                                                  \
+  X(kissm_align_options, struct_size, uint32_t, 0, 4)                                                                  \
+  X(kissm_align_options, pairs, int32_t, 4, 4)                                                                         \
+  X(kissm_align_options, pair_list, const uint64_t *, 8, 8)                                                            \
+  X(kissm_align_options, num_pairs, uint64_t, 16, 8)                                                                   \
+  X(kissm_align_options, priors, const double *, 24, 8)                                                                \
+  X(kissm_align_options, loop_radius, double, 32, 8)                                                                   \
+  X(kissm_align_options, loop_gap, int32_t, 40, 4)                                                                     \
+  X(kissm_align_options, loops_per_scan, int32_t, 44, 4)                                                               \
+  X(kissm_align_options, bound, double, 48, 8)
+
+#define KISSM_LAYOUT_FIELDS(X)                                                                                         \
+  KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X) KISSM_LAYOUT_ALIGN_OPTIONS(X)
 
 #endif

@@ -26,8 +26,9 @@ static void test_abi_sizeof(void) {
     CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_CONFIG), sizeof(kissm_config));
     CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_POINTS), sizeof(kissm_points));
     CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_RESULT), sizeof(kissm_result));
+    CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_ALIGN_OPTIONS), sizeof(kissm_align_options));
     CHECK_EQ_INT(kissm_abi_sizeof(0), 0);
-    CHECK_EQ_INT(kissm_abi_sizeof(4), 0);
+    CHECK_EQ_INT(kissm_abi_sizeof(5), 0);
     CHECK_EQ_INT(kissm_abi_sizeof(-1), 0);
     CHECK_EQ_INT(kissm_abi_sizeof(INT32_MAX), 0);
     CHECK_EQ_INT(kissm_abi_sizeof(INT32_MIN), 0);

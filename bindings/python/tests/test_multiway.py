@@ -310,3 +310,45 @@ def test_sessions_that_cannot_be_placed_are_not() -> None:
     expected = np.linalg.inv(poses[0]) @ poses[2]
     error = np.linalg.inv(expected) @ mixed.poses[2]
     assert angle_deg(error[:3, :3]) < 1.0 and np.linalg.norm(error[:3, 3]) < VOXEL_SIZE
+
+
+@pytest.mark.parametrize(
+    ("name", "pairs", "gap", "per_scan"), [("kitti07", "all", 10, 5), ("happy", "sequence", 5, 10)]
+)
+def test_the_c_job_gives_the_same_bits(real_data: Path, name: str, pairs: str, gap: int, per_scan: int) -> None:
+    """kissm_align_features (the whole job in one C call, as C and Rust users run it) on features computed here
+    gives the poses, registrations, accepted edges and residuals of kissm.multiway.align, bit for bit."""
+    from kissm._ffi import ffi, lib
+
+    folder, voxel = SETS[name]
+    names, files, _ = read_set(real_data / folder)
+    python = kissm.multiway.align(
+        dict(zip(names, files, strict=True)), voxel, pairs=pairs, loop_gap=gap, loops_per_scan=per_scan
+    )
+    matcher = kissm.Matcher(voxel_size=voxel, refine_mode="gicp", num_threads=2)
+    features = [matcher.compute_features(kissm.read_points(f.path, f.format)) for f in files]
+    options = ffi.new("kissm_align_options *")
+    assert lib.kissm_align_options_init(options, ffi.sizeof("kissm_align_options")) == 0
+    options.pairs = lib.KISSM_PAIRS_SEQUENCE if pairs == "sequence" else lib.KISSM_PAIRS_ALL
+    options.loop_gap, options.loops_per_scan = gap, per_scan
+    handles = ffi.new("kissm_features *[]", [f._ptr for f in features])
+    out = ffi.new("kissm_alignment **")
+    assert lib.kissm_align_features(matcher._ptr, handles, len(features), options, out) == 0, ffi.string(
+        lib.kissm_last_error_message()
+    )
+    alignment = ffi.gc(out[0], lib.kissm_alignment_destroy)
+    n = len(names)
+    poses = np.empty((n, 4, 4))
+    placed = np.empty(n, dtype=np.uint8)
+    status = lib.kissm_alignment_poses(alignment, ffi.from_buffer("double[]", poses), ffi.from_buffer(placed), ffi.NULL)
+    assert status == 0
+    assert poses.tobytes() == python.poses.tobytes()
+    assert placed.astype(bool).tolist() == python.placed.tolist()
+    assert lib.kissm_alignment_num_registrations(alignment) == python.registrations
+    edges = []
+    source, target, edge, residual = (ffi.new(t) for t in ("uint64_t *", "uint64_t *", "int32_t *", "double *"))
+    for k in range(python.registrations):
+        assert lib.kissm_alignment_registration(alignment, k, source, target, ffi.NULL, edge, ffi.NULL, residual) == 0
+        if edge[0] >= 0:
+            edges.append((source[0], target[0], edge[0] == 1, residual[0]))
+    assert edges == [(e.source, e.target, e.accepted, e.residual) for e in python.edges]

@@ -7,7 +7,10 @@
 #include <map>
 #include <utility>
 
+#include <kissm.h>
+
 #include "cli_args.hpp"
+#include "report.hpp"
 
 namespace kissm_cli {
 
@@ -28,83 +31,6 @@ std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &o
     return pairs;
 }
 
-namespace {
-
-// a @ b for row-major 4x4s as numpy's matmul computes it here (OpenBLAS's dgemm kernel: each entry a fused
-// multiply-add chain over the inner index, starting from 0).
-void matmul_like_numpy(const double a[16], const double b[16], double out[16]) {
-    double c[16];
-    for (int r = 0; r < 4; ++r) {
-        for (int col = 0; col < 4; ++col) {
-            double s = 0.0;
-            for (int m = 0; m < 4; ++m) s = std::fma(a[4 * r + m], b[4 * m + col], s);
-            c[4 * r + col] = s;
-        }
-    }
-    std::copy(c, c + 16, out);
-}
-
-void set_identity(double pose[16]) {
-    for (int i = 0; i < 16; ++i) pose[i] = i % 5 == 0 ? 1.0 : 0.0;
-}
-
-} // namespace
-
-DeadReckoning dead_reckoned(const std::vector<const double *> &steps, size_t scans) {
-    DeadReckoning d;
-    d.positions.assign(3 * scans, 0.0);
-    d.path.assign(scans, 0.0);
-    d.piece.assign(scans, 0);
-    double pose[16];
-    set_identity(pose);
-    for (size_t k = 0; k + 1 < scans; ++k) {
-        const double *step = k < steps.size() ? steps[k] : nullptr;
-        if (step) {
-            matmul_like_numpy(pose, step, pose);
-            const double x = step[3], y = step[7], z = step[11];
-            const double length = std::sqrt(x * x + y * y + z * z);
-            d.path[k + 1] = d.path[k] + length;
-            d.piece[k + 1] = d.piece[k];
-        } else {
-            set_identity(pose);
-            d.piece[k + 1] = d.piece[k] + 1;
-        }
-        for (int i = 0; i < 3; ++i) d.positions[3 * (k + 1) + static_cast<size_t>(i)] = pose[4 * i + 3];
-    }
-    return d;
-}
-
-std::vector<ScanPair> loop_candidates(const DeadReckoning &where, double radius, size_t gap, size_t per_scan,
-                                      double drift) {
-    const size_t n = where.path.size();
-    std::vector<bool> known(n);
-    for (size_t k = 0; k < n; ++k) {
-        const double *p = &where.positions[3 * k];
-        known[k] = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-    }
-    std::vector<ScanPair> out;
-    if (gap == 0 || per_scan == 0) return out;
-    for (size_t j = gap; j < n; ++j) {
-        if (!known[j]) continue;
-        const double *pj = &where.positions[3 * j];
-        std::vector<std::pair<double, size_t>> near;
-        for (size_t i = 0; i + gap <= j; ++i) {
-            const double *pi = &where.positions[3 * i];
-            const double dx = pi[0] - pj[0], dy = pi[1] - pj[1], dz = pi[2] - pj[2];
-            const double distance = std::sqrt(dx * dx + dy * dy + dz * dz);
-            const double allowed = radius + drift * std::fabs(where.path[j] - where.path[i]);
-            if (known[i] && where.piece[i] == where.piece[j] && distance <= allowed) near.push_back({distance, i});
-        }
-        std::sort(near.begin(), near.end());
-        if (near.size() > per_scan) near.resize(per_scan);
-        std::vector<size_t> chosen;
-        for (const auto &c : near) chosen.push_back(c.second);
-        std::sort(chosen.begin(), chosen.end());
-        for (const size_t i : chosen) out.push_back({j, i});
-    }
-    return out;
-}
-
 std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &round1,
                                      const std::vector<DoneRecord> &records, const SequenceOptions &opt) {
     if (scans < 2 || opt.loops_per_scan <= 0 || opt.loop_gap <= 0) return {};
@@ -114,20 +40,32 @@ std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &
             by_pair[static_cast<size_t>(record.pair - 1)] = &record;
         }
     }
-    std::vector<std::vector<double>> matrices(scans - 1);
-    std::vector<const double *> steps(scans - 1, nullptr);
+    std::vector<double> steps(16 * (scans - 1), 0.0);
+    std::vector<uint8_t> valid(scans - 1, 0);
     for (size_t k = 0; k < round1.size(); ++k) {
         const ScanPair &pair = round1[k];
         const DoneRecord *record = by_pair[k];
         if (pair.source != pair.target + 1 || !record || record->error || !record->valid) continue;
-        // A valid record without a transform chains NaN, as a valid result's NaN transform in Python would.
-        std::vector<double> &m = matrices[pair.target];
-        m = record->transform;
-        if (m.size() != 16) m.assign(16, std::numeric_limits<double>::quiet_NaN());
-        steps[pair.target] = m.data();
+        double *step = &steps[16 * pair.target];
+        if (record->transform.size() == 16)
+            std::copy(record->transform.begin(), record->transform.end(), step);
+        else
+            std::fill(step, step + 16, std::numeric_limits<double>::quiet_NaN());
+        valid[pair.target] = 1;
     }
-    return loop_candidates(dead_reckoned(steps, scans), opt.loop_radius, static_cast<size_t>(opt.loop_gap),
-                           static_cast<size_t>(opt.loops_per_scan), kLoopDrift);
+    uint64_t count = 0;
+    const uint64_t gap = static_cast<uint64_t>(opt.loop_gap), per_scan = static_cast<uint64_t>(opt.loops_per_scan);
+    int32_t status = kissm_sequence_loops(scans, steps.data(), valid.data(), nullptr, opt.loop_radius, gap, per_scan,
+                                          nullptr, 0, &count);
+    std::vector<uint64_t> found(2 * count);
+    if (status == KISSM_OK)
+        status = kissm_sequence_loops(scans, steps.data(), valid.data(), nullptr, opt.loop_radius, gap, per_scan,
+                                      found.data(), count, &count);
+    if (status != KISSM_OK) throw UsageError("cannot choose the loop candidates: " + library_error(status));
+    std::vector<ScanPair> pairs(count);
+    for (size_t k = 0; k < count; ++k)
+        pairs[k] = {static_cast<size_t>(found[2 * k]), static_cast<size_t>(found[2 * k + 1])};
+    return pairs;
 }
 
 std::vector<ScanPair> pairs_from_file(const std::string &path, const std::vector<Scan> &scans) {

@@ -34,32 +34,10 @@ struct SequenceOptions {
 };
 std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &opt);
 
-// The radius of a loop candidate grows by this share of the dead-reckoned path between its scans: Python's
-// kissm._candidates.DRIFT.
-constexpr double kLoopDrift = 0.02;
-
-// Python's kissm._candidates.dead_reckoned: the consecutive registrations chained. steps[k] is the transform
-// (16, row-major) of scan k+1 into scan k, or nullptr when that registration is missing or not valid, which
-// starts a new piece in a frame of its own (pose the identity). The poses are multiplied as numpy's matmul
-// does here (OpenBLAS: a fused multiply-add chain over the inner index, from 0), each step's length is
-// sqrt((x*x + y*y) + z*z), as np.linalg.norm of a 3-vector.
-struct DeadReckoning {
-    std::vector<double> positions; // 3 per scan
-    std::vector<double> path;      // per scan: the path length from the start of the sequence
-    std::vector<int64_t> piece;    // per scan
-};
-DeadReckoning dead_reckoned(const std::vector<const double *> &steps, size_t scans);
-
-// Python's kissm._candidates.loop_candidates: for each scan j >= gap in order, among the scans i <= j - gap
-// with finite positions in j's piece whose distance (sqrt((dx*dx + dy*dy) + dz*dz), numpy's) is at most
-// radius + drift * |path_j - path_i|, the `per_scan` nearest (sorted by (distance, i)), emitted by increasing
-// i, as pairs (source j, target i).
-std::vector<ScanPair> loop_candidates(const DeadReckoning &where, double radius, size_t gap, size_t per_scan,
-                                      double drift);
-
-// Round 2 of "sequence": the loop candidates from round 1's records (those of the pairs (k+1, k) among
-// `round1`; any order; a pair without a record, an error or a record that is not valid breaks the chain).
-// Depends on the records only, so that a resumed run finds the same list.
+// Round 2 of "sequence": the loop candidates kissm_sequence_loops() gives for round 1's records (those of the pairs
+// (k+1, k) among `round1`; any order; a pair without a record, an error or a record that is not valid breaks the
+// chain; a valid record without a transform chains NaN, as a valid result's NaN transform would in Python).
+// Depends on the records only, so that a resumed run finds the same list. A UsageError if the library fails.
 std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &round1,
                                      const std::vector<DoneRecord> &records, const SequenceOptions &opt);
 

@@ -417,8 +417,61 @@ int32_t kissm_pose_graph_poses(const kissm_pose_graph *graph, double *out_poses,
 
 int32_t kissm_pose_graph_edges(const kissm_pose_graph *graph, uint8_t *out_accepted, double *out_residuals);
 
+#define KISSM_PAIRS_ALL 0
+
+#define KISSM_PAIRS_SEQUENCE 1
+
+#define KISSM_PAIRS_LIST 2
+
+typedef struct kissm_align_options {
+
+    uint32_t struct_size;
+
+    int32_t pairs;
+
+    const uint64_t *pair_list;
+
+    uint64_t num_pairs;
+
+    const double *priors;
+
+    double loop_radius;
+
+    int32_t loop_gap;
+
+    int32_t loops_per_scan;
+
+    double bound;
+} kissm_align_options;
+
+int32_t kissm_align_options_init(kissm_align_options *options, uint32_t struct_size);
+
+typedef struct kissm_alignment kissm_alignment;
+
+int32_t kissm_align_features(kissm_matcher *matcher, const kissm_features *const *features,
+    uint64_t num_scans, const kissm_align_options *options,
+    kissm_alignment **out_alignment);
+
+void kissm_alignment_destroy(kissm_alignment *alignment);
+
+uint64_t kissm_alignment_num_scans(const kissm_alignment *alignment);
+
+uint64_t kissm_alignment_num_registrations(const kissm_alignment *alignment);
+
+int32_t kissm_alignment_poses(const kissm_alignment *alignment, double *out_poses, uint8_t *out_placed,
+    uint64_t *out_components);
+
+int32_t kissm_alignment_registration(const kissm_alignment *alignment, uint64_t index, uint64_t *out_source,
+    uint64_t *out_target, kissm_result *out_result, int32_t *out_edge,
+    double out_information[36], double *out_residual);
+
+int32_t kissm_sequence_loops(uint64_t num_scans, const double *steps, const uint8_t *step_valid,
+    const double *priors, double radius, uint64_t gap, uint64_t per_scan,
+    uint64_t *out_pairs, uint64_t capacity, uint64_t *out_count);
+
 #define KISSM_STRUCT_CONFIG 1
 #define KISSM_STRUCT_POINTS 2
 #define KISSM_STRUCT_RESULT 3
+#define KISSM_STRUCT_ALIGN_OPTIONS 4
 
 uint32_t kissm_abi_sizeof(int32_t which);

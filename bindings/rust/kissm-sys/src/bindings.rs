@@ -74,9 +74,13 @@ pub const KISSM_FORMAT_XYZ: i32 = 5;
 pub const KISSM_FORMAT_BIN_XYZ: i32 = 6;
 pub const KISSM_POSE_GRAPH_MAX_NODES: i32 = 100000000;
 pub const KISSM_POSE_GRAPH_DEFAULT_BOUND: f64 = 22.4577;
+pub const KISSM_PAIRS_ALL: i32 = 0;
+pub const KISSM_PAIRS_SEQUENCE: i32 = 1;
+pub const KISSM_PAIRS_LIST: i32 = 2;
 pub const KISSM_STRUCT_CONFIG: i32 = 1;
 pub const KISSM_STRUCT_POINTS: i32 = 2;
 pub const KISSM_STRUCT_RESULT: i32 = 3;
+pub const KISSM_STRUCT_ALIGN_OPTIONS: i32 = 4;
 extern "C" {
     /** @brief Runtime twin of #KISSM_VERSION_NUMBER: the version of the library actually loaded.
  @return major * 10000 + minor * 100 + patch of the library.*/
@@ -1265,6 +1269,238 @@ extern "C" {
         graph: *const kissm_pose_graph,
         out_accepted: *mut u8,
         out_residuals: *mut f64,
+    ) -> i32;
+}
+/** @brief Settings of kissm_align_features(). Fill it with kissm_align_options_init(), then change what you need.
+        The arrays it points to are read during the call only.*/
+#[repr(C)]
+#[derive(Debug, Copy, Clone)]
+pub struct kissm_align_options {
+    /// sizeof(kissm_align_options) as the caller knows it; set by kissm_align_options_init().
+    pub struct_size: u32,
+    /// A KISSM_PAIRS_* policy. Default #KISSM_PAIRS_ALL.
+    pub pairs: i32,
+    /// #KISSM_PAIRS_LIST: num_pairs (source, target) scan positions, packed; otherwise NULL. Default NULL.
+    pub pair_list: *const u64,
+    /// #KISSM_PAIRS_LIST: the number of pairs, 0 to 100,000,000; otherwise 0. Default 0.
+    pub num_pairs: u64,
+    /** #KISSM_PAIRS_SEQUENCE: NULL, or num_scans 4x4 row-major world <- scan poses (GNSS, a SLAM run) whose
+ positions choose the loop candidates instead of the chained registrations; a pose with a non-finite
+ translation marks a scan without one. Otherwise NULL. Default NULL.*/
+    pub priors: *const f64,
+    /** #KISSM_PAIRS_SEQUENCE: a loop candidate's scans lie within this distance (the clouds' unit) of each other;
+ > 0, finite, or 0 for 30 voxels (the matcher's voxel_size). Default 0.*/
+    pub loop_radius: f64,
+    /** #KISSM_PAIRS_SEQUENCE: a loop candidate's scans are at least this many apart in the sequence; 1 to
+ 1,000,000. Default 10.*/
+    pub loop_gap: i32,
+    /** #KISSM_PAIRS_SEQUENCE: at most this many candidates per scan (the nearest); 0 (none) to 1,000,000.
+ Default 5.*/
+    pub loops_per_scan: i32,
+    /** The pose graph's bound (kissm_pose_graph_optimize()); finite, > 0. Default
+ #KISSM_POSE_GRAPH_DEFAULT_BOUND.*/
+    pub bound: f64,
+}
+#[allow(clippy::unnecessary_operation, clippy::identity_op)]
+const _: () = {
+    [
+        "Size of kissm_align_options",
+    ][::core::mem::size_of::<kissm_align_options>() - 56usize];
+    [
+        "Alignment of kissm_align_options",
+    ][::core::mem::align_of::<kissm_align_options>() - 8usize];
+    [
+        "Offset of field: kissm_align_options::struct_size",
+    ][::core::mem::offset_of!(kissm_align_options, struct_size) - 0usize];
+    [
+        "Offset of field: kissm_align_options::pairs",
+    ][::core::mem::offset_of!(kissm_align_options, pairs) - 4usize];
+    [
+        "Offset of field: kissm_align_options::pair_list",
+    ][::core::mem::offset_of!(kissm_align_options, pair_list) - 8usize];
+    [
+        "Offset of field: kissm_align_options::num_pairs",
+    ][::core::mem::offset_of!(kissm_align_options, num_pairs) - 16usize];
+    [
+        "Offset of field: kissm_align_options::priors",
+    ][::core::mem::offset_of!(kissm_align_options, priors) - 24usize];
+    [
+        "Offset of field: kissm_align_options::loop_radius",
+    ][::core::mem::offset_of!(kissm_align_options, loop_radius) - 32usize];
+    [
+        "Offset of field: kissm_align_options::loop_gap",
+    ][::core::mem::offset_of!(kissm_align_options, loop_gap) - 40usize];
+    [
+        "Offset of field: kissm_align_options::loops_per_scan",
+    ][::core::mem::offset_of!(kissm_align_options, loops_per_scan) - 44usize];
+    [
+        "Offset of field: kissm_align_options::bound",
+    ][::core::mem::offset_of!(kissm_align_options, bound) - 48usize];
+};
+impl Default for kissm_align_options {
+    fn default() -> Self {
+        let mut s = ::core::mem::MaybeUninit::<Self>::uninit();
+        unsafe {
+            ::core::ptr::write_bytes(s.as_mut_ptr(), 0, 1);
+            s.assume_init()
+        }
+    }
+}
+extern "C" {
+    /** @brief Writes the documented defaults into the first struct_size bytes of *options and sets
+        options->struct_size = struct_size.
+ @param[out] options The struct to fill.
+ @param[in] struct_size Pass sizeof(kissm_align_options).
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p options is NULL.
+ @retval KISSM_ERR_STRUCT_SIZE @p struct_size is smaller than this struct, or above 65536.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_align_options_init(
+        options: *mut kissm_align_options,
+        struct_size: u32,
+    ) -> i32;
+}
+/// @brief The outcome of kissm_align_features(): the scans' poses and every registration with its edge.
+#[repr(C)]
+#[derive(Debug)]
+pub struct kissm_alignment {
+    _unused: [u8; 0],
+}
+extern "C" {
+    /** @brief Registers the pairs the policy chooses, makes each valid pose a robust edge of a pose graph and optimises
+        it from scan 0: every scan joined to scan 0 by accepted edges gets its pose in scan 0's frame, the others
+        none (NaN), never a guess.
+
+ Each registration is kissm_register_features() with @p matcher's settings; set refine_mode to
+ #KISSM_REFINE_GICP for edges weighed by their information (a coarse pose's edge gets an isotropic one from its
+ rotation_uncertainty, at least 1e-4 rad, and a translation sigma of its noise_bound). The pairs run on the
+ matcher's threads, one pair per thread; the result does not depend on their number. kissm_cancel() on @p matcher
+ stops the call; the matcher's progress callback is not called (its log callback is not either).
+ @param[in,out] matcher The registrations' settings; the features must have been computed under its descriptor
+                settings (else #KISSM_ERR_FEATURES_MISMATCH, before any registration).
+ @param[in] features num_scans features, in order (scan 0 is the anchor); a NULL entry is a scan that could not
+            be described: no pair with it is registered, and it is not placed.
+ @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ @param[in] options The pair policy and its settings; NULL for the defaults.
+ @param[out] out_alignment The outcome, for kissm_alignment_destroy(); NULL on an error.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p matcher, @p features or @p out_alignment is NULL, or a policy's array is.
+ @retval KISSM_ERR_INVALID_ARGUMENT An option is out of its range, a listed pair names a scan out of range or
+         pairs a scan with itself, or an option is given that the policy does not read.
+ @retval KISSM_ERR_STRUCT_SIZE options->struct_size is not this struct's, or above 65536.
+ @retval KISSM_ERR_FEATURES_MISMATCH Some features were not computed under @p matcher's descriptor settings.
+ @retval KISSM_ERR_CANCELLED kissm_cancel() stopped it.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_align_features(
+        matcher: *mut kissm_matcher,
+        features: *const *const kissm_features,
+        num_scans: u64,
+        options: *const kissm_align_options,
+        out_alignment: *mut *mut kissm_alignment,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Destroys an alignment.
+ @param[in] alignment From kissm_align_features(); NULL is fine.*/
+    pub fn kissm_alignment_destroy(alignment: *mut kissm_alignment);
+}
+extern "C" {
+    /** @brief Number of scans of an alignment.
+ @param[in] alignment The alignment.
+ @return The number of scans; 0 for NULL.*/
+    pub fn kissm_alignment_num_scans(alignment: *const kissm_alignment) -> u64;
+}
+extern "C" {
+    /** @brief Number of registrations an alignment ran (the pairs with features on both sides, in the order they ran).
+ @param[in] alignment The alignment.
+ @return The number of registrations; 0 for NULL.*/
+    pub fn kissm_alignment_num_registrations(alignment: *const kissm_alignment) -> u64;
+}
+extern "C" {
+    /** @brief The scans' poses, as kissm_pose_graph_poses() gives them. Any output may be NULL.
+ @param[in] alignment The alignment.
+ @param[out] out_poses num_scans 4x4 row-major world <- scan poses (world = scan 0's frame), packed; NaN for a
+             scan that is not placed.
+ @param[out] out_placed num_scans flags: 1 when accepted edges join the scan to scan 0.
+ @param[out] out_components num_scans labels: the smallest scan joined to it by accepted edges.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p alignment is NULL.
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_alignment_poses(
+        alignment: *const kissm_alignment,
+        out_poses: *mut f64,
+        out_placed: *mut u8,
+        out_components: *mut u64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief One registration of an alignment and its edge. Any output may be NULL.
+ @param[in] alignment The alignment.
+ @param[in] index 0 to kissm_alignment_num_registrations() - 1.
+ @param[out] out_source The source scan (the one the transform moves).
+ @param[out] out_target The target scan.
+ @param[out] out_result The registration, as kissm_register_features() wrote it (struct_size set by
+             kissm_result_init()).
+ @param[out] out_edge -1 when the registration is not an edge (not valid), 0 for a rejected edge, 1 for an
+             accepted one.
+ @param[out] out_information The edge's 6x6 information as the graph weighed it; NaN when not an edge.
+ @param[out] out_residual The edge's squared error xi^T I xi at the solution; NaN when not an edge or a scan of
+             it is not placed.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p alignment is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT @p index is out of range (nothing written).
+ @retval KISSM_ERR_STRUCT_SIZE out_result->struct_size is too small or above 65536 (nothing written).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_alignment_registration(
+        alignment: *const kissm_alignment,
+        index: u64,
+        out_source: *mut u64,
+        out_target: *mut u64,
+        out_result: *mut kissm_result,
+        out_edge: *mut i32,
+        out_information: *mut f64,
+        out_residual: *mut f64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief The loop candidates of a sequence of scans: pairs far apart in the sequence but near in space, the rule of
+        #KISSM_PAIRS_SEQUENCE (and of Python's and the CLI's sequences).
+
+ The scans' positions are @p priors' translations when given; otherwise the consecutive registrations chained
+ from scan 0, and then the radius grows by 2% of the path between the two scans (the odometry's drift), and an
+ invalid step starts a new piece of the sequence in a frame of its own, with no candidates across pieces. For
+ each scan j from @p gap on, the scans i <= j - gap within the radius, the @p per_scan nearest (by distance, then
+ i), are written as pairs (j, i) by increasing i; then j + 1.
+ @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ @param[in] steps NULL when @p priors is given; else num_scans - 1 4x4 row-major transforms, packed: step k is
+            T_k_(k+1), scan k+1 into scan k (kissm_result.transform of the pair (k+1, k)).
+ @param[in] step_valid NULL (every step valid) or num_scans - 1 flags, 1 valid, 0 not (its transform is not read).
+ @param[in] priors NULL, or num_scans 4x4 row-major world <- scan poses; a non-finite translation marks a scan
+            without a position.
+ @param[in] radius Finite, > 0 (the clouds' unit).
+ @param[in] gap 1 to 1,000,000.
+ @param[in] per_scan 0 to 1,000,000.
+ @param[out] out_pairs capacity (source, target) pairs, packed; may be NULL to count only. At most
+             num_scans x per_scan pairs are written.
+ @param[in] capacity The pairs @p out_pairs has room for.
+ @param[out] out_count The number of candidates.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p out_count is NULL, or both @p steps and @p priors are (with num_scans > 1).
+ @retval KISSM_ERR_INVALID_ARGUMENT An argument is out of its range, both @p steps and @p priors are given,
+         @p step_valid holds a flag other than 0 and 1, or @p capacity is below the count (*out_count is set,
+         nothing else written).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_sequence_loops(
+        num_scans: u64,
+        steps: *const f64,
+        step_valid: *const u8,
+        priors: *const f64,
+        radius: f64,
+        gap: u64,
+        per_scan: u64,
+        out_pairs: *mut u64,
+        capacity: u64,
+        out_count: *mut u64,
     ) -> i32;
 }
 extern "C" {

@@ -83,6 +83,9 @@
 //!   shared by matchers on several threads; a [`CancelHandle`] stops a running call from any thread.
 //! - **Pose graphs**: a [`PoseGraph`] joins many relative poses (registrations, odometry) into one consistent
 //!   set of absolute poses, and rejects the wrong loop closures among its robust edges.
+//! - **Multiway alignment**: [`Matcher::align_features`] places many scans in the first one's frame with no
+//!   initial guess (the pairs of a [`Pairs`] policy registered from their [`Features`], then one pose graph);
+//!   [`sequence_loops`] is its loop-candidate rule alone.
 //! - **Portable features**: [`Features::to_bytes`] and [`Features::from_bytes`] move described clouds
 //!   between processes and machines; registration from loaded features is bitwise the original's.
 //! - Nothing here panics, and no Rust code is ever called back from C.
@@ -170,6 +173,7 @@
 
 #[macro_use]
 mod codes; // first: its macro serves the modules below
+mod align;
 mod config;
 mod error;
 mod matcher;
@@ -183,6 +187,7 @@ use std::sync::OnceLock;
 pub use kissm_sys;
 use kissm_sys as sys;
 
+pub use align::{sequence_loops, AlignOptions, AlignedPair, Alignment, EdgeState, LoopPositions, Pairs};
 #[allow(deprecated)] // the former name, kept as an alias
 pub use config::NonfinitePolicy;
 pub use config::{Config, ConfigBuilder, NonFinitePolicy, Preset, RefineMode, Suppression, Viewpoint};

@@ -84,7 +84,7 @@ impl Matcher {
         &self.config
     }
 
-    fn ptr(&mut self) -> *mut sys::kissm_matcher {
+    pub(crate) fn ptr(&mut self) -> *mut sys::kissm_matcher {
         self.raw.0.as_ptr()
     }
 
@@ -316,7 +316,7 @@ impl fmt::Debug for CancelHandle {
 /// another process or on another machine; registering loaded features gives bit for bit the result of the
 /// original ones.
 pub struct Features {
-    raw: NonNull<sys::kissm_features>,
+    pub(crate) raw: NonNull<sys::kissm_features>,
 }
 
 // SAFETY: the C API documents kissm_features as immutable once created, usable from several threads at

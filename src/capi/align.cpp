@@ -1,0 +1,318 @@
+// SPDX-License-Identifier: MIT
+// Multiway alignment (kissm_align_features) and its loop-candidate rule (kissm_sequence_loops). The job is the C
+// API's own calls composed as Python's kissm.multiway.align composes them: kissm_register_features per pair, each
+// valid kissm_result made an edge through kissm_pose_graph_add_edge's conversions, one optimisation. So the same
+// features, settings and pairs give the same bits in C, Python and the CLI (docs/multiway.md).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "capi/boundary.hpp"
+#include "capi/conversions.hpp"
+#include "capi/handles.hpp"
+#include "core/loop_candidates.hpp"
+
+using namespace kissm::detail::capi;
+namespace core = kissm::detail;
+
+namespace {
+
+constexpr uint64_t kMaxPairs = 100000000;
+constexpr int64_t kMaxLoopSetting = 1000000;
+// A loop radius of 0 means this many voxels (Python's kissm.multiway default).
+constexpr double kDefaultRadiusVoxels = 30.0;
+
+// kissm_align_options has no published layout yet: only this kissm's size is taken.
+constexpr StructSizes kAlignOptionsSizes{"kissm_align_options", nullptr, 0, sizeof(kissm_align_options)};
+
+kissm_align_options default_options() {
+    kissm_align_options o{};
+    o.struct_size = sizeof o;
+    o.pairs = KISSM_PAIRS_ALL;
+    o.pair_list = nullptr;
+    o.num_pairs = 0;
+    o.priors = nullptr;
+    o.loop_radius = 0.0;
+    o.loop_gap = 10;
+    o.loops_per_scan = 5;
+    o.bound = KISSM_POSE_GRAPH_DEFAULT_BOUND;
+    return o;
+}
+
+[[noreturn]] void invalid(const std::string &message) { core::fail(core::ErrorKind::InvalidArgument, message); }
+
+void check_scans(uint64_t num_scans) {
+    if (num_scans == 0 || num_scans > KISSM_POSE_GRAPH_MAX_NODES)
+        invalid("num_scans is " + std::to_string(num_scans) + "; 1 to " + std::to_string(KISSM_POSE_GRAPH_MAX_NODES));
+}
+
+void check_loop_settings(double radius, const char *radius_name, bool zero_allowed, uint64_t gap, const char *gap_name,
+                         uint64_t per_scan, const char *per_scan_name) {
+    if (!std::isfinite(radius) || radius < 0.0 || (radius == 0.0 && !zero_allowed))
+        invalid(std::string(radius_name) + " is " + number(radius) +
+                (zero_allowed ? "; 0 (30 voxels) or a finite number above 0" : "; a finite number above 0"));
+    if (gap < 1 || gap > static_cast<uint64_t>(kMaxLoopSetting))
+        invalid(std::string(gap_name) + " is " + std::to_string(gap) + "; 1 to " + std::to_string(kMaxLoopSetting));
+    if (per_scan > static_cast<uint64_t>(kMaxLoopSetting))
+        invalid(std::string(per_scan_name) + " is " + std::to_string(per_scan) + "; 0 to " +
+                std::to_string(kMaxLoopSetting));
+}
+
+// The options as given (NULL: the defaults), checked against the policy.
+kissm_align_options checked_options(const kissm_align_options *given, uint64_t num_scans) {
+    if (given == nullptr) return default_options();
+    check_struct_size("options->struct_size", given->struct_size, kAlignOptionsSizes, given);
+    const kissm_align_options o = *given;
+    if (o.pairs != KISSM_PAIRS_ALL && o.pairs != KISSM_PAIRS_SEQUENCE && o.pairs != KISSM_PAIRS_LIST)
+        invalid("options->pairs is " + std::to_string(o.pairs) +
+                "; KISSM_PAIRS_ALL (0), KISSM_PAIRS_SEQUENCE (1) or KISSM_PAIRS_LIST (2)");
+    if (o.pairs == KISSM_PAIRS_LIST) {
+        if (o.num_pairs > kMaxPairs)
+            invalid("options->num_pairs is " + std::to_string(o.num_pairs) + "; 0 to " + std::to_string(kMaxPairs));
+        if (o.num_pairs > 0) require_non_null(o.pair_list, "options->pair_list");
+        for (uint64_t k = 0; k < o.num_pairs; ++k) {
+            const uint64_t s = o.pair_list[2 * k], t = o.pair_list[2 * k + 1];
+            if (s >= num_scans || t >= num_scans)
+                invalid("options->pair_list pair " + std::to_string(k) + " is (" + std::to_string(s) + ", " +
+                        std::to_string(t) + "); scans are 0 to " + std::to_string(num_scans - 1));
+            if (s == t)
+                invalid("options->pair_list pair " + std::to_string(k) + " pairs scan " + std::to_string(s) +
+                        " with itself");
+        }
+    } else if (o.pair_list != nullptr || o.num_pairs != 0) {
+        invalid("options->pair_list and options->num_pairs are read by KISSM_PAIRS_LIST only; NULL and 0 here");
+    }
+    if (o.pairs != KISSM_PAIRS_SEQUENCE && o.priors != nullptr)
+        invalid("options->priors is read by KISSM_PAIRS_SEQUENCE only; NULL here");
+    check_loop_settings(
+        o.loop_radius, "options->loop_radius", true, o.loop_gap < 0 ? 0 : uint64_t(o.loop_gap), "options->loop_gap",
+        o.loops_per_scan < 0 ? uint64_t(kMaxLoopSetting) + 1 : uint64_t(o.loops_per_scan), "options->loops_per_scan");
+    if (!(o.bound > 0.0) || !std::isfinite(o.bound))
+        invalid("options->bound is " + number(o.bound) + "; a finite number above 0");
+    return o;
+}
+
+// The pairs of round 1 (all, consecutive, or the list), in the policy's order.
+std::vector<core::ScanPair> first_pairs(const kissm_align_options &o, std::size_t n) {
+    std::vector<core::ScanPair> pairs;
+    if (o.pairs == KISSM_PAIRS_ALL) {
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t j = i + 1; j < n; ++j) pairs.push_back({j, i});
+    } else if (o.pairs == KISSM_PAIRS_SEQUENCE) {
+        for (std::size_t i = 0; i + 1 < n; ++i) pairs.push_back({i + 1, i});
+    } else {
+        for (uint64_t k = 0; k < o.num_pairs; ++k)
+            pairs.push_back(
+                {static_cast<std::size_t>(o.pair_list[2 * k]), static_cast<std::size_t>(o.pair_list[2 * k + 1])});
+    }
+    return pairs;
+}
+
+// Registers the pairs whose scans both have features, one pair per thread of the matcher, each on a context of
+// one thread (the results do not depend on the thread count), appending them to the alignment in pair order.
+void register_pairs(kissm_matcher &matcher, core::RunContext &ctx, const kissm_features *const *features,
+                    const std::vector<core::ScanPair> &pairs, kissm_alignment &out) {
+    std::vector<core::ScanPair> runnable;
+    for (const core::ScanPair &p : pairs)
+        if (features[p.source] != nullptr && features[p.target] != nullptr) runnable.push_back(p);
+    std::vector<core::Registration> done(runnable.size());
+    ctx.parallel_for(runnable.size(), 1, [&](std::size_t begin, std::size_t end) {
+        core::RunContext one(1, &matcher.cancel_requested, core::Hooks{});
+        for (std::size_t k = begin; k < end; ++k) {
+            const core::ScanPair &p = runnable[k];
+            done[k] = core::register_features(features[p.source]->data, features[p.target]->data, matcher.params, one);
+        }
+    });
+    for (std::size_t k = 0; k < runnable.size(); ++k) {
+        AlignedPair r;
+        r.source = runnable[k].source;
+        r.target = runnable[k].target;
+        r.result.struct_size = sizeof r.result;
+        fill_result(done[k], &r.result);
+        out.registrations.push_back(r);
+    }
+}
+
+// Round 2 of a sequence: the loop candidates of round 1's consecutive registrations (or of the priors).
+std::vector<core::ScanPair> sequence_loops(const kissm_align_options &o, const kissm_alignment &a, double voxel) {
+    const std::size_t n = a.num_scans;
+    if (o.loops_per_scan == 0 || n < 2) return {};
+    const double radius = o.loop_radius > 0.0 ? o.loop_radius : kDefaultRadiusVoxels * voxel;
+    const auto gap = static_cast<std::size_t>(o.loop_gap), per_scan = static_cast<std::size_t>(o.loops_per_scan);
+    if (o.priors != nullptr) return core::loop_candidates(core::prior_places(o.priors, n), radius, gap, per_scan, 0.0);
+    std::vector<const double *> steps(n - 1, nullptr);
+    for (const AlignedPair &r : a.registrations)
+        if (r.source == r.target + 1 && r.result.valid) steps[r.target] = r.result.transform;
+    return core::loop_candidates(core::dead_reckoned(steps, n), radius, gap, per_scan, core::kLoopDrift);
+}
+
+// The edge's weight, as Python's kissm.multiway._information: the refined information when it is all finite,
+// else an isotropic one from the rotation uncertainty (at least 1e-4 rad) and a translation sigma of the noise
+// bound (at least 1e-9), so that coarse edges weigh alike.
+void edge_information(const kissm_result &r, double information[36]) {
+    if (std::all_of(r.information, r.information + 36, [](double v) { return std::isfinite(v); })) {
+        std::copy(r.information, r.information + 36, information);
+        return;
+    }
+    const auto at_least = [](double value, double floor) { return floor > value ? floor : value; };
+    const double rotation = std::pow(at_least(r.rotation_uncertainty, 1e-4), -2.0);
+    const double translation = std::pow(at_least(r.noise_bound, 1e-9), -2.0);
+    std::fill(information, information + 36, 0.0);
+    for (int i = 0; i < 6; ++i) information[7 * i] = i < 3 ? rotation : translation;
+}
+
+// Every valid registration a robust edge, in order; one optimisation from scan 0.
+void solve(kissm_alignment &a, double bound, const std::atomic<int> *cancel) {
+    kissm_pose_graph graph;
+    graph.num_nodes = a.num_scans;
+    std::vector<AlignedPair *> edges;
+    for (AlignedPair &r : a.registrations) {
+        std::fill(r.information, r.information + 36, std::numeric_limits<double>::quiet_NaN());
+        r.residual = std::numeric_limits<double>::quiet_NaN();
+        if (!r.result.valid) continue;
+        double information[36];
+        edge_information(r.result, information);
+        try {
+            add_pose_graph_edge(graph, r.source, r.target, r.result.transform, information, 1);
+        } catch (const core::Failure &f) {
+            // A pose the graph refuses (an information that is not positive definite) is no edge; anything else
+            // is not this edge's doing.
+            if (f.kind() != core::ErrorKind::InvalidArgument) throw;
+            continue;
+        }
+        std::copy(information, information + 36, r.information);
+        edges.push_back(&r);
+    }
+    a.solution = core::optimize_pose_graph(a.num_scans, graph.edges, 0, bound, cancel);
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+        edges[e]->edge = a.solution.accepted[e] ? 1 : 0;
+        edges[e]->residual = a.solution.residual[e];
+    }
+}
+
+const AlignedPair &registration_at(const kissm_alignment &a, uint64_t index) {
+    if (index >= a.registrations.size())
+        invalid("index is " + std::to_string(index) + "; the alignment has " + std::to_string(a.registrations.size()) +
+                " registrations");
+    return a.registrations[static_cast<std::size_t>(index)];
+}
+
+} // namespace
+
+extern "C" {
+
+int32_t kissm_align_options_init(kissm_align_options *options, uint32_t struct_size) {
+    return guarded("kissm_align_options_init", [&] {
+        require_non_null(options, "options");
+        check_struct_size("struct_size", struct_size, kAlignOptionsSizes);
+        const kissm_align_options full = default_options();
+        store_struct(options, struct_size, &full, sizeof full);
+        options->struct_size = struct_size;
+        return ok();
+    });
+}
+
+int32_t kissm_align_features(kissm_matcher *matcher, const kissm_features *const *features, uint64_t num_scans,
+                             const kissm_align_options *options, kissm_alignment **out_alignment) {
+    return guarded("kissm_align_features", [&] {
+        require_non_null(out_alignment, "out_alignment");
+        *out_alignment = nullptr;
+        require_non_null(matcher, "matcher");
+        require_non_null(features, "features");
+        check_scans(num_scans);
+        const kissm_align_options o = checked_options(options, num_scans);
+        for (uint64_t k = 0; k < num_scans; ++k) {
+            if (features[k] != nullptr && !core::same_descriptor_settings(features[k]->data.params, matcher->params))
+                core::fail(core::ErrorKind::FeaturesMismatch,
+                           "features[" + std::to_string(k) +
+                               "] were computed with descriptor settings (voxel size, radii, tau, viewpoint) that "
+                               "differ from the matcher's");
+        }
+        auto a = std::make_unique<kissm_alignment>();
+        a->num_scans = static_cast<std::size_t>(num_scans);
+        core::RunContext ctx = matcher->begin_call(); // one context: a cancel between the rounds is not dropped
+        register_pairs(*matcher, ctx, features, first_pairs(o, a->num_scans), *a);
+        if (o.pairs == KISSM_PAIRS_SEQUENCE)
+            register_pairs(*matcher, ctx, features, sequence_loops(o, *a, matcher->config.voxel_size), *a);
+        solve(*a, o.bound, &matcher->cancel_requested);
+        *out_alignment = a.release();
+        return ok();
+    });
+}
+
+void kissm_alignment_destroy(kissm_alignment *alignment) { delete alignment; }
+
+uint64_t kissm_alignment_num_scans(const kissm_alignment *alignment) { return alignment ? alignment->num_scans : 0; }
+
+uint64_t kissm_alignment_num_registrations(const kissm_alignment *alignment) {
+    return alignment ? alignment->registrations.size() : 0;
+}
+
+int32_t kissm_alignment_poses(const kissm_alignment *alignment, double *out_poses, uint8_t *out_placed,
+                              uint64_t *out_components) {
+    return guarded("kissm_alignment_poses", [&] {
+        require_non_null(alignment, "alignment");
+        write_pose_graph_poses(alignment->solution, alignment->num_scans, out_poses, out_placed, out_components);
+        return ok();
+    });
+}
+
+int32_t kissm_alignment_registration(const kissm_alignment *alignment, uint64_t index, uint64_t *out_source,
+                                     uint64_t *out_target, kissm_result *out_result, int32_t *out_edge,
+                                     double out_information[36], double *out_residual) {
+    return guarded("kissm_alignment_registration", [&] {
+        require_non_null(alignment, "alignment");
+        const AlignedPair &r = registration_at(*alignment, index);
+        if (out_result != nullptr) check_result(out_result);
+        if (out_source != nullptr) *out_source = r.source;
+        if (out_target != nullptr) *out_target = r.target;
+        if (out_result != nullptr) store_struct(out_result, out_result->struct_size, &r.result, sizeof r.result);
+        if (out_edge != nullptr) *out_edge = r.edge;
+        if (out_information != nullptr) std::copy(r.information, r.information + 36, out_information);
+        if (out_residual != nullptr) *out_residual = r.residual;
+        return ok();
+    });
+}
+
+int32_t kissm_sequence_loops(uint64_t num_scans, const double *steps, const uint8_t *step_valid, const double *priors,
+                             double radius, uint64_t gap, uint64_t per_scan, uint64_t *out_pairs, uint64_t capacity,
+                             uint64_t *out_count) {
+    return guarded("kissm_sequence_loops", [&] {
+        require_non_null(out_count, "out_count");
+        check_scans(num_scans);
+        if (steps != nullptr && priors != nullptr) invalid("steps and priors are both given; one of them");
+        if (step_valid != nullptr && steps == nullptr) invalid("step_valid is given without steps");
+        if (num_scans > 1 && steps == nullptr && priors == nullptr)
+            core::fail(core::ErrorKind::NullArgument, "steps and priors are both NULL; one of them");
+        check_loop_settings(radius, "radius", false, gap, "gap", per_scan, "per_scan");
+        const auto n = static_cast<std::size_t>(num_scans);
+        std::vector<core::ScanPair> pairs;
+        if (priors != nullptr) {
+            pairs = core::loop_candidates(core::prior_places(priors, n), radius, gap, per_scan, 0.0);
+        } else {
+            std::vector<const double *> chain(n - 1, nullptr);
+            for (std::size_t k = 0; k + 1 < n; ++k) {
+                const uint8_t flag = step_valid ? step_valid[k] : 1;
+                if (flag > 1) invalid("step_valid[" + std::to_string(k) + "] is " + std::to_string(flag) + "; 0 or 1");
+                if (flag == 1) chain[k] = steps + 16 * k;
+            }
+            pairs = core::loop_candidates(core::dead_reckoned(chain, n), radius, gap, per_scan, core::kLoopDrift);
+        }
+        *out_count = pairs.size();
+        if (out_pairs != nullptr) {
+            if (capacity < pairs.size())
+                invalid("capacity is " + std::to_string(capacity) + "; the candidates are " +
+                        std::to_string(pairs.size()) + " pairs");
+            for (std::size_t k = 0; k < pairs.size(); ++k) {
+                out_pairs[2 * k] = pairs[k].source;
+                out_pairs[2 * k + 1] = pairs[k].target;
+            }
+        }
+        return ok();
+    });
+}
+
+} // extern "C"

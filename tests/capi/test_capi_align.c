@@ -1,0 +1,385 @@
+/* SPDX-License-Identifier: MIT */
+/* Multiway alignment through the C API (kissm_align_features, kissm_sequence_loops): five scans of the yard, each
+ * an independent sample cropped to its own half and seen from its own sensor pose, placed in scan 0's frame
+ * within 2 degrees and 2 voxels of the truth by every pair policy; a scan without features not placed; the same
+ * bits at 1 and 3 threads; the registrations as kissm_register_features writes them; bad input with exact
+ * statuses and nothing written; the loop-candidate rule against cases worked out by hand. C99. */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "harness.h"
+#include "kissm.h"
+#include "scenes.h"
+
+#define SCANS 5
+#define VOXEL 0.3
+#define PI 3.14159265358979323846
+
+static scn_pose g_world_from_scan[SCANS]; /* the truth */
+static kissm_features *g_features[SCANS];
+static kissm_matcher *g_matcher;
+
+/* Scan k: the scene sampled anew, cropped to a half plane turning with k, seen from a sensor turned 70k degrees
+ * about a tilted axis and moved by a few metres. */
+static void make_scans(void) {
+    const double axis[3] = {0.3, -0.2, 1.0};
+    kissm_config config = scn_config(VOXEL);
+    int k;
+    config.refine_mode = KISSM_REFINE_GICP;
+    REQUIRE(kissm_create(&config, &g_matcher) == KISSM_OK);
+    for (k = 0; k < SCANS; ++k) {
+        const double a = 0.6 * k, keep[3] = {cos(a), sin(a), 0.0};
+        const double t[3] = {1.0 * k, -0.5 * k, 0.1 * k};
+        scn_cloud cloud;
+        scn_pose scan_from_world;
+        kissm_points points;
+        scn_cloud_init(&cloud);
+        scn_make_scene(&cloud, 7, 100 + (uint64_t)k, 25.0, 0.01);
+        scn_cloud_crop(&cloud, keep, 7.0);
+        scn_pose_axis_angle(&g_world_from_scan[k], axis, (70.0 * k) * PI / 180.0, t);
+        scn_pose_inverse(&g_world_from_scan[k], &scan_from_world);
+        scn_cloud_apply(&cloud, &scan_from_world);
+        points = scn_points(&cloud);
+        REQUIRE(kissm_features_compute(g_matcher, &points, &g_features[k]) == KISSM_OK);
+        scn_cloud_free(&cloud);
+    }
+}
+
+/* Every placed scan within 2 degrees and 2 voxels of the truth, relative to scan 0; returns how many are placed. */
+static int check_poses(const kissm_alignment *a, const int expect_placed[SCANS]) {
+    double poses[SCANS * 16];
+    uint8_t placed[SCANS];
+    uint64_t components[SCANS];
+    scn_pose zero_inverse, truth, got;
+    int k, count = 0;
+    if (kissm_alignment_poses(a, poses, placed, components) != KISSM_OK) {
+        CHECK(!"kissm_alignment_poses failed");
+        return -1;
+    }
+    scn_pose_inverse(&g_world_from_scan[0], &zero_inverse);
+    for (k = 0; k < SCANS; ++k) {
+        CHECK_EQ_INT(placed[k], expect_placed[k]);
+        if (!placed[k]) {
+            CHECK(isnan(poses[16 * k]) && isnan(poses[16 * k + 15]));
+            continue;
+        }
+        ++count;
+        CHECK_EQ_INT(components[k], 0);
+        scn_pose_compose(&zero_inverse, &g_world_from_scan[k], &truth);
+        scn_pose_from_matrix(poses + 16 * k, &got);
+        CHECK_MSG(scn_rotation_error_deg(got.R, truth.R) < 2.0, "scan %d: %.3f deg", k,
+                  scn_rotation_error_deg(got.R, truth.R));
+        CHECK_MSG(scn_translation_error(got.t, truth.t) < 2.0 * VOXEL, "scan %d: %.3f m", k,
+                  scn_translation_error(got.t, truth.t));
+    }
+    return count;
+}
+
+static kissm_align_options options(int32_t pairs) {
+    kissm_align_options o;
+    CHECK_EQ_INT(kissm_align_options_init(&o, sizeof o), KISSM_OK);
+    o.pairs = pairs;
+    return o;
+}
+
+static void test_defaults(void) {
+    kissm_align_options o;
+    memset(&o, 0x5A, sizeof o);
+    CHECK_EQ_INT(kissm_align_options_init(&o, sizeof o), KISSM_OK);
+    CHECK_EQ_INT(o.struct_size, sizeof o);
+    CHECK_EQ_INT(o.pairs, KISSM_PAIRS_ALL);
+    CHECK(o.pair_list == NULL && o.num_pairs == 0 && o.priors == NULL);
+    CHECK(o.loop_radius == 0.0);
+    CHECK_EQ_INT(o.loop_gap, 10);
+    CHECK_EQ_INT(o.loops_per_scan, 5);
+    CHECK(o.bound == KISSM_POSE_GRAPH_DEFAULT_BOUND);
+    CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_ALIGN_OPTIONS), sizeof o);
+    CHECK_EQ_INT(kissm_align_options_init(&o, sizeof o - 8), KISSM_ERR_STRUCT_SIZE);
+    CHECK_EQ_INT(kissm_align_options_init(NULL, sizeof o), KISSM_ERR_NULL_ARGUMENT);
+}
+
+static void test_all_pairs(void) {
+    const int all[SCANS] = {1, 1, 1, 1, 1};
+    kissm_alignment *a = NULL;
+    uint64_t k, accepted = 0;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, (const kissm_features *const *)g_features, SCANS, NULL, &a), KISSM_OK);
+    REQUIRE(a != NULL);
+    CHECK_EQ_INT(kissm_alignment_num_scans(a), SCANS);
+    CHECK_EQ_INT(kissm_alignment_num_registrations(a), SCANS * (SCANS - 1) / 2);
+    CHECK_EQ_INT(check_poses(a, all), SCANS);
+    /* Registration order: (j, i) for i < j, i outer; each the bits of kissm_register_features. */
+    for (k = 0; k < kissm_alignment_num_registrations(a); ++k) {
+        uint64_t source = 99, target = 99;
+        int32_t edge = 7;
+        double information[36], residual = 0.0;
+        kissm_result got, direct;
+        kissm_result_init(&got, sizeof got);
+        kissm_result_init(&direct, sizeof direct);
+        REQUIRE(kissm_alignment_registration(a, k, &source, &target, &got, &edge, information, &residual) == KISSM_OK);
+        CHECK(source > target);
+        REQUIRE(kissm_register_features(g_matcher, g_features[source], g_features[target], &direct) == KISSM_OK);
+        CHECK(scn_result_equal(&got, &direct));
+        if (got.valid) {
+            CHECK(edge == 0 || edge == 1);
+            CHECK(memcmp(information, got.information, sizeof information) == 0); /* refined: its own */
+            CHECK(isfinite(residual));
+            accepted += edge == 1;
+        } else {
+            CHECK_EQ_INT(edge, -1);
+            CHECK(isnan(information[0]) && isnan(residual));
+        }
+    }
+    CHECK(accepted >= SCANS - 1);
+    kissm_alignment_destroy(a);
+}
+
+static void test_sequence_and_list(void) {
+    const int all[SCANS] = {1, 1, 1, 1, 1};
+    const uint64_t list[] = {1, 0, 2, 1, 3, 2, 4, 3, 4, 0};
+    kissm_align_options o = options(KISSM_PAIRS_SEQUENCE);
+    kissm_alignment *a = NULL;
+    uint64_t source, target;
+    o.loop_gap = 3;
+    o.loops_per_scan = 2;
+    o.loop_radius = 50.0;
+    REQUIRE(kissm_align_features(g_matcher, (const kissm_features *const *)g_features, SCANS, &o, &a) == KISSM_OK);
+    /* Round 1: (1,0) (2,1) (3,2) (4,3); round 2 with every scan within 50 m: (3,0), then (4,0) (4,1). */
+    CHECK_EQ_INT(kissm_alignment_num_registrations(a), 7);
+    REQUIRE(kissm_alignment_registration(a, 4, &source, &target, NULL, NULL, NULL, NULL) == KISSM_OK);
+    CHECK(source == 3 && target == 0);
+    REQUIRE(kissm_alignment_registration(a, 6, &source, &target, NULL, NULL, NULL, NULL) == KISSM_OK);
+    CHECK(source == 4 && target == 1);
+    CHECK_EQ_INT(check_poses(a, all), SCANS);
+    kissm_alignment_destroy(a);
+
+    o = options(KISSM_PAIRS_LIST);
+    o.pair_list = list;
+    o.num_pairs = 5;
+    REQUIRE(kissm_align_features(g_matcher, (const kissm_features *const *)g_features, SCANS, &o, &a) == KISSM_OK);
+    CHECK_EQ_INT(kissm_alignment_num_registrations(a), 5);
+    REQUIRE(kissm_alignment_registration(a, 4, &source, &target, NULL, NULL, NULL, NULL) == KISSM_OK);
+    CHECK(source == 4 && target == 0);
+    CHECK_EQ_INT(check_poses(a, all), SCANS);
+    kissm_alignment_destroy(a);
+}
+
+static void test_missing_features(void) {
+    const int expect[SCANS] = {1, 1, 0, 1, 1};
+    const kissm_features *some[SCANS];
+    kissm_alignment *a = NULL;
+    int k;
+    for (k = 0; k < SCANS; ++k) some[k] = k == 2 ? NULL : g_features[k];
+    REQUIRE(kissm_align_features(g_matcher, some, SCANS, NULL, &a) == KISSM_OK);
+    CHECK_EQ_INT(kissm_alignment_num_registrations(a), 6); /* the pairs of four scans */
+    CHECK_EQ_INT(check_poses(a, expect), SCANS - 1);
+    kissm_alignment_destroy(a);
+}
+
+/* The same bits at 1 and 3 threads: poses, and every registration but its times. */
+static void test_thread_independence(void) {
+    kissm_align_options o = options(KISSM_PAIRS_SEQUENCE);
+    kissm_alignment *a[2] = {NULL, NULL};
+    double poses[2][SCANS * 16];
+    int run;
+    uint64_t k;
+    o.loop_gap = 2;
+    o.loop_radius = 50.0;
+    for (run = 0; run < 2; ++run) {
+        kissm_config config = scn_config(VOXEL);
+        kissm_matcher *m = NULL;
+        config.refine_mode = KISSM_REFINE_GICP;
+        config.num_threads = run == 0 ? 1 : 3;
+        REQUIRE(kissm_create(&config, &m) == KISSM_OK);
+        REQUIRE(kissm_align_features(m, (const kissm_features *const *)g_features, SCANS, &o, &a[run]) == KISSM_OK);
+        REQUIRE(kissm_alignment_poses(a[run], poses[run], NULL, NULL) == KISSM_OK);
+        kissm_destroy(m);
+    }
+    CHECK(memcmp(poses[0], poses[1], sizeof poses[0]) == 0);
+    REQUIRE(kissm_alignment_num_registrations(a[0]) == kissm_alignment_num_registrations(a[1]));
+    for (k = 0; k < kissm_alignment_num_registrations(a[0]); ++k) {
+        kissm_result r[2];
+        double residual[2];
+        for (run = 0; run < 2; ++run) {
+            kissm_result_init(&r[run], sizeof r[run]);
+            REQUIRE(kissm_alignment_registration(a[run], k, NULL, NULL, &r[run], NULL, NULL, &residual[run]) ==
+                    KISSM_OK);
+        }
+        CHECK(scn_result_equal(&r[0], &r[1]));
+        CHECK(memcmp(&residual[0], &residual[1], sizeof(double)) == 0);
+    }
+    kissm_alignment_destroy(a[0]);
+    kissm_alignment_destroy(a[1]);
+}
+
+static void test_bad_input(void) {
+    const kissm_features *const *f = (const kissm_features *const *)g_features;
+    const uint64_t self_pair[] = {1, 1}, far_pair[] = {5, 0};
+    kissm_alignment *sentinel = (kissm_alignment *)&sentinel, *a = sentinel;
+    kissm_align_options o = options(KISSM_PAIRS_ALL);
+    kissm_matcher *other = NULL;
+    kissm_config config = scn_config(2 * VOXEL);
+    kissm_result r;
+
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, NULL, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_align_features(NULL, f, SCANS, NULL, &a), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(a == NULL);
+    a = sentinel;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, NULL, SCANS, NULL, &a), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(a == NULL);
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, 0, NULL, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "num_scans") != NULL);
+
+    o.pairs = 3;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->pairs") != NULL);
+    o = options(KISSM_PAIRS_LIST);
+    o.num_pairs = 1;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->pair_list") != NULL);
+    o.pair_list = self_pair;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "itself") != NULL);
+    o.pair_list = far_pair;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->pair_list pair 0") != NULL);
+    o = options(KISSM_PAIRS_ALL);
+    o.num_pairs = 1;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    o = options(KISSM_PAIRS_ALL);
+    o.priors = (const double *)self_pair;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->priors") != NULL);
+    o = options(KISSM_PAIRS_SEQUENCE);
+    o.loop_radius = -1.0;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->loop_radius") != NULL);
+    o.loop_radius = NAN;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    o = options(KISSM_PAIRS_SEQUENCE);
+    o.loop_gap = 0;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->loop_gap") != NULL);
+    o = options(KISSM_PAIRS_SEQUENCE);
+    o.loops_per_scan = -1;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->loops_per_scan") != NULL);
+    o = options(KISSM_PAIRS_ALL);
+    o.bound = 0.0;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "options->bound") != NULL);
+    o = options(KISSM_PAIRS_ALL);
+    o.struct_size = 12;
+    CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_STRUCT_SIZE);
+    CHECK(a == NULL);
+
+    /* Features of another voxel size: refused before any registration. */
+    REQUIRE(kissm_create(&config, &other) == KISSM_OK);
+    CHECK_EQ_INT(kissm_align_features(other, f, SCANS, NULL, &a), KISSM_ERR_FEATURES_MISMATCH);
+    CHECK(strstr(kissm_last_error_message(), "features[0]") != NULL);
+    kissm_destroy(other);
+
+    /* The outcome's accessors. */
+    REQUIRE(kissm_align_features(g_matcher, f, 2, NULL, &a) == KISSM_OK);
+    CHECK_EQ_INT(kissm_alignment_poses(NULL, NULL, NULL, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_alignment_registration(a, 1, NULL, NULL, NULL, NULL, NULL, NULL), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "index") != NULL);
+    memset(&r, 0, sizeof r);
+    r.struct_size = 8;
+    CHECK_EQ_INT(kissm_alignment_registration(a, 0, NULL, NULL, &r, NULL, NULL, NULL), KISSM_ERR_STRUCT_SIZE);
+    CHECK_EQ_INT(kissm_alignment_registration(NULL, 0, NULL, NULL, NULL, NULL, NULL, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_alignment_num_scans(NULL), 0);
+    CHECK_EQ_INT(kissm_alignment_num_registrations(NULL), 0);
+    kissm_alignment_destroy(a);
+    kissm_alignment_destroy(NULL);
+}
+
+/* A step of d metres along x, as a row-major transform. */
+static void step_x(double d, double m[16]) {
+    memset(m, 0, 16 * sizeof(double));
+    m[0] = m[5] = m[10] = m[15] = 1.0;
+    m[3] = d;
+}
+
+static void test_sequence_loops(void) {
+    /* Eight scans: out along x 1 m a step to x = 4, then back (4 -> 1 at x = 3, 2, 1, 0). Scan positions
+     * 0 1 2 3 4 3 2 1; with gap 3 and radius 0.5 (+2% of the path between), scan 5 (x 3) meets 2? no: 1 m apart;
+     * it meets scan 3 (0 m), but 5 - 3 < 3; scan 6 (x 2) meets 2 (gap 4), scan 7 (x 1) meets 1 (gap 6). */
+    double steps[7 * 16], priors[8 * 16];
+    uint8_t valid[7] = {1, 1, 1, 1, 1, 1, 1};
+    uint64_t pairs[32], count = 99;
+    int k;
+    for (k = 0; k < 7; ++k) step_x(k < 4 ? 1.0 : -1.0, steps + 16 * k);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.5, 3, 5, pairs, 16, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 2);
+    CHECK(pairs[0] == 6 && pairs[1] == 2 && pairs[2] == 7 && pairs[3] == 1);
+    /* Counting only. */
+    count = 99;
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, valid, NULL, 0.5, 3, 5, NULL, 0, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 2);
+    /* A broken step 4 (4 -> 5) starts a new piece: scans 5 to 7 get no candidates among 0 to 4. */
+    valid[4] = 0;
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, valid, NULL, 0.5, 3, 5, pairs, 16, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 0);
+    valid[4] = 1;
+    /* The drift: a radius of 0.95 grows by 2% of the path between the scans (scan 7 to 0: 7 m, +0.14 m). Scan 5
+     * (x 3) meets 2 (1 m, allowed 1.01); 6 (x 2) meets 1 (1.05), 2 and 3 (1.01); 7 (x 1) meets 0 (1.09), 1, 2. */
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.95, 3, 5, pairs, 16, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 7);
+    CHECK(pairs[0] == 5 && pairs[1] == 2 && pairs[2] == 6 && pairs[3] == 1 && pairs[4] == 6 && pairs[5] == 2);
+    CHECK(pairs[6] == 6 && pairs[7] == 3 && pairs[8] == 7 && pairs[9] == 0 && pairs[10] == 7 && pairs[11] == 1);
+    CHECK(pairs[12] == 7 && pairs[13] == 2);
+    /* per_scan 1 keeps the nearest. */
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.95, 3, 1, pairs, 16, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 3);
+    CHECK(pairs[0] == 5 && pairs[1] == 2 && pairs[2] == 6 && pairs[3] == 2 && pairs[4] == 7 && pairs[5] == 1);
+    /* Priors: the same positions, no drift; a scan without one (NaN translation) gets and gives none. */
+    for (k = 0; k < 8; ++k) step_x(k <= 4 ? k : 8 - k, priors + 16 * k);
+    CHECK_EQ_INT(kissm_sequence_loops(8, NULL, NULL, priors, 0.95, 3, 5, pairs, 16, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 2);
+    priors[16 * 1 + 3] = NAN;
+    CHECK_EQ_INT(kissm_sequence_loops(8, NULL, NULL, priors, 0.5, 3, 5, pairs, 16, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 1);
+    CHECK(pairs[0] == 6 && pairs[1] == 2);
+
+    /* Bad input. */
+    count = 99;
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.5, 3, 5, pairs, 1, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "capacity") != NULL);
+    CHECK_EQ_INT(count, 2);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.5, 3, 5, pairs, 16, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_loops(8, NULL, NULL, NULL, 0.5, 3, 5, pairs, 16, &count), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, priors, 0.5, 3, 5, pairs, 16, &count),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_loops(8, NULL, valid, priors, 0.5, 3, 5, pairs, 16, &count),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_loops(0, steps, NULL, NULL, 0.5, 3, 5, pairs, 16, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.0, 3, 5, pairs, 16, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "radius") != NULL);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, INFINITY, 3, 5, pairs, 16, &count),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.5, 0, 5, pairs, 16, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "gap") != NULL);
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, NULL, NULL, 0.5, 3, 2000000, pairs, 16, &count),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "per_scan") != NULL);
+    valid[3] = 2;
+    CHECK_EQ_INT(kissm_sequence_loops(8, steps, valid, NULL, 0.5, 3, 5, pairs, 16, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "step_valid[3]") != NULL);
+}
+
+int main(void) {
+    int k;
+    RUN_TEST(test_defaults);
+    RUN_TEST(test_sequence_loops);
+    make_scans();
+    RUN_TEST(test_all_pairs);
+    RUN_TEST(test_sequence_and_list);
+    RUN_TEST(test_missing_features);
+    RUN_TEST(test_thread_independence);
+    RUN_TEST(test_bad_input);
+    for (k = 0; k < SCANS; ++k) kissm_features_destroy(g_features[k]);
+    kissm_destroy(g_matcher);
+    return TEST_SUMMARY();
+}
