@@ -17,6 +17,7 @@
 #include "align/align_graph.hpp"
 #include "align/align_map.hpp"
 #include "align/align_pairs.hpp"
+#include "align/align_priors.hpp"
 #include "align/align_scans.hpp"
 #include "align/align_writers.hpp"
 #include "batch/batch_pairs.hpp"
@@ -32,7 +33,7 @@ namespace {
 
 struct AlignOptions {
     PairOptions pair; // register's settings; pair.files holds the scans file
-    std::string out, results, map, g2o, tum, kitti;
+    std::string out, results, map, g2o, tum, kitti, priors;
     std::string pairs = "all"; // all, sequence or a pairs file
     bool have_window = false;
     bool have_loop_radius = false;
@@ -77,6 +78,10 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
             opt.sequence.loop_radius = parse_positive(name, cur.value());
             opt.have_loop_radius = true;
             if (opt.loop_option.empty()) opt.loop_option = name;
+        } else if (name == "--priors") {
+            opt.priors = cur.value();
+            if (opt.priors.empty()) throw UsageError("--priors: expected a file (the poses table layout of --out)");
+            if (opt.loop_option.empty()) opt.loop_option = name;
         } else if (name == "--map") {
             opt.map = cur.value();
         } else if (name == "--map-voxel") {
@@ -120,6 +125,11 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
     }
     if (opt.results.empty()) opt.results = opt.out + ".pairs.jsonl";
     const std::string results = std::filesystem::path(opt.results).lexically_normal().string();
+    if (!opt.priors.empty() &&
+        std::filesystem::path(opt.priors).lexically_normal() == std::filesystem::path(opt.out).lexically_normal()) {
+        throw UsageError("--priors and --out are both '" + one_line(opt.out) +
+                         "': the poses would overwrite the priors; give --out another name");
+    }
     for (const std::string *output : {&opt.out, &opt.map, &opt.g2o, &opt.tum, &opt.kitti}) {
         if (!output->empty() && std::filesystem::path(*output).lexically_normal().string() == results) {
             throw UsageError("'" + one_line(*output) + "' is the results file too; give the outputs other names");
@@ -243,6 +253,7 @@ int run_align_command(const AlignOptions &given) {
     const kissm_config config = pair_config(PairCommand::Register, opt.pair);
     const std::vector<Scan> scans = read_scans_file(opt.pair.files[0], opt.pair.source_format);
     if (opt.pairs == "sequence" && !opt.have_loop_radius) opt.sequence.loop_radius = 30.0 * config.voxel_size;
+    if (!opt.priors.empty()) opt.sequence.priors = read_priors(opt.priors, scans);
     std::vector<ScanPair> pairs = chosen_pairs(opt, scans);
 
     const auto start = std::chrono::steady_clock::now();
@@ -315,7 +326,11 @@ void print_align_help(std::FILE *out) {
                  "  --loops-per-scan N      sequence: at most N loop candidates per scan, the nearest (default 5;\n"
                  "                          0 = none: the first round only)\n"
                  "  --loop-radius R         sequence: candidates lie within R of each other (default 30 x the\n"
-                 "                          voxel), plus 2%% of the path between them\n"
+                 "                          voxel), plus 2%% of the path between them (none with --priors)\n"
+                 "  --priors FILE           sequence: loop candidates from these world <- scan poses (GNSS, a SLAM\n"
+                 "                          run, an earlier --out) instead of the chained registrations: the\n"
+                 "                          poses table layout of --out (scan and T00 ... T23 columns); a scan\n"
+                 "                          without a row or with nan numbers has no prior and no candidates\n"
                  "  --results FILE          the pair results, `kissm batch`'s lines named by scan (default\n"
                  "                          POSES.tsv.pairs.jsonl). An existing non-empty FILE is refused unless\n"
                  "                          --resume\n"
@@ -332,9 +347,10 @@ void print_align_help(std::FILE *out) {
                  "                          (default %g, the 99.9%% chi-square quantile for 6 dof)\n"
                  "  -q, --quiet             no progress line and no summary on stderr\n"
                  "\n"
-                 "Loop candidates (Python's pairs=\"sequence\"): the valid consecutive registrations (scan k+1 into\n"
-                 "k) chained into dead-reckoned positions (an invalid or missing one starts a new piece); then for\n"
-                 "each scan j, the scans i <= j - N of its piece within R + 2%% of the path from i to j, the\n"
+                 "Loop candidates (Python's pairs=\"sequence\", the library's kissm_sequence_loops): the valid\n"
+                 "consecutive registrations (scan k+1 into k) chained into dead-reckoned positions (an invalid or\n"
+                 "missing one starts a new piece), or the --priors' positions; then for each scan j, the scans\n"
+                 "i <= j - N of its piece within R (+ 2%% of the path from i to j when dead-reckoned), the\n"
                  "--loops-per-scan nearest, are registered in a second round (pairs numbered after the first's)\n"
                  "and join the graph after the first round's edges.\n"
                  "\n"

@@ -297,6 +297,22 @@ void test_align_usage() {
         return args;
     };
     expect_usage_error({"align"}, "align expects 1 scans file, got 0");
+    write_file(work("priors_bad.tsv"), "scan\tT00\nx\t1\n");
+    expect_usage_error(with({"--priors", work("priors_bad.tsv")}), "--priors applies to --pairs sequence only");
+    expect_usage_error(with({"--pairs", "sequence", "--priors", out}), "--priors and --out are both");
+    expect_usage_error(with({"--pairs", "sequence", "--priors", work("absent.tsv")}), "cannot read the priors file");
+    expect_usage_error(with({"--pairs", "sequence", "--priors", work("priors_bad.tsv")}), "no 'T01' column");
+    std::string header = "scan";
+    for (int k = 0; k < 12; ++k) header += "\tT" + std::to_string(k / 4) + std::to_string(k % 4);
+    const std::string ones = "\t1\t0\t0\t0\t0\t1\t0\t0\t0\t0\t1\t0\n";
+    write_file(work("priors_bad.tsv"), header + "\nx" + ones);
+    expect_usage_error(with({"--pairs", "sequence", "--priors", work("priors_bad.tsv")}), "line 2: unknown scan 'x'");
+    write_file(work("priors_bad.tsv"), header + "\na" + ones + "# again\na" + ones);
+    expect_usage_error(with({"--pairs", "sequence", "--priors", work("priors_bad.tsv")}),
+                       "line 4: the scan 'a' is given twice");
+    write_file(work("priors_bad.tsv"), header + "\na\t1\t0\t0\t0\t0\t1\t0\t0\t0\t0\t1\tsix\n");
+    expect_usage_error(with({"--pairs", "sequence", "--priors", work("priors_bad.tsv")}), "T23 is 'six', not a number");
+
     expect_usage_error({"align", scans, scans, "--voxel", "1", "--out", out}, "align expects 1 scans file, got 2");
     expect_usage_error({"align", scans, "--out", out}, "align needs --voxel V");
     expect_usage_error({"align", scans, "--voxel", "1"}, "align needs --out FILE");
@@ -522,6 +538,26 @@ void test_align_run() {
     const std::vector<std::string> window_lines = lines_of(read_file(work("window.tsv.pairs.jsonl")));
     REQUIRE(window_lines.size() == 6);
     CHECK(contains(window_lines[5], "\"pair\": 6, \"source\": \"d\", \"target\": \"a\""));
+
+    // Priors: an earlier run's poses table as the positions (no drift): the same candidates as dead reckoning here;
+    // a scan whose prior is nan (a row of an unplaced scan) gets and gives none.
+    const Run priors = run({"align", scans, "--voxel", kVoxel, "--out", work("priors.tsv"), "--pairs", "sequence",
+                            "--loop-gap", "2", "--priors", work("loops.tsv"), "-q"});
+    CHECK_MSG(priors.code == 0, "priors: exit %d: %s", priors.code, priors.err.c_str());
+    CHECK(read_file(work("priors.tsv.pairs.jsonl")) == read_file(work("loops.tsv.pairs.jsonl")));
+    std::vector<std::string> table = lines_of(read_file(work("loops.tsv")));
+    REQUIRE(table.size() == 5 && starts_with(table[1], "a\t"));
+    table[1] = "a\t0\t0";
+    for (int i = 0; i < 12; ++i) table[1] += "\tnan";
+    std::string no_a = "# a without a prior, the other rows in another order\n" + table[0] + "\n";
+    for (const size_t k : {4, 3, 1, 2}) no_a += table[k] + "\n";
+    write_file(work("no_a.tsv"), no_a);
+    const Run partial = run({"align", scans, "--voxel", kVoxel, "--out", work("partial.tsv"), "--pairs", "sequence",
+                             "--loop-gap", "2", "--priors", work("no_a.tsv"), "-q"});
+    CHECK_EQ_INT(partial.code, 0);
+    const std::vector<std::string> partial_lines = lines_of(read_file(work("partial.tsv.pairs.jsonl")));
+    REQUIRE(partial_lines.size() == 4); // the consecutive pairs, then d-b alone (c-a and d-a need a's prior)
+    CHECK(contains(partial_lines[3], "\"pair\": 4, \"source\": \"d\", \"target\": \"b\""));
 
     // A pairs file (a star on c, one pair the other way round), its own --results.
     write_file(work("star.tsv"), "# star\nsource\ttarget\na\tc\nb\tc\nd\tc\n");

@@ -40,6 +40,22 @@ std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &
             by_pair[static_cast<size_t>(record.pair - 1)] = &record;
         }
     }
+    const auto gap = static_cast<uint64_t>(opt.loop_gap), per_scan = static_cast<uint64_t>(opt.loops_per_scan);
+    const auto candidates = [&](const double *steps, const uint8_t *valid, const double *priors) {
+        uint64_t count = 0;
+        int32_t status =
+            kissm_sequence_loops(scans, steps, valid, priors, opt.loop_radius, gap, per_scan, nullptr, 0, &count);
+        std::vector<uint64_t> found(2 * count);
+        if (status == KISSM_OK)
+            status = kissm_sequence_loops(scans, steps, valid, priors, opt.loop_radius, gap, per_scan, found.data(),
+                                          count, &count);
+        if (status != KISSM_OK) throw UsageError("cannot choose the loop candidates: " + library_error(status));
+        std::vector<ScanPair> pairs(count);
+        for (size_t k = 0; k < count; ++k)
+            pairs[k] = {static_cast<size_t>(found[2 * k]), static_cast<size_t>(found[2 * k + 1])};
+        return pairs;
+    };
+    if (!opt.priors.empty()) return candidates(nullptr, nullptr, opt.priors.data());
     std::vector<double> steps(16 * (scans - 1), 0.0);
     std::vector<uint8_t> valid(scans - 1, 0);
     for (size_t k = 0; k < round1.size(); ++k) {
@@ -53,19 +69,7 @@ std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &
             std::fill(step, step + 16, std::numeric_limits<double>::quiet_NaN());
         valid[pair.target] = 1;
     }
-    uint64_t count = 0;
-    const uint64_t gap = static_cast<uint64_t>(opt.loop_gap), per_scan = static_cast<uint64_t>(opt.loops_per_scan);
-    int32_t status = kissm_sequence_loops(scans, steps.data(), valid.data(), nullptr, opt.loop_radius, gap, per_scan,
-                                          nullptr, 0, &count);
-    std::vector<uint64_t> found(2 * count);
-    if (status == KISSM_OK)
-        status = kissm_sequence_loops(scans, steps.data(), valid.data(), nullptr, opt.loop_radius, gap, per_scan,
-                                      found.data(), count, &count);
-    if (status != KISSM_OK) throw UsageError("cannot choose the loop candidates: " + library_error(status));
-    std::vector<ScanPair> pairs(count);
-    for (size_t k = 0; k < count; ++k)
-        pairs[k] = {static_cast<size_t>(found[2 * k]), static_cast<size_t>(found[2 * k + 1])};
-    return pairs;
+    return candidates(steps.data(), valid.data(), nullptr);
 }
 
 std::vector<ScanPair> pairs_from_file(const std::string &path, const std::vector<Scan> &scans) {

@@ -31,10 +31,12 @@ struct SequenceOptions {
     int32_t loop_gap = 10;      // a loop candidate's scans are at least this many apart (>= 1)
     int32_t loops_per_scan = 5; // at most this many candidates per later scan (0: none)
     double loop_radius = 0.0;   // > 0 (the command makes it 30 x the voxel when not given)
+    std::vector<double> priors; // empty, or 16 per scan (read_priors): the positions loop candidates come from
 };
 std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &opt);
 
-// Round 2 of "sequence": the loop candidates kissm_sequence_loops() gives for round 1's records (those of the pairs
+// Round 2 of "sequence": the loop candidates kissm_sequence_loops() gives for opt.priors when given, else for round
+// 1's records (those of the pairs
 // (k+1, k) among `round1`; any order; a pair without a record, an error or a record that is not valid breaks the
 // chain; a valid record without a transform chains NaN, as a valid result's NaN transform would in Python).
 // Depends on the records only, so that a resumed run finds the same list. A UsageError if the library fails.

@@ -265,12 +265,9 @@ int header_column(const std::vector<std::string> &header, const char *column, co
     return at;
 }
 
-PairsTable parse_pairs(const std::string &text, const std::string &name) {
-    PairsTable table;
-    std::vector<std::string> header;
-    int source_col = -1, target_col = -1, gt_col = -1;
-    size_t line_no = 0;
-    size_t start = 0;
+TextTable parse_text_table(const std::string &text, const std::string &name) {
+    TextTable table;
+    size_t line_no = 0, start = 0;
     while (start < text.size()) {
         size_t end = text.find('\n', start);
         if (end == std::string::npos) end = text.size();
@@ -281,46 +278,60 @@ PairsTable parse_pairs(const std::string &text, const std::string &name) {
         if (is_blank_or_comment_line(line)) continue;
         const std::string where = name + " line " + std::to_string(line_no);
         std::vector<std::string> fields = split_tab_fields(line);
-        if (header.empty()) {
-            header = fields;
-            source_col = header_column(header, "source", where);
-            target_col = header_column(header, "target", where);
-            gt_col = header_column(header, "gt", where);
-            if (source_col < 0 || target_col < 0) {
-                throw UsageError(where + ": the header has no '" + (source_col < 0 ? "source" : "target") +
-                                 "' column (expected tab-separated column names: source, target and optionally gt)");
-            }
-            table.has_gt_column = gt_col >= 0;
+        if (table.header_where.empty()) {
+            table.header = std::move(fields);
+            table.header_where = where;
             continue;
         }
-        if (fields.size() != header.size()) {
+        if (fields.size() != table.header.size()) {
             throw UsageError(where + ": " + std::to_string(fields.size()) + " tab-separated fields, the header has " +
-                             std::to_string(header.size()));
+                             std::to_string(table.header.size()));
         }
-        PairRow row;
-        row.index = static_cast<int64_t>(table.rows.size()) + 1;
-        row.line = line_no;
-        row.source = fields[static_cast<size_t>(source_col)];
-        row.target = fields[static_cast<size_t>(target_col)];
-        if (gt_col >= 0) row.gt = fields[static_cast<size_t>(gt_col)];
-        if (row.source.empty() || row.target.empty()) {
-            throw UsageError(where + ": empty " + (row.source.empty() ? "source" : "target") + " path");
-        }
-        table.rows.push_back(row);
+        table.rows.push_back({line_no, where, std::move(fields)});
     }
-    if (header.empty()) {
+    return table;
+}
+
+std::string read_table_text(const std::string &path, const std::string &what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw UsageError("cannot read the " + what + " '" + one_line(path) + "'");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw UsageError("cannot read the " + what + " '" + one_line(path) + "'");
+    return text;
+}
+
+PairsTable parse_pairs(const std::string &text, const std::string &name) {
+    const TextTable t = parse_text_table(text, name);
+    if (t.header_where.empty()) {
         throw UsageError(name + ": no header line (expected tab-separated column names: source, target and "
                                 "optionally gt)");
+    }
+    const int source_col = header_column(t.header, "source", t.header_where);
+    const int target_col = header_column(t.header, "target", t.header_where);
+    const int gt_col = header_column(t.header, "gt", t.header_where);
+    if (source_col < 0 || target_col < 0) {
+        throw UsageError(t.header_where + ": the header has no '" + (source_col < 0 ? "source" : "target") +
+                         "' column (expected tab-separated column names: source, target and optionally gt)");
+    }
+    PairsTable table;
+    table.has_gt_column = gt_col >= 0;
+    for (const TextTable::Row &r : t.rows) {
+        PairRow row;
+        row.index = static_cast<int64_t>(table.rows.size()) + 1;
+        row.line = r.line;
+        row.source = r.fields[static_cast<size_t>(source_col)];
+        row.target = r.fields[static_cast<size_t>(target_col)];
+        if (gt_col >= 0) row.gt = r.fields[static_cast<size_t>(gt_col)];
+        if (row.source.empty() || row.target.empty()) {
+            throw UsageError(r.where + ": empty " + (row.source.empty() ? "source" : "target") + " path");
+        }
+        table.rows.push_back(row);
     }
     return table;
 }
 
 PairsTable read_pairs_file(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw UsageError("cannot read the pairs file '" + one_line(path) + "'");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw UsageError("cannot read the pairs file '" + one_line(path) + "'");
-    return parse_pairs(text, one_line(path));
+    return parse_pairs(read_table_text(path, "pairs file"), one_line(path));
 }
 
 std::string resolve_pair_path(const std::string &pairs_file, const std::string &path) {

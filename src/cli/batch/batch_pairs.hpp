@@ -43,6 +43,22 @@ PairsTable read_pairs_file(const std::string &path);
 std::vector<std::string> split_tab_fields(const std::string &line);
 bool is_blank_or_comment_line(const std::string &line);
 int header_column(const std::vector<std::string> &header, const char *column, const std::string &where);
+// A whole table: blank and '#' lines skipped, the first other line the header (empty when there is none), every
+// later line a row with exactly as many fields as the header (else a UsageError naming the line), a trailing '\r'
+// ignored. `name` names the text in each row's `where` ("NAME line N").
+struct TextTable {
+    struct Row {
+        size_t line = 0;
+        std::string where;
+        std::vector<std::string> fields;
+    };
+    std::vector<std::string> header;
+    std::string header_where;
+    std::vector<Row> rows;
+};
+TextTable parse_text_table(const std::string &text, const std::string &name);
+// A file's bytes; a UsageError "cannot read the WHAT 'PATH'" when it cannot be read.
+std::string read_table_text(const std::string &path, const std::string &what);
 // `path` as written in the pairs file: absolute as is, relative against the pairs file's folder (so that a
 // pairs file and its clouds can move together, and the result does not depend on the working directory).
 std::string resolve_pair_path(const std::string &pairs_file, const std::string &path);
