@@ -1162,6 +1162,13 @@ KISSM_API int32_t kissm_pose_graph_edges(const kissm_pose_graph *graph, uint8_t 
 #define KISSM_PAIRS_SEQUENCE 1
 /** The pairs of kissm_align_options.pair_list, in its order. */
 #define KISSM_PAIRS_LIST 2
+/** Several sessions (drives, robots, survey days) merged, the scans ordered session by session
+ * (kissm_align_options.sessions): each session's consecutive pairs as trusted odometry (a valid one is taken as
+ * right), its loop candidates as #KISSM_PAIRS_SEQUENCE finds them, a grid of every stride-th scan of a later
+ * session with every stride-th scan of each earlier one; then, once the graph places a later session, its scans
+ * with the loops_per_scan nearest placed scans of earlier sessions within loop_radius, and one more optimisation.
+ * Python's kissm.multiway.align_sessions. */
+#define KISSM_PAIRS_SESSIONS 3
 /** @} */
 
 /**
@@ -1193,6 +1200,14 @@ typedef struct kissm_align_options {
     /** The pose graph's bound (kissm_pose_graph_optimize()); finite, > 0. Default
      * #KISSM_POSE_GRAPH_DEFAULT_BOUND. */
     double bound;
+    /** #KISSM_PAIRS_SESSIONS: num_scans session numbers, the scans in session order: sessions[0] = 0, each next one
+     * equal to or 1 above the one before. Otherwise NULL. Default NULL. */
+    const uint32_t *sessions;
+    /** #KISSM_PAIRS_SESSIONS: the grid across sessions takes every stride-th scan of each; 1 to 1,000,000.
+     * Default 10. */
+    int32_t stride;
+    /** 0. */
+    int32_t reserved;
     /* New fields are only ever appended here. */
 } kissm_align_options;
 
@@ -1223,6 +1238,8 @@ typedef struct kissm_alignment kissm_alignment;
  * stops the call; the matcher's progress callback is not called (its log callback is not either).
  * @param[in,out] matcher The registrations' settings; the features must have been computed under its descriptor
  *                settings (else #KISSM_ERR_FEATURES_MISMATCH, before any registration).
+ * With #KISSM_PAIRS_SESSIONS the consecutive pairs within a session are trusted edges (always accepted when
+ * valid); every other edge is robust.
  * @param[in] features num_scans features, in order (scan 0 is the anchor); a NULL entry is a scan that could not
  *            be described: no pair with it is registered, and it is not placed.
  * @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.

@@ -39,6 +39,9 @@ kissm_align_options default_options() {
     o.loop_gap = 10;
     o.loops_per_scan = 5;
     o.bound = KISSM_POSE_GRAPH_DEFAULT_BOUND;
+    o.sessions = nullptr;
+    o.stride = 10;
+    o.reserved = 0;
     return o;
 }
 
@@ -66,9 +69,9 @@ kissm_align_options checked_options(const kissm_align_options *given, uint64_t n
     if (given == nullptr) return default_options();
     check_struct_size("options->struct_size", given->struct_size, kAlignOptionsSizes, given);
     const kissm_align_options o = *given;
-    if (o.pairs != KISSM_PAIRS_ALL && o.pairs != KISSM_PAIRS_SEQUENCE && o.pairs != KISSM_PAIRS_LIST)
+    if (o.pairs < KISSM_PAIRS_ALL || o.pairs > KISSM_PAIRS_SESSIONS)
         invalid("options->pairs is " + std::to_string(o.pairs) +
-                "; KISSM_PAIRS_ALL (0), KISSM_PAIRS_SEQUENCE (1) or KISSM_PAIRS_LIST (2)");
+                "; KISSM_PAIRS_ALL (0), KISSM_PAIRS_SEQUENCE (1), KISSM_PAIRS_LIST (2) or KISSM_PAIRS_SESSIONS (3)");
     if (o.pairs == KISSM_PAIRS_LIST) {
         if (o.num_pairs > kMaxPairs)
             invalid("options->num_pairs is " + std::to_string(o.num_pairs) + "; 0 to " + std::to_string(kMaxPairs));
@@ -92,6 +95,22 @@ kissm_align_options checked_options(const kissm_align_options *given, uint64_t n
         o.loops_per_scan < 0 ? uint64_t(kMaxLoopSetting) + 1 : uint64_t(o.loops_per_scan), "options->loops_per_scan");
     if (!(o.bound > 0.0) || !std::isfinite(o.bound))
         invalid("options->bound is " + number(o.bound) + "; a finite number above 0");
+    if (o.pairs == KISSM_PAIRS_SESSIONS) {
+        require_non_null(o.sessions, "options->sessions");
+        for (uint64_t k = 0; k < num_scans; ++k) {
+            const uint32_t before = k == 0 ? 0 : o.sessions[k - 1];
+            if (o.sessions[k] != before && !(k > 0 && o.sessions[k] == before + 1))
+                invalid("options->sessions[" + std::to_string(k) + "] is " + std::to_string(o.sessions[k]) +
+                        (k == 0 ? "; 0 (the first scan's session)"
+                                : "; " + std::to_string(before) + " or " + std::to_string(before + 1) +
+                                      " (the scans in session order)"));
+        }
+    } else if (o.sessions != nullptr) {
+        invalid("options->sessions is read by KISSM_PAIRS_SESSIONS only; NULL here");
+    }
+    if (o.stride < 1 || o.stride > kMaxLoopSetting)
+        invalid("options->stride is " + std::to_string(o.stride) + "; 1 to " + std::to_string(kMaxLoopSetting));
+    if (o.reserved != 0) invalid("options->reserved is " + std::to_string(o.reserved) + "; 0");
     return o;
 }
 
@@ -114,7 +133,7 @@ std::vector<core::ScanPair> first_pairs(const kissm_align_options &o, std::size_
 // Registers the pairs whose scans both have features, one pair per thread of the matcher, each on a context of
 // one thread (the results do not depend on the thread count), appending them to the alignment in pair order.
 void register_pairs(kissm_matcher &matcher, core::RunContext &ctx, const kissm_features *const *features,
-                    const std::vector<core::ScanPair> &pairs, kissm_alignment &out) {
+                    const std::vector<core::ScanPair> &pairs, kissm_alignment &out, bool robust = true) {
     std::vector<core::ScanPair> runnable;
     for (const core::ScanPair &p : pairs)
         if (features[p.source] != nullptr && features[p.target] != nullptr) runnable.push_back(p);
@@ -130,6 +149,7 @@ void register_pairs(kissm_matcher &matcher, core::RunContext &ctx, const kissm_f
         AlignedPair r;
         r.source = runnable[k].source;
         r.target = runnable[k].target;
+        r.robust = robust;
         r.result.struct_size = sizeof r.result;
         fill_result(done[k], &r.result);
         out.registrations.push_back(r);
@@ -172,11 +192,12 @@ void solve(kissm_alignment &a, double bound, const std::atomic<int> *cancel) {
     for (AlignedPair &r : a.registrations) {
         std::fill(r.information, r.information + 36, std::numeric_limits<double>::quiet_NaN());
         r.residual = std::numeric_limits<double>::quiet_NaN();
+        r.edge = -1;
         if (!r.result.valid) continue;
         double information[36];
         edge_information(r.result, information);
         try {
-            add_pose_graph_edge(graph, r.source, r.target, r.result.transform, information, 1);
+            add_pose_graph_edge(graph, r.source, r.target, r.result.transform, information, r.robust ? 1 : 0);
         } catch (const core::Failure &f) {
             // A pose the graph refuses (an information that is not positive definite) is no edge; anything else
             // is not this edge's doing.
@@ -190,6 +211,79 @@ void solve(kissm_alignment &a, double bound, const std::atomic<int> *cancel) {
     for (std::size_t e = 0; e < edges.size(); ++e) {
         edges[e]->edge = a.solution.accepted[e] ? 1 : 0;
         edges[e]->residual = a.solution.residual[e];
+    }
+}
+
+// KISSM_PAIRS_SESSIONS, as Python's kissm.multiway.align_sessions: each session's odometry (trusted), then its
+// loop candidates and the stride grid across sessions, one optimisation; then each placed scan of a later session
+// with the nearest placed scans of earlier sessions, and the optimisation again.
+void align_sessions(kissm_matcher &matcher, core::RunContext &ctx, const kissm_features *const *features,
+                    const kissm_align_options &o, kissm_alignment &a) {
+    const std::size_t n = a.num_scans;
+    std::vector<std::size_t> first; // each session's first scan, then n
+    for (std::size_t k = 0; k < n; ++k)
+        if (k == 0 || o.sessions[k] != o.sessions[k - 1]) first.push_back(k);
+    first.push_back(n);
+    const std::size_t sessions = first.size() - 1;
+    const auto usable = [&](std::size_t source, std::size_t target) {
+        return features[source] != nullptr && features[target] != nullptr;
+    };
+    std::vector<core::ScanPair> odometry;
+    for (std::size_t s = 0; s < sessions; ++s)
+        for (std::size_t k = first[s]; k + 1 < first[s + 1]; ++k) odometry.push_back({k + 1, k});
+    register_pairs(matcher, ctx, features, odometry, a, false);
+
+    const double radius = o.loop_radius > 0.0 ? o.loop_radius : kDefaultRadiusVoxels * matcher.config.voxel_size;
+    const auto gap = static_cast<std::size_t>(o.loop_gap), per_scan = static_cast<std::size_t>(o.loops_per_scan);
+    const auto stride = static_cast<std::size_t>(o.stride);
+    std::vector<const double *> step_of(n, nullptr); // step_of[k]: scan k+1 into k, when valid
+    for (const AlignedPair &r : a.registrations)
+        if (r.result.valid) step_of[r.target] = r.result.transform;
+    std::vector<core::ScanPair> wanted;
+    for (std::size_t s = 0; s < sessions; ++s) {
+        const std::size_t begin = first[s], size = first[s + 1] - begin;
+        const std::vector<const double *> steps(step_of.begin() + static_cast<std::ptrdiff_t>(begin),
+                                                step_of.begin() + static_cast<std::ptrdiff_t>(begin + size - 1));
+        for (const core::ScanPair &p :
+             core::loop_candidates(core::dead_reckoned(steps, size), radius, gap, per_scan, core::kLoopDrift))
+            wanted.push_back({begin + p.source, begin + p.target});
+        for (std::size_t t = 0; t < s; ++t)
+            for (std::size_t j = first[s]; j < first[s + 1]; j += stride)
+                for (std::size_t i = first[t]; i < first[t + 1]; i += stride) wanted.push_back({j, i});
+    }
+    register_pairs(matcher, ctx, features, wanted, a);
+    solve(a, o.bound, &matcher.cancel_requested);
+
+    // The second round across sessions, from the merged poses.
+    std::vector<std::pair<std::size_t, std::size_t>> registered;
+    for (const AlignedPair &r : a.registrations) registered.push_back({r.source, r.target});
+    std::sort(registered.begin(), registered.end());
+    std::vector<std::size_t> placed;
+    for (std::size_t k = 0; k < n; ++k)
+        if (a.solution.placed[k]) placed.push_back(k);
+    std::vector<core::ScanPair> across;
+    std::vector<std::pair<double, std::size_t>> near;
+    for (const std::size_t k : placed) {
+        near.clear();
+        const core::Rigid &here = a.solution.poses[k];
+        for (const std::size_t e : placed) {
+            if (o.sessions[e] >= o.sessions[k]) continue;
+            const core::Rigid &there = a.solution.poses[e];
+            const double dx = there.t[0] - here.t[0], dy = there.t[1] - here.t[1], dz = there.t[2] - here.t[2];
+            const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+            if (d <= radius) near.push_back({d, e});
+        }
+        std::sort(near.begin(), near.end());
+        if (near.size() > per_scan) near.resize(per_scan);
+        for (const auto &[d, e] : near) {
+            (void)d;
+            if (!std::binary_search(registered.begin(), registered.end(), std::make_pair(k, e)) && usable(k, e))
+                across.push_back({k, e});
+        }
+    }
+    if (!across.empty()) {
+        register_pairs(matcher, ctx, features, across, a);
+        solve(a, o.bound, &matcher.cancel_requested);
     }
 }
 
@@ -234,10 +328,14 @@ int32_t kissm_align_features(kissm_matcher *matcher, const kissm_features *const
         auto a = std::make_unique<kissm_alignment>();
         a->num_scans = static_cast<std::size_t>(num_scans);
         core::RunContext ctx = matcher->begin_call(); // one context: a cancel between the rounds is not dropped
-        register_pairs(*matcher, ctx, features, first_pairs(o, a->num_scans), *a);
-        if (o.pairs == KISSM_PAIRS_SEQUENCE)
-            register_pairs(*matcher, ctx, features, sequence_loops(o, *a, matcher->config.voxel_size), *a);
-        solve(*a, o.bound, &matcher->cancel_requested);
+        if (o.pairs == KISSM_PAIRS_SESSIONS) {
+            align_sessions(*matcher, ctx, features, o, *a);
+        } else {
+            register_pairs(*matcher, ctx, features, first_pairs(o, a->num_scans), *a);
+            if (o.pairs == KISSM_PAIRS_SEQUENCE)
+                register_pairs(*matcher, ctx, features, sequence_loops(o, *a, matcher->config.voxel_size), *a);
+            solve(*a, o.bound, &matcher->cancel_requested);
+        }
         *out_alignment = a.release();
         return ok();
     });

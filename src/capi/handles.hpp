@@ -48,6 +48,7 @@ namespace capi {
 struct AlignedPair {
     std::size_t source = 0, target = 0;
     kissm_result result; // this kissm's full layout
+    bool robust = true;  // false: a session's odometry, a trusted edge
     int32_t edge = -1;   // -1: not an edge (not valid, or the graph refused it); 0 rejected; 1 accepted
     double information[36];
     double residual = 0.0;

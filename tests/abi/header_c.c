@@ -77,6 +77,7 @@ PIN(KISSM_STRUCT_ALIGN_OPTIONS, 4)
 PIN(KISSM_PAIRS_ALL, 0)
 PIN(KISSM_PAIRS_SEQUENCE, 1)
 PIN(KISSM_PAIRS_LIST, 2)
+PIN(KISSM_PAIRS_SESSIONS, 3)
 
 /* The version string is a string literal. */
 const char kissm_header_test_version[] = KISSM_VERSION_STRING;

@@ -95,6 +95,9 @@ static void test_defaults(void) {
     CHECK_EQ_INT(o.loop_gap, 10);
     CHECK_EQ_INT(o.loops_per_scan, 5);
     CHECK(o.bound == KISSM_POSE_GRAPH_DEFAULT_BOUND);
+    CHECK(o.sessions == NULL);
+    CHECK_EQ_INT(o.stride, 10);
+    CHECK_EQ_INT(o.reserved, 0);
     CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_ALIGN_OPTIONS), sizeof o);
     CHECK_EQ_INT(kissm_align_options_init(&o, sizeof o - 8), KISSM_ERR_STRUCT_SIZE);
     CHECK_EQ_INT(kissm_align_options_init(NULL, sizeof o), KISSM_ERR_NULL_ARGUMENT);
@@ -165,6 +168,40 @@ static void test_sequence_and_list(void) {
     kissm_alignment_destroy(a);
 }
 
+/* Two sessions, scans 0-2 and 3-4: each session's consecutive pairs trusted, the grid across (stride 2: 3 and
+ * every other scan of session 0 ... here 3-0 and 3-2), then the merged poses' nearest: everything placed. */
+static void test_sessions(void) {
+    const int all[SCANS] = {1, 1, 1, 1, 1};
+    const uint32_t sessions[SCANS] = {0, 0, 0, 1, 1};
+    kissm_align_options o = options(KISSM_PAIRS_SESSIONS);
+    kissm_alignment *a = NULL;
+    uint64_t k, source, target;
+    int32_t edge;
+    kissm_result r;
+    o.sessions = sessions;
+    o.stride = 2;
+    o.loop_radius = 50.0;
+    o.loops_per_scan = 1;
+    REQUIRE(kissm_align_features(g_matcher, (const kissm_features *const *)g_features, SCANS, &o, &a) == KISSM_OK);
+    CHECK_EQ_INT(check_poses(a, all), SCANS);
+    /* Odometry (1,0) (2,1) (4,3); the grid (3,0) (3,2); then each placed scan of session 1 with its nearest placed
+     * scan of session 0 not yet paired with it. */
+    REQUIRE(kissm_alignment_num_registrations(a) >= 5);
+    for (k = 0; k < kissm_alignment_num_registrations(a); ++k) {
+        kissm_result_init(&r, sizeof r);
+        REQUIRE(kissm_alignment_registration(a, k, &source, &target, &r, &edge, NULL, NULL) == KISSM_OK);
+        if (k < 3) {
+            CHECK(source == target + 1 && sessions[source] == sessions[target]);
+            CHECK(!r.valid || edge == 1); /* trusted: a valid odometry step is always an accepted edge */
+        } else if (k < 5) {
+            CHECK(source == 3 && target == (k == 3 ? 0 : 2));
+        } else {
+            CHECK(sessions[source] == 1 && sessions[target] == 0);
+        }
+    }
+    kissm_alignment_destroy(a);
+}
+
 static void test_missing_features(void) {
     const int expect[SCANS] = {1, 1, 0, 1, 1};
     const kissm_features *some[SCANS];
@@ -231,7 +268,7 @@ static void test_bad_input(void) {
     CHECK_EQ_INT(kissm_align_features(g_matcher, f, 0, NULL, &a), KISSM_ERR_INVALID_ARGUMENT);
     CHECK(strstr(kissm_last_error_message(), "num_scans") != NULL);
 
-    o.pairs = 3;
+    o.pairs = -1;
     CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
     CHECK(strstr(kissm_last_error_message(), "options->pairs") != NULL);
     o = options(KISSM_PAIRS_LIST);
@@ -273,6 +310,34 @@ static void test_bad_input(void) {
     o.struct_size = 12;
     CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_STRUCT_SIZE);
     CHECK(a == NULL);
+
+    {
+        const uint32_t unordered[SCANS] = {0, 1, 0, 1, 1}, late_start[SCANS] = {1, 1, 1, 1, 1};
+        o = options(KISSM_PAIRS_SESSIONS);
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->sessions") != NULL);
+        o.sessions = unordered;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->sessions[2] is 0; 1 or 2") != NULL);
+        o.sessions = late_start;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->sessions[0] is 1") != NULL);
+        o = options(KISSM_PAIRS_SEQUENCE);
+        o.sessions = unordered;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->sessions is read by KISSM_PAIRS_SESSIONS only") != NULL);
+        o = options(KISSM_PAIRS_ALL);
+        o.stride = 0;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->stride") != NULL);
+        o = options(KISSM_PAIRS_ALL);
+        o.reserved = 1;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->reserved") != NULL);
+        o = options(4);
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(a == NULL);
+    }
 
     /* Features of another voxel size: refused before any registration. */
     REQUIRE(kissm_create(&config, &other) == KISSM_OK);
@@ -376,6 +441,7 @@ int main(void) {
     make_scans();
     RUN_TEST(test_all_pairs);
     RUN_TEST(test_sequence_and_list);
+    RUN_TEST(test_sessions);
     RUN_TEST(test_missing_features);
     RUN_TEST(test_thread_independence);
     RUN_TEST(test_bad_input);

@@ -3,10 +3,14 @@
 // reused, refinements from decoded transforms (kissm_refine, kissm_refine_features), a cancellation request
 // between calls, configs read back. Invariants on top of fuzz_register's: repeating a call on the reused
 // handle gives the identical result, features give the same result as the direct call (a refinement from
-// features differs only in the descriptor counts it reports), and a cancel request made between calls does
-// not leak into the next one.
+// features differs only in the descriptor counts it reports), a cancel request made between calls does
+// not leak into the next one, and a multiway alignment of the features there are (kissm_align_features, with
+// decoded options, valid or not) succeeds exactly when its options are valid, places scan 0 at the identity,
+// every placed scan at a finite rigid pose and the others at NaN, and repeated gives the same bits.
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "fuzz_input.hpp"
 
@@ -14,6 +18,63 @@ namespace {
 
 void require(bool ok) {
     if (!ok) std::abort();
+}
+
+// kissm_align_features over the three feature slots with options decoded from the input; see the file comment.
+void fuzz_alignment(kissm_fuzz::Bytes &in, kissm_matcher *m, kissm_features *const features[3]) {
+    static const double radii[] = {0.0, 1.0, 50.0, -1.0, std::numeric_limits<double>::quiet_NaN()};
+    static const double bounds[] = {KISSM_POSE_GRAPH_DEFAULT_BOUND, 1e-3, 0.0, std::numeric_limits<double>::infinity()};
+    static const uint32_t patterns[][3] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 2}, {1, 1, 1}, {0, 2, 2}};
+    kissm_align_options o;
+    require(kissm_align_options_init(&o, sizeof o) == KISSM_OK);
+    const std::uint8_t policy = in.u8() % 5, settings = in.u8(), more = in.u8();
+    const uint64_t list[4] = {more % 4u, (more / 4u) % 4u, (more / 16u) % 4u, (more / 64u) % 4u};
+    const uint32_t *pattern = patterns[(more / 8u) % 6u];
+    o.pairs = policy;
+    o.loop_gap = settings % 3; // 0 is refused
+    o.loops_per_scan = (settings / 3) % 3;
+    o.loop_radius = radii[(settings / 9) % 5]; // -1 and NaN are refused
+    o.bound = bounds[(settings / 45) % 4];     // 0 and infinity are refused
+    o.stride = (more >> 4) % 3;                // 0 is refused
+    if (policy == KISSM_PAIRS_LIST) o.pair_list = list, o.num_pairs = 2;
+    if (policy == KISSM_PAIRS_SESSIONS) o.sessions = pattern;
+    bool valid = policy < 4 && o.loop_gap >= 1 && std::isfinite(o.loop_radius) && o.loop_radius >= 0.0 &&
+                 o.bound > 0.0 && std::isfinite(o.bound) && o.stride >= 1;
+    if (policy == KISSM_PAIRS_LIST)
+        for (int k = 0; k < 2; ++k)
+            valid = valid && list[2 * k] < 3 && list[2 * k + 1] < 3 && list[2 * k] != list[2 * k + 1];
+    if (policy == KISSM_PAIRS_SESSIONS) {
+        valid = valid && pattern[0] == 0;
+        for (int k = 1; k < 3; ++k) valid = valid && pattern[k] >= pattern[k - 1] && pattern[k] - pattern[k - 1] <= 1;
+    }
+    kissm_alignment *a = nullptr;
+    const int32_t st = kissm_align_features(m, features, 3, &o, &a);
+    require(st == KISSM_OK || st == KISSM_ERR_INVALID_ARGUMENT || st == KISSM_ERR_OUT_OF_MEMORY);
+    require((st == KISSM_OK) == (a != nullptr) && (st != KISSM_ERR_INVALID_ARGUMENT || !valid));
+    if (st != KISSM_OK) return;
+    require(valid && kissm_alignment_num_scans(a) == 3);
+    double poses[48], again[48];
+    uint8_t placed[3];
+    require(kissm_alignment_poses(a, poses, placed, nullptr) == KISSM_OK && placed[0] == 1);
+    for (int i = 0; i < 16; ++i) require(poses[i] == (i % 5 == 0 ? 1.0 : 0.0));
+    for (int k = 1; k < 3; ++k)
+        for (int i = 0; i < 16; ++i)
+            require(placed[k] ? std::isfinite(poses[16 * k + i]) : std::isnan(poses[16 * k + i]));
+    for (uint64_t k = 0; k < kissm_alignment_num_registrations(a); ++k) {
+        uint64_t s = 9, t = 9;
+        int32_t edge = 9;
+        require(kissm_alignment_registration(a, k, &s, &t, nullptr, &edge, nullptr, nullptr) == KISSM_OK);
+        require(s < 3 && t < 3 && s != t && features[s] && features[t] && edge >= -1 && edge <= 1);
+    }
+    kissm_alignment *b = nullptr;
+    const int32_t st2 = kissm_align_features(m, features, 3, &o, &b);
+    require(st2 == KISSM_OK || st2 == KISSM_ERR_OUT_OF_MEMORY);
+    if (st2 == KISSM_OK) {
+        require(kissm_alignment_poses(b, again, nullptr, nullptr) == KISSM_OK);
+        require(std::memcmp(poses, again, sizeof poses) == 0);
+    }
+    kissm_alignment_destroy(b);
+    kissm_alignment_destroy(a);
 }
 
 } // namespace
@@ -29,14 +90,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
     kissm_result first[9];
     bool have_first[9] = {};
     // Up to 12 operations, each byte picks one and its clouds: the high nibble 0-4 as before refinement existed
-    // (so old seeds replay the same calls), 5 and 6 the refinements, 7-15 the first five again.
+    // (so old seeds replay the same calls), 5 and 6 the refinements, 7-14 the first five again, 15 an alignment.
     for (int step = 0; step < 12 && in.left() > 0; ++step) {
         const std::uint8_t op = in.u8();
         const int a = op % 3, b = (op / 3) % 3;
         const kissm_points pa = clouds[a].view(), pb = clouds[b].view();
         kissm_result r;
         require(kissm_result_init(&r, sizeof r) == KISSM_OK);
-        const int kind = (op >> 4) < 7 ? (op >> 4) : (op >> 4) % 5;
+        const int kind = (op >> 4) < 7 || (op >> 4) == 15 ? (op >> 4) : (op >> 4) % 5;
         switch (kind) {
         case 0: { // register; again later must be identical
             const int32_t st = kissm_register(m, &pa, &pb, &r);
@@ -95,6 +156,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             }
             break;
         }
+        case 15: fuzz_alignment(in, m, features); break;
         case 3: // a cancel request while no call runs: cleared when the next call starts
             kissm_cancel(m);
             break;

@@ -423,6 +423,8 @@ int32_t kissm_pose_graph_edges(const kissm_pose_graph *graph, uint8_t *out_accep
 
 #define KISSM_PAIRS_LIST 2
 
+#define KISSM_PAIRS_SESSIONS 3
+
 typedef struct kissm_align_options {
 
     uint32_t struct_size;
@@ -442,6 +444,12 @@ typedef struct kissm_align_options {
     int32_t loops_per_scan;
 
     double bound;
+
+    const uint32_t *sessions;
+
+    int32_t stride;
+
+    int32_t reserved;
 } kissm_align_options;
 
 int32_t kissm_align_options_init(kissm_align_options *options, uint32_t struct_size);

@@ -77,6 +77,7 @@ pub const KISSM_POSE_GRAPH_DEFAULT_BOUND: f64 = 22.4577;
 pub const KISSM_PAIRS_ALL: i32 = 0;
 pub const KISSM_PAIRS_SEQUENCE: i32 = 1;
 pub const KISSM_PAIRS_LIST: i32 = 2;
+pub const KISSM_PAIRS_SESSIONS: i32 = 3;
 pub const KISSM_STRUCT_CONFIG: i32 = 1;
 pub const KISSM_STRUCT_POINTS: i32 = 2;
 pub const KISSM_STRUCT_RESULT: i32 = 3;
@@ -1300,12 +1301,20 @@ pub struct kissm_align_options {
     /** The pose graph's bound (kissm_pose_graph_optimize()); finite, > 0. Default
  #KISSM_POSE_GRAPH_DEFAULT_BOUND.*/
     pub bound: f64,
+    /** #KISSM_PAIRS_SESSIONS: num_scans session numbers, the scans in session order: sessions[0] = 0, each next one
+ equal to or 1 above the one before. Otherwise NULL. Default NULL.*/
+    pub sessions: *const u32,
+    /** #KISSM_PAIRS_SESSIONS: the grid across sessions takes every stride-th scan of each; 1 to 1,000,000.
+ Default 10.*/
+    pub stride: i32,
+    /// 0.
+    pub reserved: i32,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
     [
         "Size of kissm_align_options",
-    ][::core::mem::size_of::<kissm_align_options>() - 56usize];
+    ][::core::mem::size_of::<kissm_align_options>() - 72usize];
     [
         "Alignment of kissm_align_options",
     ][::core::mem::align_of::<kissm_align_options>() - 8usize];
@@ -1336,6 +1345,15 @@ const _: () = {
     [
         "Offset of field: kissm_align_options::bound",
     ][::core::mem::offset_of!(kissm_align_options, bound) - 48usize];
+    [
+        "Offset of field: kissm_align_options::sessions",
+    ][::core::mem::offset_of!(kissm_align_options, sessions) - 56usize];
+    [
+        "Offset of field: kissm_align_options::stride",
+    ][::core::mem::offset_of!(kissm_align_options, stride) - 64usize];
+    [
+        "Offset of field: kissm_align_options::reserved",
+    ][::core::mem::offset_of!(kissm_align_options, reserved) - 68usize];
 };
 impl Default for kissm_align_options {
     fn default() -> Self {
@@ -1378,6 +1396,8 @@ extern "C" {
  stops the call; the matcher's progress callback is not called (its log callback is not either).
  @param[in,out] matcher The registrations' settings; the features must have been computed under its descriptor
                 settings (else #KISSM_ERR_FEATURES_MISMATCH, before any registration).
+ With #KISSM_PAIRS_SESSIONS the consecutive pairs within a session are trusted edges (always accepted when
+ valid); every other edge is robust.
  @param[in] features num_scans features, in order (scan 0 is the anchor); a NULL entry is a scan that could not
             be described: no pair with it is registered, and it is not placed.
  @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.

@@ -43,6 +43,24 @@ pub enum Pairs<'a> {
     /// These pairs, `(source, target)`, in this order (`KISSM_PAIRS_LIST`): scans of the alignment, never a
     /// scan with itself.
     List(&'a [(usize, usize)]),
+    /// Several sessions (drives, robots, survey days) merged (`KISSM_PAIRS_SESSIONS`, Python's
+    /// `kissm.multiway.align_sessions`): the scans in session order, `sessions[scan]` its session (the first 0,
+    /// each next equal or 1 above). Each session's consecutive pairs are trusted odometry, its loop candidates as
+    /// [`Pairs::Sequence`] finds them, a grid of every `stride`-th scan of a later session with every `stride`-th
+    /// of each earlier one; then, once placed, each scan of a later session with its `loops_per_scan` nearest
+    /// placed scans of earlier sessions within `loop_radius`, and the graph again.
+    Sessions {
+        /// One session number per scan; its length must be the number of scans.
+        sessions: &'a [u32],
+        /// The grid across sessions takes every `stride`-th scan: 1 to 1,000,000 (10 in Python).
+        stride: usize,
+        /// As [`Pairs::Sequence`]'s, within sessions and across them; `None` for 30 voxels.
+        loop_radius: Option<f64>,
+        /// As [`Pairs::Sequence`]'s, within a session.
+        loop_gap: usize,
+        /// As [`Pairs::Sequence`]'s, within sessions and across them.
+        loops_per_scan: usize,
+    },
 }
 
 impl Pairs<'static> {
@@ -304,6 +322,20 @@ impl Matcher {
                     }
                     priors_flat = flat_poses(priors, "priors")?;
                 }
+                raw_options.loop_radius = loop_radius.unwrap_or(0.0);
+                raw_options.loop_gap = loop_setting(loop_gap, "loop_gap", "1 to 1000000")?;
+                raw_options.loops_per_scan = loop_setting(loops_per_scan, "loops_per_scan", "0 to 1000000")?;
+            }
+            Pairs::Sessions { sessions, stride, loop_radius, loop_gap, loops_per_scan } => {
+                raw_options.pairs = sys::KISSM_PAIRS_SESSIONS;
+                if sessions.len() != num_scans {
+                    return Err(invalid(format!(
+                        "sessions holds {} numbers; one per scan ({num_scans}, the length of features)",
+                        sessions.len()
+                    )));
+                }
+                raw_options.sessions = sessions.as_ptr();
+                raw_options.stride = loop_setting(stride, "stride", "1 to 1000000")?;
                 raw_options.loop_radius = loop_radius.unwrap_or(0.0);
                 raw_options.loop_gap = loop_setting(loop_gap, "loop_gap", "1 to 1000000")?;
                 raw_options.loops_per_scan = loop_setting(loops_per_scan, "loops_per_scan", "0 to 1000000")?;

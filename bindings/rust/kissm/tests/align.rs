@@ -200,6 +200,25 @@ fn a_list_registers_its_pairs_in_order() {
 }
 
 #[test]
+fn two_sessions_merge_into_one_frame() {
+    let Some(scans) = scans() else { return };
+    let features = all_features(scans);
+    let sessions = [0, 0, 1, 1];
+    let pairs = Pairs::Sessions { sessions: &sessions, stride: 2, loop_radius: None, loop_gap: 2, loops_per_scan: 1 };
+    let alignment = align(scans, &features, pairs, 2);
+    assert_placed_at_the_truth(&alignment, scans);
+    // Odometry first, (1, 0) and (3, 2), trusted: valid ones are accepted edges; then the grid (2, 0).
+    let pairs_run = pairs_of(&alignment);
+    assert_eq!(pairs_run[..3], [(1, 0), (3, 2), (2, 0)]);
+    for r in &alignment.registrations()[..2] {
+        assert!(!r.registration.valid || r.edge == EdgeState::Accepted);
+    }
+    // Every later pair joins session 1 to session 0.
+    assert!(pairs_run[3..].iter().all(|&(s, t)| sessions[s] == 1 && sessions[t] == 0));
+    assert!(align(scans, &features, pairs, 1).same_result(&alignment));
+}
+
+#[test]
 fn a_scan_without_features_is_not_placed() {
     let Some(scans) = scans() else { return };
     let mut features = all_features(scans);
@@ -291,6 +310,11 @@ fn bad_input_fails_with_the_argument_named() {
     assert_error(run(&features, Pairs::All, 0.0), invalid, "bound");
     assert_error(run(&features, Pairs::All, f64::INFINITY), invalid, "bound");
     assert_error(run(&[], Pairs::All, bound), invalid, "features");
+    let sessions =
+        |sessions, stride| Pairs::Sessions { sessions, stride, loop_radius: None, loop_gap: 2, loops_per_scan: 1 };
+    assert_error(run(&features, sessions(&[0, 0, 1], 2), bound), invalid, "sessions holds 3");
+    assert_error(run(&features, sessions(&[0, 1, 0, 1], 2), bound), invalid, "options->sessions[2]");
+    assert_error(run(&features, sessions(&[0, 0, 1, 1], 0), bound), invalid, "options->stride");
     // Features of other descriptor settings.
     let other = Matcher::with_voxel_size(0.5).unwrap().compute_features(&common::flat_plane()).unwrap();
     let mixed = [features[0], Some(&other)];
