@@ -69,13 +69,14 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
     }
     std::vector<long> variable = variables_of(reached, anchor);
     LmOptions options;
+    LmWorkspace workspace; // one analysis for the start and every graduated round; again when the placed nodes change
     // The least-squares start of the robust rounds need not be converged (with wrong edges in it, it crawls);
     // without wrong edges the accepted edges' optimum below finishes it.
     LmOptions start = options;
     start.max_iterations = kStartIterations;
     start.relative_tolerance = 1e-6;
     start.step_tolerance = std::numeric_limits<double>::infinity();
-    levenberg_marquardt(edges, weight, variable, out.poses, start, cancel);
+    levenberg_marquardt(edges, weight, variable, out.poses, start, workspace, cancel);
 
     std::vector<double> r2(m, 0.0);
     auto residuals = [&] {
@@ -98,7 +99,7 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
                 weight[e] = tls_weight(r2[e], bound, mu);
                 binary = binary && (weight[e] == 0.0 || weight[e] == 1.0);
             }
-            levenberg_marquardt(edges, weight, variable, out.poses, round, cancel);
+            levenberg_marquardt(edges, weight, variable, out.poses, round, workspace, cancel);
             residuals();
             if (binary) break;
             mu *= kMuGrowth;
@@ -117,7 +118,7 @@ PoseGraphSolution optimize_pose_graph(std::size_t num_nodes, const std::vector<P
         out.placed.assign(num_nodes, 0);
         for (std::size_t i = 0; i < num_nodes; ++i) out.placed[i] = out.component[i] == out.component[anchor] ? 1 : 0;
         variable = variables_of(out.placed, anchor);
-        levenberg_marquardt(edges, weight, variable, out.poses, options, cancel);
+        levenberg_marquardt(edges, weight, variable, out.poses, options, workspace, cancel);
     };
     auto settle = [&] {
         for (int pass = 0;; ++pass) {

@@ -3,9 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
+#include <utility>
 
 #include "failure.hpp"
 
@@ -21,108 +19,154 @@ void check_cancel(const std::atomic<int> *cancel) {
         fail(ErrorKind::Cancelled, "the optimisation was cancelled");
 }
 
-// The error of an edge and its Jacobians for right perturbations X <- X Exp(d) of its source and target.
-struct Linearised {
-    Vector6d error;
-    Matrix6d d_source, d_target;
-};
-
-Linearised linearise(const PoseGraphEdge &e, const std::vector<Rigid> &poses) {
-    const Rigid between = poses[e.target].inverse() * poses[e.source]; // inv(X_t) X_s
-    Linearised out;
-    out.error = se3_log(e.measured.inverse() * between);
-    const Matrix6d jri = se3_right_jacobian_inverse(out.error);
-    out.d_source = jri;
-    out.d_target = -jri * se3_adjoint(between.inverse());
-    return out;
+// The error xi = Log(inv(T) inv(X_t) X_s) of an edge.
+Vector6d edge_error(const PoseGraphEdge &e, const std::vector<Rigid> &poses) {
+    return se3_log(e.measured.inverse() * (poses[e.target].inverse() * poses[e.source]));
 }
 
+// The weighted cost sum_e w_e xi_e^T I_e xi_e, summed in the edges' order; each counted edge's error is kept in
+// errors for the linearisation at the same poses (the logarithm is the dearest part of both).
 double total_cost(const std::vector<PoseGraphEdge> &edges, const std::vector<double> &weights,
-                  const std::vector<long> &variable, const std::vector<Rigid> &poses) {
+                  const std::vector<long> &variable, const std::vector<Rigid> &poses, std::vector<Vector6d> &errors) {
+    errors.resize(edges.size());
     double cost = 0.0;
     for (std::size_t i = 0; i < edges.size(); ++i) {
         const PoseGraphEdge &e = edges[i];
         if (weights[i] == 0.0 || (variable[e.source] < 0 && variable[e.target] < 0)) continue;
-        cost += weights[i] * edge_chi2(e, poses);
+        errors[i] = edge_error(e, poses);
+        cost += weights[i] * errors[i].dot(e.information * errors[i]);
     }
     return cost;
+}
+
+// The pattern of the normal equations: one off-diagonal block per pair of variable nodes an edge joins (edges
+// between the same two nodes share it), whatever the weights, so that the graduated rounds reuse the analysis.
+void prepare(const std::vector<PoseGraphEdge> &edges, const std::vector<long> &variable, long num_vars,
+             LmWorkspace &ws) {
+    if (ws.num_edges == edges.size() && ws.variable == variable) return;
+    ws.variable.clear();                      // until the analysis below has succeeded (it can throw std::bad_alloc)
+    std::vector<std::pair<long, long>> keyed; // (min, max) per edge joining two variables
+    std::vector<std::size_t> by_key;
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+        const long vs = variable[edges[i].source], vt = variable[edges[i].target];
+        if (vs >= 0 && vt >= 0 && vs != vt) {
+            keyed.emplace_back(std::min(vs, vt), std::max(vs, vt));
+            by_key.push_back(i);
+        }
+    }
+    std::vector<std::size_t> sorted(keyed.size());
+    for (std::size_t k = 0; k < sorted.size(); ++k) sorted[k] = k;
+    std::sort(sorted.begin(), sorted.end(),
+              [&](std::size_t a, std::size_t b) { return keyed[a] != keyed[b] ? keyed[a] < keyed[b] : a < b; });
+    std::vector<std::pair<long, long>> pairs;
+    ws.edge_pair.assign(edges.size(), -1);
+    for (std::size_t k = 0; k < sorted.size(); ++k) {
+        if (k == 0 || keyed[sorted[k]] != keyed[sorted[k - 1]]) pairs.push_back(keyed[sorted[k]]);
+        ws.edge_pair[by_key[sorted[k]]] = static_cast<long>(pairs.size()) - 1;
+    }
+    ws.ldlt.analyse(num_vars, pairs);
+    ws.diagonal.assign(static_cast<std::size_t>(num_vars), Matrix6d::Zero());
+    ws.damped.assign(static_cast<std::size_t>(num_vars), Matrix6d::Zero());
+    ws.off.assign(pairs.size(), Matrix6d::Zero());
+    ws.num_edges = edges.size();
+    ws.variable = variable;
+}
+
+// The normal equations H d = -b at the poses, into the workspace's blocks (pair (a, b) holds H_ab) and b; the edges
+// are summed in the order they were added.
+void assemble(const std::vector<PoseGraphEdge> &edges, const std::vector<double> &weights,
+              const std::vector<long> &variable, const std::vector<Rigid> &poses, const std::vector<Vector6d> &errors,
+              LmWorkspace &ws, Eigen::VectorXd &b) {
+    for (Matrix6d &block : ws.diagonal) block.setZero();
+    for (Matrix6d &block : ws.off) block.setZero();
+    b.setZero();
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+        const PoseGraphEdge &e = edges[i];
+        const long vs = variable[e.source], vt = variable[e.target];
+        if ((vs < 0 && vt < 0) || weights[i] == 0.0) continue; // a weight of 0 adds nothing
+        // The Jacobians for right perturbations X <- X Exp(d): J_s = J_r^-1(xi), J_t = -J_s Ad(inv(X_s) X_t). With
+        // H_ss = J_s^T W J_s, the other blocks follow by the adjoint alone: H_st = -H_ss Ad, H_tt = Ad^T H_ss Ad,
+        // and b_t = -Ad^T b_s (two 6x6 products fewer per edge than forming J_t).
+        const Vector6d &error = errors[i];
+        const Matrix6d jri = se3_right_jacobian_inverse(error);
+        const Matrix6d adjoint = se3_adjoint(poses[e.source].inverse() * poses[e.target]);
+        const Matrix6d wi = weights[i] * e.information;
+        if (vs == vt) { // both ends on one node: its Jacobian is the sum
+            const Matrix6d j = jri - jri * adjoint;
+            const Matrix6d jtw = j.transpose() * wi;
+            ws.diagonal[vs].noalias() += jtw * j;
+            b.segment<6>(6 * vs).noalias() += jtw * error;
+            continue;
+        }
+        Matrix6d jtw, hss, n;
+        jtw.noalias() = jri.transpose() * wi;
+        hss.noalias() = jtw * jri;
+        const Vector6d gs = jtw * error;
+        if (vs >= 0) {
+            ws.diagonal[vs] += hss;
+            b.segment<6>(6 * vs) += gs;
+        }
+        n.noalias() = hss * adjoint; // -H_st
+        if (vt >= 0) {
+            ws.diagonal[vt].noalias() += adjoint.transpose() * n;
+            b.segment<6>(6 * vt).noalias() -= adjoint.transpose() * gs;
+        }
+        if (vs >= 0 && vt >= 0) {
+            // The pair is stored as (smaller, larger) variable: H_{min,max}.
+            if (vs < vt)
+                ws.off[ws.edge_pair[i]] -= n;
+            else
+                ws.off[ws.edge_pair[i]] -= n.transpose();
+        }
+    }
 }
 
 } // namespace
 
 double levenberg_marquardt(const std::vector<PoseGraphEdge> &edges, const std::vector<double> &weights,
                            const std::vector<long> &variable, std::vector<Rigid> &poses, const LmOptions &options,
-                           const std::atomic<int> *cancel) {
+                           LmWorkspace &ws, const std::atomic<int> *cancel) {
     const long num_vars = variable.empty() ? 0 : *std::max_element(variable.begin(), variable.end()) + 1;
-    double cost = total_cost(edges, weights, variable, poses);
+    std::vector<Vector6d> errors, trial_errors;
+    double cost = total_cost(edges, weights, variable, poses, errors);
     if (num_vars <= 0) return cost;
     const Eigen::Index n = 6 * num_vars;
-    // The sparsity pattern holds every edge's blocks, weighted or not, so one symbolic analysis serves all steps.
-    std::vector<Eigen::Triplet<double>> triplets;
-    Eigen::SparseMatrix<double> H(n, n);
-    Eigen::VectorXd b(n), diagonal(n);
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
-    bool analysed = false;
-    double lambda = 1e-6;
+    prepare(edges, variable, num_vars, ws);
+    Eigen::VectorXd b(n), diagonal(n), step(n);
+    double lambda = ws.lambda;
     std::vector<Rigid> trial;
     for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
         check_cancel(cancel);
-        triplets.clear();
-        b.setZero();
-        for (std::size_t i = 0; i < edges.size(); ++i) {
-            const PoseGraphEdge &e = edges[i];
-            const long vs = variable[e.source], vt = variable[e.target];
-            if (vs < 0 && vt < 0) continue;
-            const double w = weights[i];
-            const Linearised lin = linearise(e, poses);
-            const Matrix6d wi = w * e.information;
-            const long vars[2] = {vs, vt};
-            const Matrix6d *jac[2] = {&lin.d_source, &lin.d_target};
-            for (int a = 0; a < 2; ++a) {
-                if (vars[a] < 0) continue;
-                const Eigen::Matrix<double, 6, 6> jtw = jac[a]->transpose() * wi;
-                b.segment<6>(6 * vars[a]) += jtw * lin.error;
-                for (int c = 0; c < 2; ++c) {
-                    if (vars[c] < 0 || vars[c] > vars[a]) continue; // the lower triangle only
-                    const Matrix6d block = jtw * *jac[c];
-                    for (int r = 0; r < 6; ++r)
-                        for (int q = 0; q < 6; ++q)
-                            if (vars[a] != vars[c] || q <= r)
-                                triplets.emplace_back(6 * vars[a] + r, 6 * vars[c] + q, block(r, q));
-                }
-            }
-        }
-        for (Eigen::Index k = 0; k < n; ++k) triplets.emplace_back(k, k, 0.0); // the damping's slots
-        H.setFromTriplets(triplets.begin(), triplets.end());
-        diagonal = H.diagonal();
-        // A node whose every edge carries weight 0 (rejected loops) has no information: it stays where it is.
-        for (Eigen::Index k = 0; k < n; ++k)
-            if (diagonal[k] <= 0.0) diagonal[k] = 1.0;
-        if (!analysed) {
-            ldlt.analyzePattern(H);
-            analysed = true;
-        }
+        assemble(edges, weights, variable, poses, errors, ws, b);
+        for (long v = 0; v < num_vars; ++v) diagonal.segment<6>(6 * v) = ws.diagonal[v].diagonal();
         bool stepped = false;
         for (int attempt = 0; attempt < 30 && !stepped; ++attempt) {
             check_cancel(cancel);
-            Eigen::SparseMatrix<double> damped = H;
-            for (Eigen::Index k = 0; k < n; ++k)
-                damped.coeffRef(k, k) += lambda * diagonal[k] + (H.coeff(k, k) <= 0.0 ? 1.0 : 0.0);
-            ldlt.factorize(damped);
-            if (ldlt.info() != Eigen::Success) {
+            // A node whose every edge carries weight 0 (rejected loops) has no information: it stays where it is.
+            for (long v = 0; v < num_vars; ++v) {
+                ws.damped[v] = ws.diagonal[v];
+                for (int r = 0; r < 6; ++r) {
+                    const double h = diagonal[6 * v + r];
+                    ws.damped[v](r, r) += h <= 0.0 ? lambda + 1.0 : lambda * h;
+                }
+            }
+            if (!ws.ldlt.factorize(ws.damped, ws.off)) {
                 lambda *= 10.0;
                 continue;
             }
-            const Eigen::VectorXd step = ldlt.solve(-b);
+            step = -b;
+            ws.ldlt.solve(step);
             trial = poses;
             for (std::size_t node = 0; node < variable.size(); ++node)
                 if (variable[node] >= 0) trial[node] = poses[node] * se3_exp(step.segment<6>(6 * variable[node]));
-            const double trial_cost = total_cost(edges, weights, variable, trial);
+            const double trial_cost = total_cost(edges, weights, variable, trial, trial_errors);
             if (trial_cost <= cost) {
                 const double gain = cost - trial_cost;
                 poses.swap(trial);
+                errors.swap(trial_errors);
                 cost = trial_cost;
                 lambda = std::max(lambda / 10.0, 1e-12);
+                ws.lambda = lambda;
                 stepped = true;
                 const double moved = step.lpNorm<Eigen::Infinity>();
                 if ((gain <= options.relative_tolerance * std::max(cost, 1e-300) && moved <= options.step_tolerance) ||

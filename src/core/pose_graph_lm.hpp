@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: MIT
 // Weighted Levenberg-Marquardt over a pose graph: minimises sum_e w_e xi_e^T I_e xi_e over the nodes with a
-// variable, the others held where they are, on Eigen's sparse LDL^T of the normal equations.
+// variable, the others held where they are, on a sparse LDL^T of the normal equations by 6x6 blocks (block_ldlt.hpp).
 #pragma once
 
 #include <atomic>
 #include <cstddef>
 #include <vector>
 
+#include "block_ldlt.hpp"
 #include "pose_graph.hpp"
 
 KISSM_DETAIL_BEGIN
@@ -19,10 +20,26 @@ struct LmOptions {
     double step_tolerance = 1e-6;
 };
 
+// What a solve keeps for the next one with the same variables and edges: the factorisation's ordering and pattern
+// (one analysis serves every step and every graduated round, which change weights only) and the normal equations'
+// storage. A weight of 0 leaves its blocks in the pattern as explicit zeros.
+struct LmWorkspace {
+    std::vector<long> variable;  // the variables the analysis is for (empty: none yet)
+    std::size_t num_edges = 0;   // ...and the number of edges
+    std::vector<long> edge_pair; // per edge: its off-diagonal block, or -1 (a node fixed)
+    BlockLdlt ldlt;
+    // The damping the last accepted step left: a solve that starts where the last one ended (the next graduated
+    // round, the accepted edges' optimum) starts with it rather than at 1e-6, and saves the steps that would shrink it
+    // again (65 instead of 71 factorisations on the benchmark's 10,000-node drive with wrong closures;
+    // docs/pose-graph.md).
+    double lambda = 1e-6;
+    std::vector<Matrix6d> diagonal, damped, off; // the normal equations' blocks
+};
+
 // variable[n] is the node's variable number (0, 1, ...) or -1 when it stays fixed; an edge with weight 0 or with
 // both nodes fixed is skipped. Updates poses in place; returns the final cost. Throws Failure(Cancelled).
 double levenberg_marquardt(const std::vector<PoseGraphEdge> &edges, const std::vector<double> &weights,
                            const std::vector<long> &variable, std::vector<Rigid> &poses, const LmOptions &options,
-                           const std::atomic<int> *cancel);
+                           LmWorkspace &workspace, const std::atomic<int> *cancel);
 
 KISSM_DETAIL_END
