@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <set>
 #include <string>
@@ -34,8 +35,10 @@ namespace {
 struct AlignOptions {
     PairOptions pair; // register's settings; pair.files holds the scans file
     std::string out, results, map, g2o, tum, kitti, priors;
-    std::string pairs = "all"; // all, sequence or a pairs file
+    std::string pairs = "all"; // all, sequence, sessions or a pairs file
+    int32_t stride = 10;       // sessions: the grid across sessions
     bool have_window = false;
+    bool have_stride = false;
     bool have_loop_radius = false;
     std::string loop_option; // the first loop option given, for the message when --pairs is not sequence
     SequenceOptions sequence;
@@ -65,6 +68,9 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
         } else if (name == "--pairs") {
             opt.pairs = cur.value();
             if (opt.pairs.empty()) throw UsageError("--pairs: expected all, sequence or a pairs file");
+        } else if (name == "--stride") {
+            opt.stride = parse_int32(name, cur.value(), 1, 1000000);
+            opt.have_stride = true;
         } else if (name == "--window") {
             opt.sequence.window = parse_int32(name, cur.value(), 1, 1000000);
             opt.have_window = true;
@@ -108,8 +114,11 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
     require_voxel("align", opt.pair);
     if (opt.out.empty()) throw UsageError("align needs --out FILE, the poses (one line per scan)" + see);
     if (opt.have_window && opt.pairs != "sequence") throw UsageError("--window applies to --pairs sequence only");
-    if (!opt.loop_option.empty() && opt.pairs != "sequence") {
-        throw UsageError(opt.loop_option + " applies to --pairs sequence only");
+    const bool sessions = opt.pairs == "sessions";
+    if (opt.have_stride && !sessions) throw UsageError("--stride applies to --pairs sessions only");
+    if (!opt.loop_option.empty() && opt.pairs != "sequence" && !(sessions && opt.loop_option != "--priors")) {
+        throw UsageError(opt.loop_option + " applies to --pairs sequence" +
+                         (opt.loop_option == "--priors" ? std::string(" only") : std::string(" and sessions only")));
     }
     if (opt.pairs == "sequence" && opt.sequence.loops_per_scan > 0 && opt.sequence.window > 1 &&
         opt.sequence.window >= opt.sequence.loop_gap) {
@@ -142,6 +151,7 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
 std::vector<ScanPair> chosen_pairs(const AlignOptions &opt, const std::vector<Scan> &scans) {
     if (opt.pairs == "all") return all_pairs(scans.size());
     if (opt.pairs == "sequence") return sequence_candidates(scans.size(), opt.sequence);
+    if (opt.pairs == "sessions") return session_odometry(session_starts(scans));
     return pairs_from_file(opt.pairs, scans);
 }
 
@@ -202,46 +212,67 @@ size_t register_pending(const AlignOptions &opt, const kissm_config &config, con
     return run.pending.size();
 }
 
-// Registers the pairs the results file does not hold yet. --pairs sequence with loop candidates runs two
-// rounds: round 1's pairs (1..n1), then the loop candidates its records give (n1+1..), appended to *pairs.
-// Round 2's list depends on round 1's records only: a resumed run whose file holds all of round 1 finds the
-// same list before it checks the file, one that does not completes round 1 first. Returns how many ran.
+// The later rounds of a policy: each gives its pairs from the records of all the pairs before it (so_far), which
+// are all in the results file by then.
+using NextRound = std::function<std::vector<ScanPair>(const std::vector<DoneRecord> &, const std::vector<ScanPair> &)>;
+
+std::vector<NextRound> later_rounds(const AlignOptions &opt, const std::vector<Scan> &scans,
+                                    const std::vector<ScanPair> &round1) {
+    std::vector<NextRound> rounds;
+    if (opt.pairs == "sequence" && opt.sequence.loops_per_scan > 0) {
+        rounds.push_back([&opt, &scans, round1](const std::vector<DoneRecord> &records, const std::vector<ScanPair> &) {
+            return sequence_loops(scans.size(), round1, records, opt.sequence);
+        });
+    }
+    if (opt.pairs == "sessions") {
+        const std::vector<size_t> starts = session_starts(scans);
+        rounds.push_back([&opt, starts, round1](const std::vector<DoneRecord> &records, const std::vector<ScanPair> &) {
+            return session_loops_and_grid(starts, round1, records, opt.sequence, static_cast<size_t>(opt.stride));
+        });
+        rounds.push_back([&opt, starts](const std::vector<DoneRecord> &records, const std::vector<ScanPair> &so_far) {
+            const Alignment a = solve_alignment(starts.back(), so_far, records, opt.bound);
+            return sessions_across(starts, so_far, a.poses, a.placed, opt.sequence);
+        });
+    }
+    return rounds;
+}
+
+bool all_recorded(const std::vector<ScanPair> &pairs, const std::vector<DoneRecord> &records) {
+    std::vector<bool> seen(pairs.size(), false);
+    for (const DoneRecord &d : records) {
+        if (d.pair >= 1 && d.pair <= static_cast<int64_t>(pairs.size())) seen[static_cast<size_t>(d.pair - 1)] = true;
+    }
+    return std::find(seen.begin(), seen.end(), false) == seen.end();
+}
+
+// Registers the pairs the results file does not hold yet, round by round: round 1's pairs (1..n1), then each later
+// round's (numbered after the pairs before it), appended to *pairs. A round's list depends on the records before
+// it only: a resumed run finds the lists of the rounds whose earlier pairs are all in the file before it checks
+// the file, and completes the rest in order. Returns how many ran.
 size_t register_all(const AlignOptions &opt, const kissm_config &config, const std::vector<Scan> &scans,
                     std::vector<ScanPair> *pairs) {
     if (!opt.resume && exists_non_empty(opt.results)) {
         throw UsageError("'" + one_line(opt.results) +
                          "' exists and is not empty: --resume completes it, or remove it to start again");
     }
-    const bool loops = opt.pairs == "sequence" && opt.sequence.loops_per_scan > 0;
-    if (!loops) {
-        const std::vector<PairRow> rows = pair_rows(*pairs, scans);
-        return register_pending(opt, config, rows, done_pairs(opt, rows));
-    }
-    const std::vector<ScanPair> round1 = *pairs;
-    bool round1_done = false;
+    const std::vector<NextRound> rounds = later_rounds(opt, scans, *pairs);
+    size_t round = 0;
     if (opt.resume) {
         const std::vector<DoneRecord> records = read_all_records(opt.results, true);
-        std::vector<bool> seen(round1.size(), false);
-        for (const DoneRecord &d : records) {
-            if (d.pair >= 1 && d.pair <= static_cast<int64_t>(round1.size())) {
-                seen[static_cast<size_t>(d.pair - 1)] = true;
-            }
-        }
-        round1_done = std::find(seen.begin(), seen.end(), false) == seen.end();
-        if (round1_done) {
-            // The names are checked with round 2's rows below (resume_results).
-            const std::vector<ScanPair> round2 = sequence_loops(scans.size(), round1, records, opt.sequence);
-            pairs->insert(pairs->end(), round2.begin(), round2.end());
+        // The names are checked with the rows below (resume_results).
+        for (; round < rounds.size() && all_recorded(*pairs, records); ++round) {
+            const std::vector<ScanPair> next = rounds[round](records, *pairs);
+            pairs->insert(pairs->end(), next.begin(), next.end());
         }
     }
     std::vector<PairRow> rows = pair_rows(*pairs, scans);
     size_t ran = register_pending(opt, config, rows, done_pairs(opt, rows));
-    if (!round1_done) {
-        const std::vector<ScanPair> round2 =
-            sequence_loops(scans.size(), round1, read_all_records(opt.results), opt.sequence);
-        pairs->insert(pairs->end(), round2.begin(), round2.end());
+    for (; round < rounds.size(); ++round) {
+        const size_t from = pairs->size();
+        const std::vector<ScanPair> next = rounds[round](read_all_records(opt.results), *pairs);
+        pairs->insert(pairs->end(), next.begin(), next.end());
         rows = pair_rows(*pairs, scans);
-        if (!round2.empty()) ran += register_pending(opt, config, rows, {}, round1.size());
+        if (!next.empty()) ran += register_pending(opt, config, rows, {}, from);
     }
     return ran;
 }
@@ -252,7 +283,11 @@ int run_align_command(const AlignOptions &given) {
     if (!opt.pair.have_threads) opt.pair.threads = 1;
     const kissm_config config = pair_config(PairCommand::Register, opt.pair);
     const std::vector<Scan> scans = read_scans_file(opt.pair.files[0], opt.pair.source_format);
-    if (opt.pairs == "sequence" && !opt.have_loop_radius) opt.sequence.loop_radius = 30.0 * config.voxel_size;
+    if ((opt.pairs == "sequence" || opt.pairs == "sessions") && !opt.have_loop_radius)
+        opt.sequence.loop_radius = 30.0 * config.voxel_size;
+    if (opt.pairs == "sessions" &&
+        std::any_of(scans.begin(), scans.end(), [](const Scan &s) { return s.session.empty(); }))
+        throw UsageError("--pairs sessions needs a session column in the scans file, with a session for every scan");
     if (!opt.priors.empty()) opt.sequence.priors = read_priors(opt.priors, scans);
     std::vector<ScanPair> pairs = chosen_pairs(opt, scans);
 
@@ -292,81 +327,91 @@ int run_align_command(const AlignOptions &given) {
 } // namespace
 
 void print_align_help(std::FILE *out) {
-    std::fprintf(out,
-                 "usage: kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|FILE] [--jobs N]\n"
-                 "                   [--resume] [--map MAP.ply] [--g2o G.g2o] [options]\n"
-                 "\n"
-                 "Puts many scans into the first one's frame with no initial guess: registers the chosen pairs as\n"
-                 "`kissm batch` does (each scan described once, --jobs at a time, one JSON line per pair kept in a\n"
-                 "results file so that a killed run resumes), makes every valid registration a robust edge of a\n"
-                 "pose graph (its transform and information) and optimises it from the first scan. A scan that\n"
-                 "accepted edges do not join to the first one is reported as not placed, never given a guess.\n"
-                 "The same settings give the same poses as Python's kissm.multiway.align, bit for bit.\n"
-                 "\n"
-                 "SCANS.tsv: tab-separated; blank and '#' lines ignored; the first other line names the columns:\n"
-                 "scan (a name) and file (relative to SCANS.tsv's folder, or absolute) required, format optional\n"
-                 "(%s;\n"
-                 "empty = --format's, default auto); other columns are ignored.\n"
-                 "\n"
-                 "Align options:\n"
-                 "  --out FILE              the poses (required): a header line, then per scan in SCANS.tsv's order\n"
-                 "                          scan, placed (1/0), component (the smallest scan position joined to\n"
-                 "                          it; 0 when placed), T00 ... T23: the first 3 rows of T_world_scan\n"
-                 "                          (world = the first scan's frame), shortest round-trip numbers, nan\n"
-                 "                          where not placed\n"
-                 "  --pairs all|sequence|FILE  the pairs registered (default all): all = every pair once, the\n"
-                 "                          later scan the source; sequence = scans in acquisition order: each\n"
-                 "                          with the --window K scans after it (default 1: consecutive pairs),\n"
-                 "                          then loop candidates (below); FILE = a tab-separated file with\n"
-                 "                          source and target columns naming scans (blank and '#' ignored)\n"
-                 "  --window K              for --pairs sequence, 1..1000000 (default 1); above 1 with loop\n"
-                 "                          candidates, below --loop-gap (dead reckoning chains the k+1 -> k\n"
-                 "                          pairs only)\n"
-                 "  --loop-gap N            sequence: a loop candidate's scans are at least N apart (default 10)\n"
-                 "  --loops-per-scan N      sequence: at most N loop candidates per scan, the nearest (default 5;\n"
-                 "                          0 = none: the first round only)\n"
-                 "  --loop-radius R         sequence: candidates lie within R of each other (default 30 x the\n"
-                 "                          voxel), plus 2%% of the path between them (none with --priors)\n"
-                 "  --priors FILE           sequence: loop candidates from these world <- scan poses (GNSS, a SLAM\n"
-                 "                          run, an earlier --out) instead of the chained registrations: the\n"
-                 "                          poses table layout of --out (scan and T00 ... T23 columns); a scan\n"
-                 "                          without a row or with nan numbers has no prior and no candidates\n"
-                 "  --results FILE          the pair results, `kissm batch`'s lines named by scan (default\n"
-                 "                          POSES.tsv.pairs.jsonl). An existing non-empty FILE is refused unless\n"
-                 "                          --resume\n"
-                 "  --resume                keep FILE's finished pairs, run the others; the poses are the same\n"
-                 "                          bytes as an uninterrupted run's\n"
-                 "  --jobs N                pairs registered at once, 1..1024 (default 1)\n"
-                 "  --threads N             each job's worker threads (default 1 here; 0 = all hardware threads)\n"
-                 "  --map FILE.ply          the placed scans' points in the world frame (binary PLY)\n"
-                 "  --map-voxel V           with --map: one centroid per occupied voxel of size V instead\n"
-                 "  --g2o FILE              the graph in g2o's format (placed scans, accepted edges)\n"
-                 "  --tum FILE              the placed scans' poses in the TUM format (the position as timestamp)\n"
-                 "  --kitti FILE            every scan's pose in the KITTI format (nan where not placed)\n"
-                 "  --bound B               the pose graph's rejection bound on an edge's squared error\n"
-                 "                          (default %g, the 99.9%% chi-square quantile for 6 dof)\n"
-                 "  -q, --quiet             no progress line and no summary on stderr\n"
-                 "\n"
-                 "Loop candidates (Python's pairs=\"sequence\", the library's kissm_sequence_loops): the valid\n"
-                 "consecutive registrations (scan k+1 into k) chained into dead-reckoned positions (an invalid or\n"
-                 "missing one starts a new piece), or the --priors' positions; then for each scan j, the scans\n"
-                 "i <= j - N of its piece within R (+ 2%% of the path from i to j when dead-reckoned), the\n"
-                 "--loops-per-scan nearest, are registered in a second round (pairs numbered after the first's)\n"
-                 "and join the graph after the first round's edges.\n"
-                 "\n"
-                 "Registration: every option of `kissm register` but the output ones, as in `kissm batch`:\n"
-                 "--voxel or --preset, --refine (default gicp here: its information weighs the edges; with\n"
-                 "none, an edge's information comes from its rotation uncertainty and noise bound), the validity\n"
-                 "settings, --suppression, --rotation-dof, --up, ... ('kissm register --help'); --format applies\n"
-                 "to the scans without a format (--format-src and --format-tgt do not apply).\n"
-                 "\n"
-                 "Progress (pairs, rate, ETA) and a summary (scans placed, components, edges accepted and\n"
-                 "rejected) go to stderr; nothing to stdout.\n"
-                 "\n"
-                 "Exit status: 0 every scan placed, 1 some scans not placed (the outputs are still written),\n"
-                 "2 usage or input error (bad options, an unreadable or malformed scans or pairs file, an unknown\n"
-                 "scan, the results file exists without --resume or holds another pair list's results).\n",
-                 format_names(), KISSM_POSE_GRAPH_DEFAULT_BOUND);
+    std::fprintf(
+        out,
+        "usage: kissm align SCANS.tsv --voxel V --out POSES.tsv [--pairs all|sequence|sessions|FILE]\n"
+        "                   [--jobs N]\n"
+        "                   [--resume] [--map MAP.ply] [--g2o G.g2o] [options]\n"
+        "\n"
+        "Puts many scans into the first one's frame with no initial guess: registers the chosen pairs as\n"
+        "`kissm batch` does (each scan described once, --jobs at a time, one JSON line per pair kept in a\n"
+        "results file so that a killed run resumes), makes every valid registration a robust edge of a\n"
+        "pose graph (its transform and information) and optimises it from the first scan. A scan that\n"
+        "accepted edges do not join to the first one is reported as not placed, never given a guess.\n"
+        "The same settings give the same poses as Python's kissm.multiway.align, bit for bit.\n"
+        "\n"
+        "SCANS.tsv: tab-separated; blank and '#' lines ignored; the first other line names the columns:\n"
+        "scan (a name) and file (relative to SCANS.tsv's folder, or absolute) required, format optional\n"
+        "(%s;\n"
+        "empty = --format's, default auto) and session (for --pairs sessions) optional; other columns are\n"
+        "ignored.\n"
+        "\n"
+        "Align options:\n"
+        "  --out FILE              the poses (required): a header line, then per scan in SCANS.tsv's order\n"
+        "                          scan, placed (1/0), component (the smallest scan position joined to\n"
+        "                          it; 0 when placed), T00 ... T23: the first 3 rows of T_world_scan\n"
+        "                          (world = the first scan's frame), shortest round-trip numbers, nan\n"
+        "                          where not placed\n"
+        "  --pairs all|sequence|sessions|FILE  the pairs registered (default all): all = every pair once, the\n"
+        "                          later scan the source; sequence = scans in acquisition order: each\n"
+        "                          with the --window K scans after it (default 1: consecutive pairs),\n"
+        "                          then loop candidates (below); FILE = a tab-separated file with\n"
+        "                          source and target columns naming scans (blank and '#' ignored)\n"
+        "                          sessions = the scans file's session column groups the scans into\n"
+        "                          sessions (drives, robots, days; each session's scans together, in\n"
+        "                          acquisition order), merged as Python's align_sessions: each\n"
+        "                          session's consecutive pairs trusted, its loop candidates, a grid of\n"
+        "                          every --stride-th scan across sessions, then each placed scan with\n"
+        "                          the nearest placed scans of earlier sessions (a third round)\n"
+        "  --stride N              sessions: the grid across sessions, 1..1000000 (default 10)\n"
+        "  --window K              for --pairs sequence, 1..1000000 (default 1); above 1 with loop\n"
+        "                          candidates, below --loop-gap (dead reckoning chains the k+1 -> k\n"
+        "                          pairs only)\n"
+        "  --loop-gap N            sequence: a loop candidate's scans are at least N apart (default 10)\n"
+        "  --loops-per-scan N      sequence: at most N loop candidates per scan, the nearest (default 5;\n"
+        "                          0 = none: the first round only)\n"
+        "  --loop-radius R         sequence: candidates lie within R of each other (default 30 x the\n"
+        "                          voxel), plus 2%% of the path between them (none with --priors)\n"
+        "  --priors FILE           sequence: loop candidates from these world <- scan poses (GNSS, a SLAM\n"
+        "                          run, an earlier --out) instead of the chained registrations: the\n"
+        "                          poses table layout of --out (scan and T00 ... T23 columns); a scan\n"
+        "                          without a row or with nan numbers has no prior and no candidates\n"
+        "  --results FILE          the pair results, `kissm batch`'s lines named by scan (default\n"
+        "                          POSES.tsv.pairs.jsonl). An existing non-empty FILE is refused unless\n"
+        "                          --resume\n"
+        "  --resume                keep FILE's finished pairs, run the others; the poses are the same\n"
+        "                          bytes as an uninterrupted run's\n"
+        "  --jobs N                pairs registered at once, 1..1024 (default 1)\n"
+        "  --threads N             each job's worker threads (default 1 here; 0 = all hardware threads)\n"
+        "  --map FILE.ply          the placed scans' points in the world frame (binary PLY)\n"
+        "  --map-voxel V           with --map: one centroid per occupied voxel of size V instead\n"
+        "  --g2o FILE              the graph in g2o's format (placed scans, accepted edges)\n"
+        "  --tum FILE              the placed scans' poses in the TUM format (the position as timestamp)\n"
+        "  --kitti FILE            every scan's pose in the KITTI format (nan where not placed)\n"
+        "  --bound B               the pose graph's rejection bound on an edge's squared error\n"
+        "                          (default %g, the 99.9%% chi-square quantile for 6 dof)\n"
+        "  -q, --quiet             no progress line and no summary on stderr\n"
+        "\n"
+        "Loop candidates (Python's pairs=\"sequence\", the library's kissm_sequence_loops): the valid\n"
+        "consecutive registrations (scan k+1 into k) chained into dead-reckoned positions (an invalid or\n"
+        "missing one starts a new piece), or the --priors' positions; then for each scan j, the scans\n"
+        "i <= j - N of its piece within R (+ 2%% of the path from i to j when dead-reckoned), the\n"
+        "--loops-per-scan nearest, are registered in a second round (pairs numbered after the first's)\n"
+        "and join the graph after the first round's edges.\n"
+        "\n"
+        "Registration: every option of `kissm register` but the output ones, as in `kissm batch`:\n"
+        "--voxel or --preset, --refine (default gicp here: its information weighs the edges; with\n"
+        "none, an edge's information comes from its rotation uncertainty and noise bound), the validity\n"
+        "settings, --suppression, --rotation-dof, --up, ... ('kissm register --help'); --format applies\n"
+        "to the scans without a format (--format-src and --format-tgt do not apply).\n"
+        "\n"
+        "Progress (pairs, rate, ETA) and a summary (scans placed, components, edges accepted and\n"
+        "rejected) go to stderr; nothing to stdout.\n"
+        "\n"
+        "Exit status: 0 every scan placed, 1 some scans not placed (the outputs are still written),\n"
+        "2 usage or input error (bad options, an unreadable or malformed scans or pairs file, an unknown\n"
+        "scan, the results file exists without --resume or holds another pair list's results).\n",
+        format_names(), KISSM_POSE_GRAPH_DEFAULT_BOUND);
 }
 
 int run_align(const std::vector<std::string> &args) {

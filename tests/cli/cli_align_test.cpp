@@ -320,16 +320,19 @@ void test_align_usage() {
         expect_usage_error(with({"--pairs", "sequence", "--window", bad}), "--window");
     }
     expect_usage_error(with({"--window", "2"}), "--window applies to --pairs sequence only");
+    expect_usage_error(with({"--stride", "2"}), "--stride applies to --pairs sessions only");
+    expect_usage_error(with({"--pairs", "sessions", "--stride", "0"}), "--stride");
+    expect_usage_error(with({"--pairs", "sessions", "--priors", out}), "--priors applies to --pairs sequence only");
     // Loop candidates' options: their ranges, --pairs sequence only, a window that would repeat them.
     expect_usage_error(with({"--pairs", "sequence", "--loop-gap", "0"}), "--loop-gap");
     expect_usage_error(with({"--pairs", "sequence", "--loop-gap", "x"}), "--loop-gap");
     expect_usage_error(with({"--pairs", "sequence", "--loop-radius", "-1"}), "--loop-radius");
     expect_usage_error(with({"--pairs", "sequence", "--loop-radius", "0"}), "--loop-radius");
     expect_usage_error(with({"--pairs", "sequence", "--loops-per-scan", "-1"}), "--loops-per-scan");
-    expect_usage_error(with({"--loop-gap", "2"}), "--loop-gap applies to --pairs sequence only");
+    expect_usage_error(with({"--loop-gap", "2"}), "--loop-gap applies to --pairs sequence and sessions only");
     expect_usage_error(with({"--pairs", "all", "--loops-per-scan", "0"}),
-                       "--loops-per-scan applies to --pairs sequence only");
-    expect_usage_error(with({"--loop-radius", "3"}), "--loop-radius applies to --pairs sequence only");
+                       "--loops-per-scan applies to --pairs sequence and sessions only");
+    expect_usage_error(with({"--loop-radius", "3"}), "--loop-radius applies to --pairs sequence and sessions only");
     expect_usage_error(with({"--pairs", "sequence", "--window", "3", "--loop-gap", "3"}),
                        "--window 3 with loop candidates needs --loop-gap above 3");
     expect_usage_error(with({"--jobs", "0"}), "--jobs");
@@ -558,6 +561,42 @@ void test_align_run() {
     const std::vector<std::string> partial_lines = lines_of(read_file(work("partial.tsv.pairs.jsonl")));
     REQUIRE(partial_lines.size() == 4); // the consecutive pairs, then d-b alone (c-a and d-a need a's prior)
     CHECK(contains(partial_lines[3], "\"pair\": 4, \"source\": \"d\", \"target\": \"b\""));
+
+    // Two sessions (a, b) and (c, d), as Python's align_sessions: each session's odometry trusted (b-a, d-c), the
+    // grid across at stride 1 (c-a, c-b, d-a, d-b), then nothing left to pair from the merged poses.
+    write_file(work("sessions.tsv"), "scan\tfile\tsession\na\tscan_a.ply\tfirst\nb\tscan_b.ply\tfirst\n"
+                                     "c\tscan_c.ply\tsecond\nd\tscan_d.ply\tsecond\n");
+    const Run two_sessions = run({"align", work("sessions.tsv"), "--voxel", kVoxel, "--out", work("sessions_out.tsv"),
+                                  "--pairs", "sessions", "--stride", "1"});
+    CHECK_MSG(two_sessions.code == 0, "sessions: exit %d: %s", two_sessions.code, two_sessions.err.c_str());
+    CHECK_MSG(contains(two_sessions.err, "4 placed, 1 component; 6 pairs: 6 valid (6 edges accepted"), "%s",
+              two_sessions.err.c_str());
+    check_placed(read_file(work("sessions_out.tsv")), scene, "--pairs sessions");
+    const std::vector<std::string> session_lines = lines_of(read_file(work("sessions_out.tsv.pairs.jsonl")));
+    const char *const session_order[6] = {"b a", "d c", "c a", "c b", "d a", "d b"};
+    REQUIRE(session_lines.size() == 6);
+    for (size_t k = 0; k < 6; ++k) {
+        std::string error;
+        const Json j = json_parse(session_lines[k], &error);
+        CHECK_MSG(j.at("pair").as_double() == static_cast<double>(k + 1) &&
+                      j.at("source").text + " " + j.at("target").text == session_order[k],
+                  "session pair %zu: %s", k + 1, session_lines[k].c_str());
+    }
+    // Stride 2: the grid is c-a alone; the merged poses then pair c and d with their nearest of a and b.
+    const Run strided = run({"align", work("sessions.tsv"), "--voxel", kVoxel, "--out", work("strided.tsv"), "--pairs",
+                             "sessions", "--stride", "2", "--loops-per-scan", "1", "-q"});
+    CHECK_EQ_INT(strided.code, 0);
+    check_placed(read_file(work("strided.tsv")), scene, "--pairs sessions --stride 2");
+    const std::vector<std::string> strided_lines = lines_of(read_file(work("strided.tsv.pairs.jsonl")));
+    REQUIRE(strided_lines.size() >= 3);
+    CHECK(contains(strided_lines[2], "\"pair\": 3, \"source\": \"c\", \"target\": \"a\""));
+    // A session interrupted by another, and a scans file without sessions, are refused.
+    write_file(work("split.tsv"), "scan\tfile\tsession\na\tscan_a.ply\t1\nb\tscan_b.ply\t2\nc\tscan_c.ply\t1\n");
+    expect_usage_error(
+        {"align", work("split.tsv"), "--voxel", kVoxel, "--out", work("split_out.tsv"), "--pairs", "sessions"},
+        "line 4: session '1' began at line 2");
+    expect_usage_error({"align", scans, "--voxel", kVoxel, "--out", work("nosession.tsv"), "--pairs", "sessions"},
+                       "needs a session column");
 
     // A pairs file (a star on c, one pair the other way round), its own --results.
     write_file(work("star.tsv"), "# star\nsource\ttarget\na\tc\nb\tc\nd\tc\n");

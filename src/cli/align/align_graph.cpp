@@ -76,8 +76,8 @@ Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, cons
         }
         std::copy(record->transform.begin(), record->transform.end(), edge.transform);
         edge_information(*record, edge.information);
-        status = kissm_pose_graph_add_edge(graph.get(), edge.source, edge.target, edge.transform, edge.information, 1,
-                                           nullptr);
+        status = kissm_pose_graph_add_edge(graph.get(), edge.source, edge.target, edge.transform, edge.information,
+                                           pairs[k].trusted ? 0 : 1, nullptr);
         if (status != KISSM_OK) {
             a.skipped.push_back(what + ": the pose graph refuses it: " + library_error(status));
             continue;

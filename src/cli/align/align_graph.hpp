@@ -39,8 +39,9 @@ struct Alignment {
 void edge_information(const DoneRecord &record, double information[36]);
 
 // Builds the graph of `scans` nodes from the records (any order; each pair of `pairs` exactly once, as
-// scan_results(..., with_poses = true) read them), adds the valid ones in pair order as robust edges and
-// optimises it with anchor 0 and `bound`. A UsageError when a pair has no record or the library fails.
+// scan_results(..., with_poses = true) read them), adds the valid ones in pair order as edges (trusted for a
+// trusted pair, robust otherwise) and optimises it with anchor 0 and `bound`. A UsageError when a pair has no record or
+// the library fails.
 Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, const std::vector<DoneRecord> &records,
                           double bound);
 

@@ -72,6 +72,80 @@ std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &
     return candidates(steps.data(), valid.data(), nullptr);
 }
 
+std::vector<size_t> session_starts(const std::vector<Scan> &scans) {
+    std::vector<size_t> starts;
+    std::map<std::string, size_t> first_line;
+    for (size_t k = 0; k < scans.size(); ++k) {
+        if (k > 0 && scans[k].session == scans[k - 1].session) continue;
+        const auto seen = first_line.emplace(scans[k].session, scans[k].line);
+        if (!seen.second) {
+            throw UsageError("scans file line " + std::to_string(scans[k].line) + ": session '" +
+                             one_line(scans[k].session) + "' began at line " + std::to_string(seen.first->second) +
+                             " and another came between; list each session's scans together, in acquisition order");
+        }
+        starts.push_back(k);
+    }
+    starts.push_back(scans.size());
+    return starts;
+}
+
+std::vector<ScanPair> session_odometry(const std::vector<size_t> &starts) {
+    std::vector<ScanPair> pairs;
+    for (size_t s = 0; s + 1 < starts.size(); ++s)
+        for (size_t k = starts[s]; k + 1 < starts[s + 1]; ++k) pairs.push_back({k + 1, k, true});
+    return pairs;
+}
+
+std::vector<ScanPair> session_loops_and_grid(const std::vector<size_t> &starts, const std::vector<ScanPair> &round1,
+                                             const std::vector<DoneRecord> &records, const SequenceOptions &opt,
+                                             size_t stride) {
+    // The whole list dead-reckoned: no odometry joins two sessions, so each starts a piece of its own, as Python
+    // chains each session alone.
+    const size_t n = starts.back();
+    const std::vector<ScanPair> loops = sequence_loops(n, round1, records, opt);
+    std::vector<ScanPair> pairs;
+    size_t next = 0;
+    for (size_t s = 0; s + 1 < starts.size(); ++s) {
+        for (; next < loops.size() && loops[next].source < starts[s + 1]; ++next) pairs.push_back(loops[next]);
+        for (size_t t = 0; t < s; ++t)
+            for (size_t j = starts[s]; j < starts[s + 1]; j += stride)
+                for (size_t i = starts[t]; i < starts[t + 1]; i += stride) pairs.push_back({j, i});
+    }
+    return pairs;
+}
+
+std::vector<ScanPair> sessions_across(const std::vector<size_t> &starts, const std::vector<ScanPair> &so_far,
+                                      const std::vector<double> &poses, const std::vector<uint8_t> &placed,
+                                      const SequenceOptions &opt) {
+    const size_t n = starts.back();
+    std::vector<size_t> session(n);
+    for (size_t s = 0; s + 1 < starts.size(); ++s)
+        for (size_t k = starts[s]; k < starts[s + 1]; ++k) session[k] = s;
+    std::vector<std::pair<size_t, size_t>> done;
+    for (const ScanPair &p : so_far) done.push_back({p.source, p.target});
+    std::sort(done.begin(), done.end());
+    std::vector<ScanPair> pairs;
+    std::vector<std::pair<double, size_t>> near;
+    for (size_t k = 0; k < n; ++k) {
+        if (!placed[k]) continue;
+        near.clear();
+        for (size_t e = 0; e < n; ++e) {
+            if (!placed[e] || session[e] >= session[k]) continue;
+            const double dx = poses[16 * e + 3] - poses[16 * k + 3], dy = poses[16 * e + 7] - poses[16 * k + 7],
+                         dz = poses[16 * e + 11] - poses[16 * k + 11];
+            const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+            if (d <= opt.loop_radius) near.push_back({d, e});
+        }
+        std::sort(near.begin(), near.end());
+        const size_t keep = std::min(near.size(), static_cast<size_t>(std::max(opt.loops_per_scan, 0)));
+        for (size_t c = 0; c < keep; ++c) {
+            if (!std::binary_search(done.begin(), done.end(), std::make_pair(k, near[c].second)))
+                pairs.push_back({k, near[c].second});
+        }
+    }
+    return pairs;
+}
+
 std::vector<ScanPair> pairs_from_file(const std::string &path, const std::vector<Scan> &scans) {
     std::map<std::string, size_t> position;
     for (size_t k = 0; k < scans.size(); ++k) position[scans[k].name] = k;

@@ -17,6 +17,7 @@ namespace kissm_cli {
 // Positions in the scans file; the source is the scan whose points the pair's transform moves.
 struct ScanPair {
     size_t source = 0, target = 0;
+    bool trusted = false; // a session's odometry (--pairs sessions): an edge the graph always keeps
 };
 
 // "all": every pair once, the later scan the source: (j, i) for i < j, i outer, j inner (the order of Python's
@@ -42,6 +43,22 @@ std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &o
 // Depends on the records only, so that a resumed run finds the same list. A UsageError if the library fails.
 std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &round1,
                                      const std::vector<DoneRecord> &records, const SequenceOptions &opt);
+
+// "sessions" (Python's kissm.multiway.align_sessions): the scans grouped by their session column, in order.
+// Round 1: each session's consecutive pairs (k+1, k), trusted. Round 2 (session_loops_and_grid): for each session
+// s in order, its loop candidates from its round-1 records (as sequence_loops, within the session), then every
+// opt.stride-th scan j of s with every opt.stride-th scan i of each earlier session t (t outer, j, then i).
+// Round 3 (sessions_across): from the poses the graph of rounds 1 and 2 gives, each placed scan k of a later
+// session (in order) with the loops_per_scan nearest placed scans e of earlier sessions within the radius (by
+// distance sqrt((dx*dx + dy*dy) + dz*dz), then e), unless (k, e) was registered already.
+std::vector<size_t> session_starts(const std::vector<Scan> &scans); // each session's first scan, then the count
+std::vector<ScanPair> session_odometry(const std::vector<size_t> &starts);
+std::vector<ScanPair> session_loops_and_grid(const std::vector<size_t> &starts, const std::vector<ScanPair> &round1,
+                                             const std::vector<DoneRecord> &records, const SequenceOptions &opt,
+                                             size_t stride);
+std::vector<ScanPair> sessions_across(const std::vector<size_t> &starts, const std::vector<ScanPair> &so_far,
+                                      const std::vector<double> &poses, const std::vector<uint8_t> &placed,
+                                      const SequenceOptions &opt);
 
 // A pairs file: `kissm batch`'s table (source and target columns; blank and '#' lines ignored), naming scans
 // by their `scan` names. A UsageError names the line of an unknown scan or a scan paired with itself.

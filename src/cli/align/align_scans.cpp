@@ -18,6 +18,7 @@ std::vector<Scan> parse_scans(const std::string &text, const std::string &name, 
     const int scan_col = header_column(t.header, "scan", t.header_where);
     const int file_col = header_column(t.header, "file", t.header_where);
     const int format_col = header_column(t.header, "format", t.header_where);
+    const int session_col = header_column(t.header, "session", t.header_where);
     if (scan_col < 0 || file_col < 0) {
         throw UsageError(t.header_where + ": the header has no '" + (scan_col < 0 ? "scan" : "file") +
                          "' column (expected tab-separated column names: scan, file and optionally format)");
@@ -40,6 +41,7 @@ std::vector<Scan> parse_scans(const std::string &text, const std::string &name, 
         scan.file = resolve_pair_path(scans_file, file);
         const std::string format = format_col >= 0 ? r.fields[static_cast<size_t>(format_col)] : std::string();
         scan.format = format.empty() ? default_format : parse_format(r.where + ": format", format);
+        if (session_col >= 0) scan.session = r.fields[static_cast<size_t>(session_col)];
         scans.push_back(scan);
     }
     if (scans.empty()) throw UsageError(name + ": no scans (one line per scan after the header)");
