@@ -386,7 +386,7 @@ void test_align_usage() {
     const Run help = run({"align", "--help"});
     CHECK_EQ_INT(help.code, 0);
     CHECK(starts_with(help.out, "usage: kissm align SCANS.tsv"));
-    CHECK(contains(help.out, "--pairs all|sequence|FILE") && contains(help.out, "default gicp here") &&
+    CHECK(contains(help.out, "--pairs all|sequence|sessions|FILE") && contains(help.out, "default gicp here") &&
           contains(help.out, "Exit status: 0"));
     CHECK(help.err.empty());
     const Run help2 = run({"help", "align"});
