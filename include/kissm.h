@@ -937,6 +937,28 @@ KISSM_API int32_t kissm_features_serialize(const kissm_features *features, void 
  */
 KISSM_API int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_features **out_features);
 
+/** @brief Numbers in a signature (kissm_features_signature()). */
+#define KISSM_SIGNATURE_SIZE 82
+/**
+ * @brief A fixed-length summary of the features for finding scans that see the same place: the Euclidean
+ *        distance between two clouds' signatures is small when they overlap (loop candidates among thousands
+ *        of scans, docs/multiway.md "Loop candidates by similarity").
+ *
+ * Three blocks, each of unit length: the mean of the keypoints' FPFH descriptors (33 numbers), their standard
+ * deviation per bin (33), and the square roots of the shares of keypoints per band of 12 voxels of distance from
+ * the keypoints' centroid (16, the last band open). It depends on no coordinate frame (a rotated or moved cloud
+ * gives nearly the same numbers; voxelisation differs a little), is computed from what the features serialise
+ * (loaded features give the same bits), on the calling thread in a fixed order (the same bits whatever the
+ * matcher's threads), and costs a pass over the keypoints. Features without keypoints give all zeros. Compare
+ * signatures of features computed with the same voxel size only.
+ * @param[in] features The features.
+ * @param[out] out_signature #KISSM_SIGNATURE_SIZE numbers; untouched on failure.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p features or @p out_signature is NULL.
+ * @retval KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_features_signature(const kissm_features *features, double *out_signature);
+
 /** @} */
 
 /* ------------------------------------------------------------------------------------------------ */

@@ -29,6 +29,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/confidence.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/features_codec.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/signature.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/se3.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_tree.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/block_ldlt.cpp

@@ -8,9 +8,12 @@
 #include "capi/conversions.hpp"
 #include "capi/handles.hpp"
 #include "core/features_codec.hpp"
+#include "core/signature.hpp"
 
 using namespace kissm::detail::capi;
 namespace core = kissm::detail;
+
+static_assert(core::kSignatureSize == KISSM_SIGNATURE_SIZE, "kissm.h publishes the signature's size");
 
 extern "C" {
 
@@ -91,6 +94,17 @@ int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_featu
         auto f = std::make_unique<kissm_features>();
         f->data = core::decode_features(static_cast<const std::uint8_t *>(bytes), static_cast<std::size_t>(size), ctx);
         *out_features = f.release();
+        return ok();
+    });
+}
+
+int32_t kissm_features_signature(const kissm_features *features, double *out_signature) {
+    return guarded("kissm_features_signature", [&] {
+        require_non_null(features, "features");
+        require_non_null(out_signature, "out_signature");
+        const core::CloudFeatures &f = features->data;
+        core::cloud_signature(f.voxels.points, f.descriptors.keypoint, f.descriptors.values.data(), f.params.voxel_size,
+                              out_signature);
         return ok();
     });
 }

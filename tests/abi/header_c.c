@@ -79,6 +79,8 @@ PIN(KISSM_PAIRS_SEQUENCE, 1)
 PIN(KISSM_PAIRS_LIST, 2)
 PIN(KISSM_PAIRS_SESSIONS, 3)
 
+PIN(KISSM_SIGNATURE_SIZE, 82)
+
 /* The version string is a string literal. */
 const char kissm_header_test_version[] = KISSM_VERSION_STRING;
 
@@ -106,6 +108,7 @@ struct kissm_header_test_api {
     int32_t (*register_features)(kissm_matcher *, const kissm_features *, const kissm_features *, kissm_result *);
     int32_t (*features_serialize)(const kissm_features *, void *, uint64_t, uint64_t *);
     int32_t (*features_deserialize)(const void *, uint64_t, kissm_features **);
+    int32_t (*features_signature)(const kissm_features *, double *);
     int32_t (*read_points)(const char *, int32_t, kissm_cloud **);
     void (*cloud_destroy)(kissm_cloud *);
     uint64_t (*cloud_count)(const kissm_cloud *);
@@ -148,6 +151,7 @@ const struct kissm_header_test_api kissm_header_test_api = {
     .register_features = kissm_register_features,
     .features_serialize = kissm_features_serialize,
     .features_deserialize = kissm_features_deserialize,
+    .features_signature = kissm_features_signature,
     .read_points = kissm_read_points,
     .cloud_destroy = kissm_cloud_destroy,
     .cloud_count = kissm_cloud_count,

@@ -109,6 +109,21 @@ static void test_null_pointers(void) {
     CHECK(msg_has("result"));
     scn_result_poison(&r);
     CHECK_EQ_INT(kissm_register_features(g_m, fs, ft, &r), KISSM_OK);
+
+    /* kissm_features_signature: nothing written */
+    {
+        double sig[KISSM_SIGNATURE_SIZE];
+        int k, untouched = 1;
+        for (k = 0; k < KISSM_SIGNATURE_SIZE; ++k) sig[k] = -7.0;
+        CHECK_EQ_INT(kissm_features_signature(NULL, sig), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(msg_has("features"));
+        for (k = 0; k < KISSM_SIGNATURE_SIZE; ++k) untouched &= sig[k] == -7.0;
+        CHECK(untouched);
+        CHECK_EQ_INT(kissm_features_signature(fs, NULL), KISSM_ERR_NULL_ARGUMENT);
+        CHECK(msg_has("out_signature"));
+        CHECK_EQ_INT(kissm_features_signature(fs, sig), KISSM_OK);
+        CHECK(strcmp(kissm_last_error_message(), "") == 0);
+    }
     CHECK(r.valid == 1);
     kissm_features_destroy(fs);
     kissm_features_destroy(ft);

@@ -172,6 +172,16 @@ static void test_features_thread_counts(void) {
     scn_result_poison(&r);
     CHECK_EQ_INT(kissm_register_features(m1, s1, t4, &r), KISSM_OK);
     CHECK(scn_result_equal(&g_reference, &r));
+    {
+        /* signatures of features made at 1 and 4 threads: the same bits */
+        kissm_features *s4 = NULL;
+        double a[KISSM_SIGNATURE_SIZE], b[KISSM_SIGNATURE_SIZE];
+        REQUIRE(kissm_features_compute(m4, &s, &s4) == KISSM_OK);
+        CHECK_EQ_INT(kissm_features_signature(s1, a), KISSM_OK);
+        CHECK_EQ_INT(kissm_features_signature(s4, b), KISSM_OK);
+        CHECK(memcmp(a, b, sizeof a) == 0);
+        kissm_features_destroy(s4);
+    }
     kissm_features_destroy(s1);
     kissm_features_destroy(t4);
     kissm_destroy(m1);

@@ -423,6 +423,72 @@ static void test_threads(void) {
     free(jobs);
 }
 
+/* The signature of a cloud's features: unit-length blocks, nearly the same for the cloud moved rigidly (the
+ * voxel grid differs) and far from another place's; zeros without keypoints. */
+static double signature_distance(const double *a, const double *b) {
+    double sum = 0.0;
+    int k;
+    for (k = 0; k < KISSM_SIGNATURE_SIZE; ++k) sum += (a[k] - b[k]) * (a[k] - b[k]);
+    return sqrt(sum);
+}
+
+static void signature_of(kissm_matcher *m, const scn_cloud *cloud, double *out) {
+    kissm_points p = scn_points(cloud);
+    kissm_features *f = NULL;
+    REQUIRE(kissm_features_compute(m, &p, &f) == KISSM_OK);
+    CHECK_EQ_INT(kissm_features_signature(f, out), KISSM_OK);
+    kissm_features_destroy(f);
+}
+
+static void test_signature(void) {
+    static const int blocks[4] = {0, 33, 66, KISSM_SIGNATURE_SIZE};
+    kissm_config c = scn_config(VOXEL);
+    kissm_matcher *m = NULL;
+    scn_cloud moved, other, line;
+    scn_pose pose;
+    const double axis[3] = {1.0, -2.0, 3.0}, shift[3] = {40.0, -25.0, 3.0};
+    double here[KISSM_SIGNATURE_SIZE], there[KISSM_SIGNATURE_SIZE], elsewhere[KISSM_SIGNATURE_SIZE];
+    double zeros[KISSM_SIGNATURE_SIZE], near, far;
+    int b, k;
+    REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+    signature_of(m, &g_pair.source, here);
+    for (b = 0; b < 3; ++b) {
+        double squares = 0.0;
+        for (k = blocks[b]; k < blocks[b + 1]; ++k) squares += here[k] * here[k];
+        CHECK_MSG(fabs(squares - 1.0) < 1e-12, "block %d: squared length %.17g", b, squares);
+    }
+    scn_cloud_init(&moved);
+    scn_cloud_copy(&moved, &g_pair.source);
+    scn_pose_axis_angle(&pose, axis, 2.6, shift);
+    scn_cloud_apply(&moved, &pose);
+    signature_of(m, &moved, there);
+    scn_cloud_init(&other);
+    scn_make_scene(&other, 11, 5, 15.0, 0.01);
+    signature_of(m, &other, elsewhere);
+    near = signature_distance(here, there);
+    far = signature_distance(here, elsewhere);
+    fprintf(stderr, "  signature distance: moved %.4f, another place %.4f\n", near, far);
+    CHECK(near < 0.1);
+    CHECK(far > 3.0 * near);
+
+    scn_cloud_init(&line);
+    scn_make_line(&line, 2, 2000, 0.001);
+    {
+        kissm_points p = scn_points(&line);
+        kissm_features *f = NULL;
+        REQUIRE(kissm_features_compute(m, &p, &f) == KISSM_OK);
+        CHECK_EQ_INT(kissm_features_num_keypoints(f), 0);
+        for (k = 0; k < KISSM_SIGNATURE_SIZE; ++k) zeros[k] = 1.0;
+        CHECK_EQ_INT(kissm_features_signature(f, zeros), KISSM_OK);
+        for (k = 0; k < KISSM_SIGNATURE_SIZE; ++k) CHECK(zeros[k] == 0.0);
+        kissm_features_destroy(f);
+    }
+    scn_cloud_free(&moved);
+    scn_cloud_free(&other);
+    scn_cloud_free(&line);
+    kissm_destroy(m);
+}
+
 /* A failing kissm_features_compute leaves *out alone; cancelling one does too. */
 static int32_t cancel_at_features(void *user, int32_t stage, double fraction) {
     (void)user;
@@ -465,6 +531,7 @@ int main(void) {
     RUN_TEST(test_one_against_many);
     RUN_TEST(test_threads);
     RUN_TEST(test_compute_failures);
+    RUN_TEST(test_signature);
     for (i = 0; i < NUM_TARGETS; ++i) scn_cloud_free(&g_targets[i]);
     scn_pair_free(&g_pair);
     return TEST_SUMMARY();

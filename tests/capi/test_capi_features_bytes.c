@@ -209,6 +209,13 @@ static void round_trip(int32_t refine_mode, int32_t suppression) {
     CHECK_EQ_INT(kissm_refine_features(m, ds, dt, initial, &b), KISSM_OK);
     CHECK(memcmp(a.transform, b.transform, sizeof a.transform) == 0);
     CHECK_MSG(scn_result_equal(&a, &b), "refine_features from bytes differs");
+    {
+        /* the signature of loaded features: the original's bits */
+        double sa[KISSM_SIGNATURE_SIZE], sb[KISSM_SIGNATURE_SIZE];
+        CHECK_EQ_INT(kissm_features_signature(fs, sa), KISSM_OK);
+        CHECK_EQ_INT(kissm_features_signature(ds, sb), KISSM_OK);
+        CHECK(memcmp(sa, sb, sizeof sa) == 0);
+    }
     /* the memory they hold: the same arrays and the same rebuilt indexes, up to vector slack */
     CHECK(kissm_features_memory_bytes(ds) <= kissm_features_memory_bytes(fs));
     CHECK(kissm_features_memory_bytes(ds) * 10 >= kissm_features_memory_bytes(fs) * 9);

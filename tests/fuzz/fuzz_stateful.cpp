@@ -3,10 +3,11 @@
 // reused, refinements from decoded transforms (kissm_refine, kissm_refine_features), a cancellation request
 // between calls, configs read back. Invariants on top of fuzz_register's: repeating a call on the reused
 // handle gives the identical result, features give the same result as the direct call (a refinement from
-// features differs only in the descriptor counts it reports), a cancel request made between calls does
-// not leak into the next one, and a multiway alignment of the features there are (kissm_align_features, with
-// decoded options, valid or not) succeeds exactly when its options are valid, places scan 0 at the identity,
-// every placed scan at a finite rigid pose and the others at NaN, and repeated gives the same bits.
+// features differs only in the descriptor counts it reports), a features' signature is sane and repeatable, a
+// cancel request made between calls does not leak into the next one, and a multiway alignment of the features
+// there are (kissm_align_features, with decoded options, valid or not) succeeds exactly when its options are
+// valid, places scan 0 at the identity, every placed scan at a finite rigid pose and the others at NaN, and
+// repeated gives the same bits.
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -118,6 +119,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             if (features[a])
                 require(kissm_features_memory_bytes(features[a]) >=
                         kissm_features_num_voxels(features[a]) * 12 + kissm_features_num_keypoints(features[a]) * 264);
+            // the signature: always computed, finite, in [0, 1] (unit-length blocks of non-negative numbers), and
+            // the same bits when asked again
+            if (features[a]) {
+                double signature[KISSM_SIGNATURE_SIZE], again[KISSM_SIGNATURE_SIZE];
+                require(kissm_features_signature(features[a], signature) == KISSM_OK);
+                require(kissm_features_signature(features[a], again) == KISSM_OK);
+                require(std::memcmp(signature, again, sizeof signature) == 0);
+                for (const double v : signature) require(std::isfinite(v) && v >= 0.0 && v <= 1.0);
+            }
             break;
         }
         case 2: { // register from features: same as the direct call when both exist

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """Features.to_bytes / Features.from_bytes and pickling: byte round trips, registrations from loaded features
 bitwise equal to the originals' (in this process and in a spawned worker), malformed bytes, wrong argument types
-and features of another configuration; on the committed pair and on a KITTI 07 keyframe pair of the real data."""
+and features of another configuration, and Features.signature (loaded, other thread counts, a moved cloud); on the
+committed pair and on a KITTI 07 keyframe pair of the real data."""
 
 from __future__ import annotations
 
@@ -82,6 +83,28 @@ def test_bytes_round_trip(case: Case, described: Any) -> None:
             assert kissm.Features.from_bytes(like).to_bytes() == data
         if len(data) % 8 == 0:
             assert kissm.Features.from_bytes(np.frombuffer(data, dtype=np.float64)).to_bytes() == data
+
+
+def test_signature_of_loaded_features_and_other_thread_counts(case: Case, described: Any) -> None:
+    """Features.signature(): (KISSM_SIGNATURE_SIZE,) float64 of three unit-length blocks, the same bits for loaded
+    features and for features computed at 1 and 4 threads, nearly the same for the cloud moved rigidly (the voxel
+    grid differs) and farther from the other cloud of the pair."""
+    source, target, _ = described
+    signature = source.signature()
+    assert signature.shape == (kissm._ffi.lib.KISSM_SIGNATURE_SIZE,) == (82,) and signature.dtype == np.float64
+    for block in (signature[:33], signature[33:66], signature[66:]):
+        assert abs(float(block @ block) - 1.0) < 1e-12 and (block >= 0).all()
+    assert kissm.Features.from_bytes(source.to_bytes()).signature().tobytes() == signature.tobytes()
+    for threads in (1, 4):
+        with kissm.Matcher(case.config.replace(num_threads=threads)) as matcher:
+            assert matcher.compute_features(case.source).signature().tobytes() == signature.tobytes()
+    c, s = np.cos(2.6), np.sin(2.6)
+    rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    moved = np.asarray(case.source, dtype=np.float64) @ rotation.T + [40.0, -25.0, 3.0]
+    with kissm.Matcher(case.config) as matcher:
+        near = float(np.linalg.norm(matcher.compute_features(moved).signature() - signature))
+    far = float(np.linalg.norm(target.signature() - signature))
+    assert near < 0.1 and far > near, (near, far)
 
 
 def test_registration_from_loaded_features_is_bitwise_the_original(case: Case, described: Any) -> None:

@@ -16,7 +16,7 @@ import pytest
 
 import kissm
 import kissm.multiway
-from kissm._candidates import loop_candidates
+from kissm._candidates import corroborated, loop_candidates, similar_candidates
 
 from testdata import VOXEL_SIZE, committed_pair
 
@@ -240,6 +240,73 @@ def test_sequence_loop_candidates_from_priors() -> None:
     assert loop_candidates(positions, 100.0, 4, 5, drift=0.0) == [(0, 4)]
 
 
+def test_similar_candidates() -> None:
+    """The per_scan nearest signatures at least gap back, ties to the lower scan; a NaN row is nobody's candidate;
+    with pieces, only pairs of different pieces."""
+    signatures = np.array([[0.0, 0], [1, 0], [0, 1], [1, 0], [np.nan, np.nan], [0.1, 0]])
+    assert similar_candidates(signatures, 2, 1) == [(0, 2), (1, 3), (0, 5)]
+    assert similar_candidates(signatures, 2, 2) == [(0, 2), (0, 3), (1, 3), (0, 5), (1, 5)]  # 1 and 3 tie for 5
+    assert similar_candidates(signatures, 2, 0) == []
+    assert similar_candidates(signatures, 5, 3) == [(0, 5)]
+    piece = np.array([0, 0, 0, 1, 1, 1])
+    assert similar_candidates(signatures, 2, 1, piece) == [(1, 3), (0, 5)]
+    assert similar_candidates(signatures, 1, 9, piece) == [(0, 3), (1, 3), (2, 3), (0, 5), (1, 5), (2, 5)]
+
+
+def test_registrations_between_pieces_are_kept_when_the_most_agree() -> None:
+    """Of the registrations between two pieces, those agreeing with the one most others agree with are kept: three
+    that put the later piece at its true place beat two that agree on a wrong one; a lone one is not kept."""
+    poses = np.tile(np.eye(4), (10, 1, 1))
+    poses[:, 0, 3] = [0, 1, 2, 3, 0, 1, 2, 3, 0, 1]  # along x in each piece's frame
+    piece = np.array([0, 0, 0, 0, 1, 1, 1, 1, 2, 2])
+    reckoned = (poses, np.zeros(10), piece)
+
+    def registration(i: int, j: int, offset: list[float]) -> tuple[int, int, np.ndarray]:
+        frame = np.eye(4)
+        frame[:3, 3] = offset  # the later piece's frame in the earlier one's
+        return i, j, np.linalg.inv(poses[i]) @ frame @ poses[j]
+
+    right, wrong = [0.0, 50.0, 0.0], [500.0, 0.0, 0.0]
+    edges = [registration(0, 4, right), registration(1, 5, right), registration(2, 6, right)]
+    edges += [registration(3, 7, wrong), registration(0, 5, wrong), registration(1, 8, right)]
+    assert corroborated(edges, reckoned, 1.0, 0.0) == [True, True, True, False, False, False]
+    # Two registrations of one later cloud do not corroborate each other.
+    assert corroborated([registration(0, 4, right), registration(1, 4, right)], reckoned, 1.0, 0.0) == [False, False]
+
+
+def moved_view(cloud: np.ndarray, angle: float, shift: list[float]) -> tuple[np.ndarray, np.ndarray]:
+    """The cloud as seen from another frame: the points in it and that frame's pose in the cloud's."""
+    c, s = math.cos(angle), math.sin(angle)
+    move = np.eye(4)
+    move[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+    move[:3, 3] = shift
+    return (cloud - move[:3, 3]) @ move[:3, :3], move
+
+
+def test_a_broken_chain_closes_its_loop_by_similarity() -> None:
+    """A sequence that sees a place, loses it (two unrelated clouds: the chain breaks twice, as for a robot
+    kidnapped or a sensor blinded) and comes back: the odometry cannot relate the pieces, the clouds' similarity
+    can. With similar_per_scan=1 the later piece is placed right through the earlier scans it resembles (not the
+    unrelated clouds); with 0, as before, it is not placed."""
+    clouds, poses = synthetic_set()
+    rng = np.random.default_rng(11)
+    back, move = moved_view(clouds[1], 2.0, [3.0, -4.0, 0.5])
+    sequence = [clouds[0], clouds[1], rng.uniform(-20, 20, (3000, 3)), rng.uniform(-30, 30, (3000, 3)), clouds[2], back]
+    truth = [poses[0], poses[1], None, None, poses[2], poses[1] @ move]
+    found = kissm.multiway.align(sequence, VOXEL_SIZE, pairs="sequence", loop_gap=2, similar_per_scan=1)
+    assert found.placed.tolist() == [True, True, False, False, True, True]
+    valid = {(e.source, e.target) for e in found.edges}
+    assert (2, 1) not in valid and (3, 2) not in valid and (4, 3) not in valid  # the breaks
+    assert found.registrations == 5 + 4  # the consecutive pairs, then one similar earlier scan for 2, 3, 4 and 5
+    assert {(4, 0), (4, 1)} & valid and {(5, 0), (5, 1)} & valid  # the place seen again, not the unrelated clouds
+    for k in (1, 4, 5):
+        expected = np.linalg.inv(truth[0]) @ truth[k]
+        error = np.linalg.inv(expected) @ found.poses[k]
+        assert angle_deg(error[:3, :3]) < 1.0 and np.linalg.norm(error[:3, 3]) < VOXEL_SIZE, k
+    before = kissm.multiway.align(sequence, VOXEL_SIZE, pairs="sequence", loop_gap=2, similar_per_scan=0)
+    assert before.placed.tolist() == [True, True, False, False, False, False] and before.registrations == 5
+
+
 def test_bad_arguments() -> None:
     clouds, _ = synthetic_set()
     with pytest.raises(kissm.InvalidArgumentError, match="pairs"):
@@ -254,6 +321,9 @@ def test_bad_arguments() -> None:
         kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", loop_radius=float("nan"))
     with pytest.raises(kissm.InvalidArgumentError, match="loops_per_scan"):
         kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", loops_per_scan=-1)
+    for bad in (-1, 1.5, True):
+        with pytest.raises(kissm.InvalidArgumentError, match="similar_per_scan"):
+            kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs="sequence", similar_per_scan=bad)
     with pytest.raises(kissm.InvalidArgumentError, match="pair"):
         kissm.multiway.align(clouds[:2], VOXEL_SIZE, pairs=[(0, 5)])
     with pytest.raises(kissm.InvalidArgumentError, match="empty"):

@@ -372,6 +372,10 @@ int32_t kissm_features_serialize(const kissm_features *features, void *buffer, u
 
 int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_features **out_features);
 
+#define KISSM_SIGNATURE_SIZE 82
+
+int32_t kissm_features_signature(const kissm_features *features, double *out_signature);
+
 #define KISSM_FORMAT_AUTO 0
 #define KISSM_FORMAT_PLY 1
 #define KISSM_FORMAT_PCD 2

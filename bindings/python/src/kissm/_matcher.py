@@ -92,6 +92,19 @@ class Features:
     def __repr__(self) -> str:
         return f"<kissm.Features: {self.num_points} points, {self.num_voxels} voxels, {self.num_keypoints} keypoints>"
 
+    def signature(self) -> np.ndarray:
+        """A fixed-length summary of the features for finding scans that see the same place
+        (``kissm_features_signature``): a (``KISSM_SIGNATURE_SIZE``,) float64 array whose Euclidean distance to
+        another cloud's is small when the two overlap. Three unit-length blocks: the keypoints' mean FPFH, its
+        standard deviation per bin, and the square roots of the shares of keypoints per 12-voxel band of distance
+        from their centroid. It depends on no coordinate frame, is the same bits for loaded features and at any
+        thread count, and is all zeros for features without keypoints. Compare signatures of one voxel size only;
+        :mod:`kissm.multiway` takes its loop candidates from them (docs/multiway.md).
+        """
+        out = np.empty(int(lib.KISSM_SIGNATURE_SIZE), dtype=np.float64)
+        check(lib.kissm_features_signature(self._ptr, ffi.from_buffer("double[]", out, require_writable=True)))
+        return out
+
     def to_bytes(self) -> bytes:
         """The features as bytes (``kissm_features_serialize``) that :meth:`from_bytes` reads back on any machine.
 

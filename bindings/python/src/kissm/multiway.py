@@ -24,7 +24,14 @@ from typing import Any
 import numpy as np
 
 from . import batch
-from ._candidates import DRIFT, check_sequence_options, dead_reckoned, loop_candidates
+from ._candidates import (
+    DRIFT,
+    check_sequence_options,
+    corroborated,
+    loop_candidates,
+    reckoned_poses,
+    similar_candidates,
+)
 from ._config import RefineMode
 from ._errors import InvalidArgumentError
 from ._matcher import Features
@@ -46,9 +53,11 @@ class Edge:
     information: np.ndarray
     """(6, 6) its information (rotation first, source frame)."""
     accepted: bool
-    """Whether the optimisation kept it (False: it disagrees with the rest, or a scan of it is not placed)."""
+    """Whether the optimisation kept it (False: it disagrees with the rest, or a scan of it is not placed, or it
+    was kept out of the graph: a registration between the pieces of a broken chain outside the largest set of them
+    that agrees, docs/multiway.md "Loop candidates by similarity")."""
     residual: float
-    """Its squared error ``xi^T I xi`` at the solution; NaN where a scan of it is not placed."""
+    """Its squared error ``xi^T I xi`` at the solution; NaN where a scan of it is not placed or it was kept out."""
     result: Result
     """The registration itself."""
 
@@ -143,6 +152,7 @@ def align(
     loop_radius: float | None = None,
     loop_gap: int = 10,
     loops_per_scan: int = 5,
+    similar_per_scan: int = 3,
     executor: Any = None,
     progress: batch.ProgressLike = None,
     refine: RefineMode | None = "gicp",
@@ -165,7 +175,12 @@ def align(
     The positions are ``priors`` ((N, 4, 4) world <- scan poses, e.g. GNSS or a SLAM run; rows of NaN for clouds
     without one) when given; otherwise the consecutive registrations chained into a dead-reckoned path, with the
     radius grown by 2% of the path length between the two clouds for the drift (a break in the chain, an
-    invalid consecutive pair, starts a new piece; pieces get no candidates between them).
+    invalid consecutive pair, starts a new piece). Between pieces, where the odometry cannot judge, the candidates
+    come from the clouds' similarity instead: each cloud with the ``similar_per_scan`` earlier clouds of other
+    pieces, at least ``loop_gap`` back, whose :meth:`kissm.Features.signature` are the nearest (0 turns this
+    off; an unbroken chain gets none, so the registrations still grow linearly with the clouds). Such a pair has no
+    position to check it: of the valid registrations between two pieces, only the largest set that agrees on where
+    the pieces lie joins the graph (docs/multiway.md, "Loop candidates by similarity").
 
     ``voxel_size``, ``refine`` (``"gicp"`` by default: its information weighs the edges; ``None`` or ``"none"``
     gives coarse poses, whose edges get an information from the rotation uncertainty alone and are weighed
@@ -173,8 +188,10 @@ def align(
     ``executor``, ``progress`` and ``threads_per_job`` are :func:`kissm.batch.register_many`'s. ``bound`` is the
     pose graph's (:meth:`kissm.PoseGraph.optimize`).
 
-    Raises :class:`kissm.InvalidArgumentError` for an unknown ``pairs`` value or a pair naming a cloud that is
-    not given, and whatever :func:`kissm.batch.register_many` raises for bad settings or clouds.
+    Raises :class:`kissm.InvalidArgumentError` for an unknown ``pairs`` value, a pair naming a cloud that is not
+    given, or a sequence option out of range (``loop_radius``, ``loop_gap``, ``loops_per_scan``,
+    ``similar_per_scan``, ``priors``; the message names it), and whatever :func:`kissm.batch.register_many`
+    raises for bad settings or clouds.
     """
     by_key = _as_mapping(clouds)
     keys = list(by_key)
@@ -196,26 +213,34 @@ def align(
         for pair in chosen:
             if len(pair) != 2 or pair[0] not in position or pair[1] not in position:
                 raise InvalidArgumentError(f"align: pair {pair!r} does not name two of the clouds")
-    prior_positions = check_sequence_options(sequence, priors, len(keys), loop_radius, loop_gap, loops_per_scan)
+    prior_positions = check_sequence_options(
+        sequence, priors, len(keys), loop_radius, loop_gap, loops_per_scan, similar_per_scan
+    )
     runner = _Runner(executor, progress, threads_per_job, voxel_size, refine, config)
+    held_out: set[int] = set()
     if sequence and len(keys) > 1:
         # Two rounds over the same clouds: described once, then the features serve both.
         usable = runner.describe(by_key)
         results = runner.register([p for p in chosen if p[0] in usable and p[1] in usable], usable)
         steps = {position[r.target]: r.result for r in results}
-        loops = loop_candidates(
-            prior_positions if prior_positions is not None else dead_reckoned(steps, len(keys)),
-            runner.radius(loop_radius),
-            loop_gap,
-            loops_per_scan,
-            drift=0.0 if prior_positions is not None else DRIFT,
-        )
+        radius = runner.radius(loop_radius)
+        if prior_positions is not None:
+            loops = loop_candidates(prior_positions, radius, loop_gap, loops_per_scan, drift=0.0)
+        else:
+            poses, path, piece = reckoned = reckoned_poses(steps, len(keys))
+            loops = loop_candidates((poses[:, :3, 3], path, piece), radius, loop_gap, loops_per_scan, drift=DRIFT)
+            # Across the breaks of the chain, the clouds' similarity (docs/multiway.md, "Loop candidates by
+            # similarity").
+            similar = similar_candidates(_signatures(keys, usable), loop_gap, similar_per_scan, piece)
+            loops = sorted(set(loops).union(similar), key=lambda pair: (pair[1], pair[0]))
         wanted = [(keys[j], keys[i]) for i, j in loops if keys[i] in usable and keys[j] in usable]
         results += runner.register(wanted, usable)
+        if prior_positions is None:
+            held_out = _uncorroborated(results, position, reckoned, radius)
     else:
         results = runner.register(chosen, by_key)
     edges = [(position[r.source], position[r.target], r.result, True) for r in results]
-    return _solve(keys, edges, bound, len(results))
+    return _solve(keys, edges, bound, len(results), held_out)
 
 
 def session_clouds(sessions: Sequence[Sequence[Any] | Mapping[Any, Any]]) -> dict[tuple[int, Hashable], Any]:
@@ -285,8 +310,8 @@ def align_sessions(
     steps: dict[tuple[int, int], Result | None] = {odometry[(r.source, r.target)]: r.result for r in results}
     wanted: list[tuple[Hashable, Hashable]] = []
     for s, m in enumerate(members):
-        reckoned = dead_reckoned({k: steps.get((s, k)) for k in range(len(m) - 1)}, len(m))
-        for i, j in loop_candidates(reckoned, radius, loop_gap, loops_per_scan, DRIFT):
+        poses, path, piece = reckoned_poses({k: steps.get((s, k)) for k in range(len(m) - 1)}, len(m))
+        for i, j in loop_candidates((poses[:, :3, 3], path, piece), radius, loop_gap, loops_per_scan, DRIFT):
             wanted += pair(s, j, s, i)
         for t in range(s):
             for j in range(0, len(m), stride):
@@ -366,23 +391,60 @@ class _Runner:
         return 30.0 * float(self.voxel_size)
 
 
+def _uncorroborated(
+    results: list[batch.PairResult],
+    position: Mapping[Any, int],
+    reckoned: tuple[np.ndarray, np.ndarray, np.ndarray],
+    radius: float,
+) -> set[int]:
+    """The valid registrations between pieces of the chained odometry (pairs found by similarity) outside the
+    largest set that agrees between their pieces (:func:`kissm._candidates.corroborated`): kept out of the graph."""
+    piece = reckoned[2]
+    across: list[int] = []
+    found: list[tuple[int, int, np.ndarray]] = []
+    for k, r in enumerate(results):
+        source, target = position[r.source], position[r.target]
+        if r.result is not None and r.result.valid and piece[source] != piece[target]:
+            across.append(k)
+            found.append((target, source, np.asarray(r.result.transform, dtype=np.float64)))
+    agreed = corroborated(found, reckoned, radius, DRIFT)
+    return {k for k, ok in zip(across, agreed, strict=True) if not ok}
+
+
 def _solve(
-    keys: list[Any], registrations: list[tuple[int, int, Result | None, bool]], bound: float, count: int
+    keys: list[Any],
+    registrations: list[tuple[int, int, Result | None, bool]],
+    bound: float,
+    count: int,
+    held_out: set[int] | None = None,
 ) -> Alignment:
-    """The pose graph of the valid registrations (source, target, result, robust), in order, from the first key."""
-    valid: list[tuple[int, int, np.ndarray, np.ndarray, Result]] = []
+    """The pose graph of the valid registrations (source, target, result, robust), in order, from the first key;
+    those numbered in ``held_out`` are reported as edges not accepted and left out of the graph."""
+    valid: list[tuple[int, int, np.ndarray, np.ndarray, Result, int]] = []
+    added = 0
     with PoseGraph(len(keys)) as graph:
-        for source, target, result, robust in registrations:
+        for k, (source, target, result, robust) in enumerate(registrations):
             if result is None or not result.valid:
                 continue
             transform = np.asarray(result.transform, dtype=np.float64)
             information = _information(result)
-            graph.add_edge(source, target, transform, information, robust=robust)
-            valid.append((source, target, transform, information, result))
+            slot = -1  # the edge's number in the graph; -1: kept out
+            if not held_out or k not in held_out:
+                graph.add_edge(source, target, transform, information, robust=robust)
+                slot, added = added, added + 1
+            valid.append((source, target, transform, information, result, slot))
         solution = graph.optimize(anchor=0, bound=bound)
     edges = [
-        Edge(s, t, transform, information, bool(solution.accepted[k]), float(solution.residuals[k]), result)
-        for k, (s, t, transform, information, result) in enumerate(valid)
+        Edge(
+            s,
+            t,
+            transform,
+            information,
+            slot >= 0 and bool(solution.accepted[slot]),
+            float(solution.residuals[slot]) if slot >= 0 else math.nan,
+            result,
+        )
+        for s, t, transform, information, result, slot in valid
     ]
     return Alignment(
         keys=keys,
@@ -414,6 +476,13 @@ def _points(cloud: Any, key: Hashable) -> np.ndarray:
     if points.ndim != 2 or points.shape[1] != 3:
         raise InvalidArgumentError(f"merged: cloud {key!r} is not an (N, 3) array or a file")
     return points
+
+
+def _signatures(keys: list[Any], features: Mapping[Any, Features]) -> np.ndarray:
+    """(N, KISSM_SIGNATURE_SIZE): each cloud's signature; NaN rows for clouds that could not be described."""
+    rows = [features[key].signature() if key in features else None for key in keys]
+    size = next((len(row) for row in rows if row is not None), 1)
+    return np.array([row if row is not None else np.full(size, np.nan) for row in rows]).reshape(len(keys), size)
 
 
 def _information(result: Result) -> np.ndarray:

@@ -65,6 +65,7 @@ pub const KISSM_STAGE_SOLVER: i32 = 5;
 pub const KISSM_STAGE_REFINE: i32 = 6;
 pub const KISSM_SCALAR_FLOAT32: i32 = 1;
 pub const KISSM_SCALAR_FLOAT64: i32 = 2;
+pub const KISSM_SIGNATURE_SIZE: i32 = 82;
 pub const KISSM_FORMAT_AUTO: i32 = 0;
 pub const KISSM_FORMAT_PLY: i32 = 1;
 pub const KISSM_FORMAT_PCD: i32 = 2;
@@ -1088,6 +1089,28 @@ extern "C" {
         bytes: *const ::core::ffi::c_void,
         size: u64,
         out_features: *mut *mut kissm_features,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief A fixed-length summary of the features for finding scans that see the same place: the Euclidean
+        distance between two clouds' signatures is small when they overlap (loop candidates among thousands
+        of scans, docs/multiway.md "Loop candidates by similarity").
+
+ Three blocks, each of unit length: the mean of the keypoints' FPFH descriptors (33 numbers), their standard
+ deviation per bin (33), and the square roots of the shares of keypoints per band of 12 voxels of distance from
+ the keypoints' centroid (16, the last band open). It depends on no coordinate frame (a rotated or moved cloud
+ gives nearly the same numbers; voxelisation differs a little), is computed from what the features serialise
+ (loaded features give the same bits), on the calling thread in a fixed order (the same bits whatever the
+ matcher's threads), and costs a pass over the keypoints. Features without keypoints give all zeros. Compare
+ signatures of features computed with the same voxel size only.
+ @param[in] features The features.
+ @param[out] out_signature #KISSM_SIGNATURE_SIZE numbers; untouched on failure.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p features or @p out_signature is NULL.
+ @retval KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_features_signature(
+        features: *const kissm_features,
+        out_signature: *mut f64,
     ) -> i32;
 }
 /// @brief A cloud owned by the library, as read from a file: float64 xyz, packed.

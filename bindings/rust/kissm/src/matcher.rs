@@ -308,6 +308,9 @@ impl fmt::Debug for CancelHandle {
     }
 }
 
+/// The length of [`Features::signature`] (`KISSM_SIGNATURE_SIZE`).
+pub const SIGNATURE_SIZE: usize = sys::KISSM_SIGNATURE_SIZE as usize;
+
 /// A described cloud ([`Matcher::compute_features`]): immutable, shareable between threads
 /// (`Send + Sync`, e.g. in an `Arc`) and independent of the matcher that computed it.
 ///
@@ -345,6 +348,20 @@ impl Features {
     pub fn memory_bytes(&self) -> u64 {
         // SAFETY: live features.
         unsafe { sys::kissm_features_memory_bytes(self.raw.as_ptr()) }
+    }
+
+    /// A fixed-length summary of the features for finding scans that see the same place
+    /// (`kissm_features_signature`): the Euclidean distance between two clouds' signatures is small when they
+    /// overlap. Three unit-length blocks: the keypoints' mean FPFH, its standard deviation per bin, and the
+    /// square roots of the shares of keypoints per 12-voxel band of distance from their centroid. It depends
+    /// on no coordinate frame, is the same bits for loaded features and at any thread count, and is all zeros
+    /// for features without keypoints. Compare signatures of one voxel size only (`docs/multiway.md`, "Loop
+    /// candidates by similarity").
+    pub fn signature(&self) -> Result<[f64; SIGNATURE_SIZE], Error> {
+        let mut out = [0.0f64; SIGNATURE_SIZE];
+        // SAFETY: live features; out holds KISSM_SIGNATURE_SIZE writable doubles.
+        Error::check(unsafe { sys::kissm_features_signature(self.raw.as_ptr(), out.as_mut_ptr()) })?;
+        Ok(out)
     }
 
     /// The features as bytes (`kissm_features_serialize`) that [`from_bytes`](Features::from_bytes) reads

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: MIT
 //! `Features::to_bytes` / `Features::from_bytes`: byte round trips, registrations and refinements from loaded
 //! features bitwise equal to the originals', truncated and bit-flipped input refused with `ErrorKind::Parse`,
-//! and loaded features of another configuration refused on use; on the shared test scene and, when the real
+//! loaded features of another configuration refused on use, and the signature (the same bits when loaded or at
+//! other thread counts, nearly the same for a moved cloud); on the shared test scene and, when the real
 //! data is there, a KITTI 07 keyframe pair.
 
 mod common;
 
 use common::{scene, skip, SCENE_VOXEL};
-use kissm::{Config, ErrorKind, Features, Format, Matcher, RefineMode};
+use kissm::{Config, ErrorKind, Features, Format, Matcher, RefineMode, SIGNATURE_SIZE};
 
 const IDENTITY: [[f64; 4]; 4] =
     [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
@@ -31,7 +32,40 @@ fn reload(features: &Features) -> Features {
     // the exactly sized loaded vectors do not have.
     assert!(loaded.memory_bytes() <= features.memory_bytes());
     assert!(loaded.memory_bytes() as f64 >= 0.99 * features.memory_bytes() as f64);
+    assert_eq!(bits(&loaded.signature().unwrap()), bits(&features.signature().unwrap()), "loaded signature");
     loaded
+}
+
+fn bits(signature: &[f64; SIGNATURE_SIZE]) -> Vec<u64> {
+    signature.iter().map(|v| v.to_bits()).collect()
+}
+
+fn distance(a: &[f64; SIGNATURE_SIZE], b: &[f64; SIGNATURE_SIZE]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+}
+
+/// The signature: three unit-length blocks, the same bits at 1 and 4 threads, nearly the same for the cloud
+/// moved rigidly (the voxel grid differs), farther for the other scan of the scene, zeros without keypoints.
+#[test]
+fn signature_is_frame_and_thread_free() {
+    let Some(scene) = scene("signature_is_frame_and_thread_free") else { return };
+    let config = |threads: usize| Config::builder().voxel_size(SCENE_VOXEL).num_threads(threads).build().unwrap();
+    let (mut one, mut four) = (Matcher::new(&config(1)).unwrap(), Matcher::new(&config(4)).unwrap());
+    let here = one.compute_features(&scene.source).unwrap().signature().unwrap();
+    assert_eq!(bits(&here), bits(&four.compute_features(&scene.source).unwrap().signature().unwrap()));
+    for block in [0..33, 33..66, 66..SIGNATURE_SIZE] {
+        let squares: f64 = here[block.clone()].iter().map(|v| v * v).sum();
+        assert!((squares - 1.0).abs() < 1e-12, "{block:?}: {squares}");
+    }
+    let pose = common::Pose::axis_angle([1.0, -2.0, 3.0], 150.0, [40.0, -25.0, 3.0]);
+    let moved = one.compute_features(&common::moved(&scene.source, &pose)).unwrap().signature().unwrap();
+    let other = one.compute_features(&scene.target).unwrap().signature().unwrap();
+    let (near, far) = (distance(&here, &moved), distance(&here, &other));
+    assert!(near < 0.1 && far > near, "moved {near}, the other scan {far}");
+    let flat = one.compute_features(&common::flat_plane()).unwrap();
+    if flat.num_keypoints() == 0 {
+        assert!(flat.signature().unwrap().iter().all(|v| *v == 0.0));
+    }
 }
 
 #[test]
