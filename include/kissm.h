@@ -969,7 +969,8 @@ KISSM_API int32_t kissm_features_signature(const kissm_features *features, doubl
 /**
  * @defgroup files Point files
  * @brief Reading clouds: PLY (ascii, binary), PCD (ascii, binary), KITTI .bin (float32 xyzi), .npy
- *        (float32 / float64, shape (N, 3) or (N, >=3)), whitespace xyz text (.xyz, .txt, .pts, .asc).
+ *        (float32 / float64, shape (N, 3) or (N, >=3)), whitespace xyz text (.xyz, .txt, .pts, .asc), LAS 1.0-1.4
+ *        (.las, uncompressed).
  * @{
  */
 
@@ -980,6 +981,11 @@ KISSM_API int32_t kissm_features_signature(const kissm_features *features, doubl
 #define KISSM_FORMAT_NPY 4       /**< .npy, float32 or float64, shape (N, 3) or (N, >=3). */
 #define KISSM_FORMAT_XYZ 5       /**< Whitespace-separated xyz text. */
 #define KISSM_FORMAT_BIN_XYZ 6   /**< float32 x y z, no intensity. */
+/**
+ * ASPRS LAS 1.0-1.4, uncompressed, point data record formats 0-10: x y z only, scale and offset applied in
+ * double precision; points flagged withheld are left out. LAZ (compressed) files fail with #KISSM_ERR_PARSE.
+ */
+#define KISSM_FORMAT_LAS 7
 
 /** @brief A cloud owned by the library, as read from a file: float64 xyz, packed. */
 typedef struct kissm_cloud kissm_cloud;

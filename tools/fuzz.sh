@@ -4,7 +4,8 @@
 # starting from the committed seed corpus. Not part of CI (minutes per target); the seed corpus and the
 # regressions are replayed by normal CTest instead.
 #   bash tools/fuzz.sh [SECONDS_PER_TARGET=600] [TARGET...]      (targets: ply pcd npy xyz kitti_bin
-#                                                                  bin_xyz register stateful features pose_graph sequence_loops)
+#                                                                  bin_xyz las register stateful features pose_graph
+#                                                                  sequence_loops)
 # Findings land in build-fuzz/findings/<target>/; copy a crasher to tests/fuzz/regressions/<target>/ once
 # fixed. The grown corpus stays in build-fuzz/corpus/<target>/.
 set -euo pipefail
@@ -12,7 +13,7 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:-600}
 shift || true
 targets=("$@")
-[[ ${#targets[@]} -gt 0 ]] || targets=(ply pcd npy xyz kitti_bin bin_xyz register stateful features pose_graph sequence_loops)
+[[ ${#targets[@]} -gt 0 ]] || targets=(ply pcd npy xyz kitti_bin bin_xyz las register stateful features pose_graph sequence_loops)
 
 # clang and libFuzzer: tools/setup.sh's on-demand group "fuzz" (installed as root, else named).
 bash "$here/tools/setup.sh" --group fuzz || exit 2

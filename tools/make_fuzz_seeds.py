@@ -83,6 +83,72 @@ def readers() -> None:
     write("bin_xyz", "four.bin", b"".join(struct.pack("<fff", x, y, z) for x, y, z in PTS))
 
 
+LAS_MIN_RECORD = (20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67)
+
+
+def las(
+    minor: int,
+    fmt: int,
+    pts: Sequence[Point],
+    *,
+    extra: int = 0,
+    withheld: Sequence[int] = (),
+    scale: float = 1e-3,
+    offset: float = 0.0,
+    legacy: int | None = None,
+    wide: int | None = None,
+    fmt_id: int | None = None,
+    vlrs: bytes = b"",
+    header_scale: float | None = None,
+) -> bytes:
+    """A LAS file (ASPRS LAS 1.4 public header block layout): header, `vlrs`, then the points."""
+    size = 375 if minor >= 4 else 235 if minor == 3 else 227
+    record = LAS_MIN_RECORD[fmt] + extra
+    n = len(pts)
+    h = bytearray(size if size >= 375 else 375)
+    h[0:4] = b"LASF"
+    h[24:26] = bytes([1, minor])
+    h[26:36] = b"kissm seed"
+    struct.pack_into(
+        "<HIIBHI",
+        h,
+        94,
+        size,
+        size + len(vlrs),
+        1 if vlrs else 0,
+        fmt if fmt_id is None else fmt_id,
+        record,
+        (0 if minor >= 4 and fmt >= 6 else n) if legacy is None else legacy,
+    )
+    hs = scale if header_scale is None else header_scale
+    struct.pack_into("<3d3d", h, 131, hs, hs, hs, offset, offset, offset)
+    if minor >= 4:
+        struct.pack_into("<Q", h, 247, n if wide is None else wide)
+    body = bytearray()
+    for i, (x, y, z) in enumerate(pts):
+        r = bytearray(record)
+        struct.pack_into("<3i", r, 0, *(round((c - offset) / scale) for c in (x, y, z)))
+        flags = (0x80 if fmt <= 5 else 0x04) if i in withheld else 0
+        r[15] = flags | (2 if fmt <= 5 else 0)
+        if fmt >= 6:
+            r[16] = 2
+        body += r
+    return bytes(h[:size]) + vlrs + bytes(body)
+
+
+def las_seeds() -> None:
+    write("las", "v10_f0.las", las(0, 0, PTS))
+    write("las", "v12_f3_extra.las", las(2, 3, PTS, extra=6, withheld=(1,)))
+    write("las", "v13_f1_geo.las", las(3, 1, PTS, scale=1e-3, offset=1e6))
+    write("las", "v14_f6_wide.las", las(4, 6, PTS, withheld=(0, 4), vlrs=b"\0" * 54 + b"kissm vlr"))
+    write("las", "v14_f10.las", las(4, 10, PTS[:2]))
+    # Hostile headers: a count far beyond the file, a record shorter than its format, a zero scale, LAZ.
+    write("las", "count_lie.las", las(4, 7, PTS[:1], wide=1 << 62))
+    write("las", "short_record.las", las(2, 1, PTS[:2], extra=-9))
+    write("las", "zero_scale.las", las(2, 0, PTS[:1], header_scale=0.0))
+    write("las", "laz_id.las", las(2, 3, PTS[:1], fmt_id=0x83))
+
+
 def scene(rng: random.Random, n: int) -> list[Point]:
     """Points on a floor, two walls and some boxes of a 30 m x 30 m yard."""
     pts: list[Point] = []
@@ -237,6 +303,7 @@ def pose_graph() -> None:
 
 if __name__ == "__main__":
     readers()
+    las_seeds()
     pipeline()
     pose_graph()
     print(f"wrote {sum(1 for _ in OUT.rglob('*') if _.is_file())} seed files under {OUT}")

@@ -3,7 +3,7 @@
  *
  *   kissm_example SOURCE TARGET [VOXEL_SIZE]
  *
- * SOURCE and TARGET may be PLY, PCD, KITTI .bin, raw float32 .bin, .npy or xyz text files (whatever
+ * SOURCE and TARGET may be PLY, PCD, KITTI .bin, raw float32 .bin, .npy, xyz text or LAS files (whatever
  * kissm_read_points() reads). VOXEL_SIZE is in the clouds' unit (default 0.3, for LiDAR scans in metres).
  * Prints the rigid transform that maps SOURCE points into TARGET's frame.
  * Exit status: 0 a valid pose, 1 no trustworthy pose, 2 an error.

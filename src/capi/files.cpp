@@ -20,6 +20,7 @@ core::FileFormat file_format_of(int32_t format) {
     case KISSM_FORMAT_NPY: return core::FileFormat::Npy;
     case KISSM_FORMAT_XYZ: return core::FileFormat::Xyz;
     case KISSM_FORMAT_BIN_XYZ: return core::FileFormat::BinXyz;
+    case KISSM_FORMAT_LAS: return core::FileFormat::Las;
     default: return core::FileFormat::Auto;
     }
 }
@@ -31,7 +32,7 @@ int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cl
     return guarded("kissm_read_points", [&] {
         require_non_null(path, "path");
         require_non_null(out_cloud, "out_cloud");
-        if (format < KISSM_FORMAT_AUTO || format > KISSM_FORMAT_BIN_XYZ)
+        if (format < KISSM_FORMAT_AUTO || format > KISSM_FORMAT_LAS)
             core::fail(core::ErrorKind::InvalidArgument,
                        "format is " + std::to_string(format) + "; use a KISSM_FORMAT_* value");
         auto c = std::make_unique<kissm_cloud>();

@@ -123,6 +123,7 @@ int32_t parse_format(const std::string &option, const std::string &text) {
         {"bin_xyz", KISSM_FORMAT_BIN_XYZ}, {"bin_xyz_f32", KISSM_FORMAT_BIN_XYZ},
         {"npy", KISSM_FORMAT_NPY},         {"npy_xyz", KISSM_FORMAT_NPY},
         {"xyz", KISSM_FORMAT_XYZ},         {"txt", KISSM_FORMAT_XYZ},
+        {"las", KISSM_FORMAT_LAS},
     };
     for (const Name &n : kNames) {
         if (text == n.name) return n.format;
@@ -130,7 +131,7 @@ int32_t parse_format(const std::string &option, const std::string &text) {
     throw UsageError(option + ": unknown format '" + one_line(text) + "' (expected " + format_names() + ")");
 }
 
-const char *format_names() { return "auto, ply, pcd, kitti_bin, bin_xyz, npy or xyz"; }
+const char *format_names() { return "auto, ply, pcd, kitti_bin, bin_xyz, npy, xyz or las"; }
 
 int32_t parse_refine_mode(const std::string &option, const std::string &text) {
     if (text == "none") return KISSM_REFINE_NONE;

@@ -57,7 +57,7 @@ double parse_double(const std::string &option, const std::string &text);   // fi
 double parse_positive(const std::string &option, const std::string &text); // finite and > 0
 int32_t parse_int32(const std::string &option, const std::string &text, int32_t min_value, int32_t max_value);
 uint64_t parse_uint64(const std::string &option, const std::string &text);
-// A point file format name (auto, ply, pcd, kitti_bin, bin_xyz, npy, xyz, and the names used by the test
+// A point file format name (auto, ply, pcd, kitti_bin, bin_xyz, npy, xyz, las, and the names used by the test
 // data's pair.txt files) to its KISSM_FORMAT_* value.
 int32_t parse_format(const std::string &option, const std::string &text);
 const char *format_names();

@@ -17,5 +17,6 @@ std::vector<double> parse_kitti_bin(const std::string &path, std::string_view by
 std::vector<double> parse_bin_xyz(const std::string &path, std::string_view bytes);   // float32 x y z
 std::vector<double> parse_npy(const std::string &path, std::string_view bytes);
 std::vector<double> parse_xyz_text(const std::string &path, std::string_view bytes);
+std::vector<double> parse_las(const std::string &path, std::string_view bytes); // LAS 1.0-1.4, withheld points left out
 
 KISSM_DETAIL_END

@@ -37,6 +37,8 @@ bool from_extension(const std::string &ext, FileFormat &format) {
         format = FileFormat::Npy;
     else if (ext == "xyz" || ext == "txt" || ext == "pts" || ext == "asc")
         format = FileFormat::Xyz;
+    else if (ext == "las" || ext == "laz") // the LAS reader names LAZ as such
+        format = FileFormat::Las;
     else
         return false;
     return true;
@@ -54,6 +56,10 @@ bool from_content(std::string_view bytes, FileFormat &format) {
     }
     if (starts_with(bytes, "\x93NUMPY")) {
         format = FileFormat::Npy;
+        return true;
+    }
+    if (starts_with(bytes, "LASF")) {
+        format = FileFormat::Las;
         return true;
     }
     if (starts_with(bytes, "# .PCD")) {
@@ -86,7 +92,8 @@ std::vector<double> read_points_file(const std::string &path, FileFormat format)
     case FileFormat::KittiBin:
     case FileFormat::Npy:
     case FileFormat::Xyz:
-    case FileFormat::BinXyz: break;
+    case FileFormat::BinXyz:
+    case FileFormat::Las: break;
     default:
         fail(ErrorKind::UnsupportedFormat,
              path + ": unknown file format code " + std::to_string(static_cast<int>(format)));
@@ -101,7 +108,7 @@ std::vector<double> read_points_file(const std::string &path, FileFormat format)
             fail(ErrorKind::UnsupportedFormat,
                  path + ": unknown point file format: " +
                      (ext.empty() ? std::string("no extension") : "extension '." + ext + "' is not known") +
-                     " and the content is not PLY, PCD or .npy (pass the format explicitly)");
+                     " and the content is not PLY, PCD, .npy or LAS (pass the format explicitly)");
     }
 
     switch (format) {
@@ -111,6 +118,7 @@ std::vector<double> read_points_file(const std::string &path, FileFormat format)
     case FileFormat::Npy: return parse_npy(path, bytes);
     case FileFormat::Xyz: return parse_xyz_text(path, bytes);
     case FileFormat::BinXyz: return parse_bin_xyz(path, bytes);
+    case FileFormat::Las: return parse_las(path, bytes);
     case FileFormat::Auto: break;
     }
     fail(ErrorKind::Internal, path + ": format detection left no format");

@@ -12,11 +12,12 @@
 KISSM_DETAIL_BEGIN
 
 // The readers (src/capi/files.cpp maps the KISSM_FORMAT_* constants of kissm.h to these).
-enum class FileFormat { Auto = 0, Ply = 1, Pcd = 2, KittiBin = 3, Npy = 4, Xyz = 5, BinXyz = 6 };
+enum class FileFormat { Auto = 0, Ply = 1, Pcd = 2, KittiBin = 3, Npy = 4, Xyz = 5, BinXyz = 6, Las = 7 };
 
 // Reads the file's points as packed x y z doubles (3 * N values). Non-finite values are returned as-is.
-// Auto chooses by extension (any case): .ply, .pcd, .bin (KittiBin), .npy, .xyz / .txt / .pts / .asc (Xyz);
-// for any other extension by content (a "ply" line, a PCD header, the \x93NUMPY magic); else it throws
+// Auto chooses by extension (any case): .ply, .pcd, .bin (KittiBin), .npy, .xyz / .txt / .pts / .asc (Xyz),
+// .las / .laz (Las; LAZ is refused with a clear message); for any other extension by content (a "ply" line, a
+// PCD header, the \x93NUMPY magic, the "LASF" signature); else it throws
 // Failure(UnsupportedFormat). Missing or unreadable files throw Failure(Io); empty, malformed or truncated
 // ones Failure(Parse). A well-formed file with no points gives an empty vector.
 std::vector<double> read_points_file(const std::string &path, FileFormat format);

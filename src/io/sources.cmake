@@ -9,4 +9,5 @@ set(KISSM_IO_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/raw_bin_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/npy_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/xyz_reader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/las_reader.cpp
 )

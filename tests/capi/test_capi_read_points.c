@@ -240,7 +240,7 @@ static void test_errors(void) {
     /* invalid format ids, even for an existing, readable file */
     {
         const char *ok = write_text("ok.xyz", "1 2 3\n");
-        const int32_t bad[] = {-1, 7, 8, 100, INT32_MIN, INT32_MAX};
+        const int32_t bad[] = {-1, 8, 9, 100, INT32_MIN, INT32_MAX};
         size_t i;
         for (i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i)
             expect_failure("invalid format id", ok, bad[i], KISSM_ERR_INVALID_ARGUMENT, "format");

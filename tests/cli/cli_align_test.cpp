@@ -359,7 +359,7 @@ void test_align_usage() {
     bad_scans("scan\tfile\na\ta.ply\nb\n", "line 3: 1 tab-separated fields, the header has 2");
     bad_scans("scan\tfile\na\ta.ply\na\tb.ply\n", "line 3: the scan 'a' is named twice (line 2 too)");
     bad_scans("scan\tfile\n\ta.ply\n", "line 2: empty scan name");
-    bad_scans("scan\tfile\tformat\na\ta.ply\tlas\n", "line 2: format: unknown format 'las'");
+    bad_scans("scan\tfile\tformat\na\ta.ply\te57\n", "line 2: format: unknown format 'e57'");
 
     // The pairs: a file naming scans.
     const std::string pairs = work("pairs.tsv");

@@ -254,7 +254,9 @@ void test_args() {
     CHECK(parse_format("--f", "pcd") == KISSM_FORMAT_PCD);
     CHECK(parse_format("--f", "xyz") == KISSM_FORMAT_XYZ);
     CHECK(parse_format("--f", "auto") == KISSM_FORMAT_AUTO);
-    CHECK(throws_usage([] { parse_format("--f", "las"); }));
+    CHECK(parse_format("--f", "las") == KISSM_FORMAT_LAS);
+    CHECK(throws_usage([] { parse_format("--f", "laz"); }));
+    CHECK(throws_usage([] { parse_format("--f", "e57"); }));
     CHECK(parse_refine_mode("--refine", "none") == KISSM_REFINE_NONE);
     CHECK(parse_refine_mode("--refine", "gicp") == KISSM_REFINE_GICP);
     CHECK(parse_refine_mode("--refine", "point-to-plane") == KISSM_REFINE_POINT_TO_PLANE);

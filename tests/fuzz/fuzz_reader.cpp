@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // libFuzzer target for one point-file parser, chosen at compile time by KISSM_FUZZ_FORMAT (ply, pcd, npy,
-// xyz_text, kitti_bin, bin_xyz). Invariants: the parser returns whole points or throws kissm's Failure (Parse);
+// xyz_text, kitti_bin, bin_xyz, las). Invariants: the parser returns whole points or throws kissm's Failure (Parse);
 // any other exception, a crash or a sanitizer report is a finding. Allocation is bounded by the input
 // (the readers check header counts against the size), so the fuzzer's RSS limit also catches overshoot.
 #include <cstddef>

@@ -190,7 +190,7 @@ BAD_CALLS: list[tuple[str, dict[str, Any], str]] = [
     ("clouds type", {"clouds": [1, 2]}, "clouds must be a mapping"),
     ("cloud shape", {"clouds": {"source": np.zeros((10, 2)), "target0": np.zeros((10, 3))}}, r"clouds\['source'\]"),
     ("cloud dtype", {"clouds": {"source": np.array([["a", "b", "c"]]), "target0": np.zeros((10, 3))}}, "dtype"),
-    ("cloud format", {"clouds": {"source": kissm.batch.CloudFile("a.bin", "las"), "target0": "b.ply"}}, "format"),
+    ("cloud format", {"clouds": {"source": kissm.batch.CloudFile("a.bin", "e57"), "target0": "b.ply"}}, "format"),
     ("threads", {"threads_per_job": 0}, "threads_per_job must be an int in 1..1024"),
     ("threads bool", {"threads_per_job": True}, "threads_per_job"),
     ("num_threads", {"num_threads": 2}, "pass threads_per_job, not num_threads"),

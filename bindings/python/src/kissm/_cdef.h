@@ -384,6 +384,8 @@ int32_t kissm_features_signature(const kissm_features *features, double *out_sig
 #define KISSM_FORMAT_XYZ 5
 #define KISSM_FORMAT_BIN_XYZ 6
 
+#define KISSM_FORMAT_LAS 7
+
 typedef struct kissm_cloud kissm_cloud;
 
 int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);

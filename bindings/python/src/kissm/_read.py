@@ -20,6 +20,7 @@ FORMATS: dict[str, int] = {
     "npy": lib.KISSM_FORMAT_NPY,
     "xyz": lib.KISSM_FORMAT_XYZ,
     "bin_xyz": lib.KISSM_FORMAT_BIN_XYZ,
+    "las": lib.KISSM_FORMAT_LAS,
     # The data sets' pair.txt names, as the CLI accepts them.
     "kitti": lib.KISSM_FORMAT_KITTI_BIN,
     "kitti_bin_xyzi_f32": lib.KISSM_FORMAT_KITTI_BIN,
@@ -35,8 +36,10 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
     """Read a point file with the library's readers (the ones the ``kissm`` CLI uses).
 
     Formats: PLY (ascii, binary), PCD (ascii, binary), KITTI ``.bin`` (float32 x y z intensity), ``.npy``
-    (float32/float64, (N, 3) or (N, k >= 3)), whitespace ``xyz`` text (.xyz .txt .pts .asc), and raw
-    float32 x y z triples with ``format="bin_xyz"``. ``"auto"`` picks by extension, then by content.
+    (float32/float64, (N, 3) or (N, k >= 3)), whitespace ``xyz`` text (.xyz .txt .pts .asc), LAS 1.0-1.4
+    (.las, uncompressed, point formats 0-10: scale and offset applied in float64, points flagged withheld left
+    out; LAZ raises ParseError), and raw float32 x y z triples with ``format="bin_xyz"``. ``"auto"`` picks by
+    extension, then by content.
 
     Returns:
         A new (N, 3) float64 C-contiguous array. Non-finite points are kept as they are (the registration's
@@ -48,7 +51,7 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
         ValueError: ``format`` is not one of :data:`FORMATS`.
     """
     if format not in FORMATS:
-        names = ", ".join(repr(name) for name in list(FORMATS)[:7])
+        names = ", ".join(repr(name) for name in list(FORMATS)[:8])
         raise ValueError(f"format is {format!r}; use one of {names}")
     encoded = os.fsencode(path)
     if b"\0" in encoded:

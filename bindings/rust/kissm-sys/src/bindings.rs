@@ -73,6 +73,7 @@ pub const KISSM_FORMAT_KITTI_BIN: i32 = 3;
 pub const KISSM_FORMAT_NPY: i32 = 4;
 pub const KISSM_FORMAT_XYZ: i32 = 5;
 pub const KISSM_FORMAT_BIN_XYZ: i32 = 6;
+pub const KISSM_FORMAT_LAS: i32 = 7;
 pub const KISSM_POSE_GRAPH_MAX_NODES: i32 = 100000000;
 pub const KISSM_POSE_GRAPH_DEFAULT_BOUND: f64 = 22.4577;
 pub const KISSM_PAIRS_ALL: i32 = 0;

@@ -33,7 +33,7 @@ use kissm::{Config, Format, Matcher, RefineMode, Registration};
 const USAGE: &str = "usage: register SRC TGT --voxel V [--threads N] [--json] \
                      [--refine gicp|point-to-plane|none] [--initial T.txt] \
                      [--format FMT | --format-src FMT --format-tgt FMT]\n\
-                     FMT: auto, ply, pcd, kitti_bin, bin_xyz, npy or xyz";
+                     FMT: auto, ply, pcd, kitti_bin, bin_xyz, npy, xyz or las";
 
 struct Options {
     files: Vec<String>,

@@ -210,6 +210,9 @@ pub enum Format {
     Xyz,
     /// Raw float32 x, y, z triples (no intensity, no header).
     BinXyz,
+    /// LAS 1.0-1.4, uncompressed, point formats 0-10: x, y, z with the file's scale and offset applied in
+    /// float64; points flagged withheld are left out. LAZ files fail with a parse error.
+    Las,
 }
 
 impl Format {
@@ -223,11 +226,12 @@ impl Format {
             Format::Npy => sys::KISSM_FORMAT_NPY,
             Format::Xyz => sys::KISSM_FORMAT_XYZ,
             Format::BinXyz => sys::KISSM_FORMAT_BIN_XYZ,
+            Format::Las => sys::KISSM_FORMAT_LAS,
         }
     }
 
     /// The format of a name as the `kissm` tool spells it: `auto`, `ply`, `pcd`, `kitti_bin`, `npy`,
-    /// `xyz`, `bin_xyz` (case-insensitive; `kitti`, `txt`, `npy_xyz` and the data sets' `bin_xyz_f32` and
+    /// `xyz`, `bin_xyz`, `las` (case-insensitive; `kitti`, `txt`, `npy_xyz` and the data sets' `bin_xyz_f32` and
     /// `kitti_bin_xyzi_f32` work too).
     pub fn from_name(name: &str) -> Option<Format> {
         let name = name.to_ascii_lowercase();
@@ -239,6 +243,7 @@ impl Format {
             "npy" | "npy_xyz" => Format::Npy,
             "xyz" | "txt" => Format::Xyz,
             "bin_xyz" | "bin_xyz_f32" => Format::BinXyz,
+            "las" => Format::Las,
             _ => return None,
         })
     }
@@ -327,8 +332,8 @@ fn path_to_cstring(path: &Path) -> Result<CString, Error> {
     })
 }
 
-/// Reads a point file with the library's readers (the `kissm` tool's): PLY, PCD, KITTI `.bin`, `.npy`
-/// and xyz text, picked by extension, then by content.
+/// Reads a point file with the library's readers (the `kissm` tool's): PLY, PCD, KITTI `.bin`, `.npy`,
+/// xyz text and LAS, picked by extension, then by content.
 ///
 /// Raw float32 x, y, z `.bin` files (no intensity) need [`read_points_with_format`] with
 /// [`Format::BinXyz`]: by extension `.bin` means KITTI x, y, z, intensity.

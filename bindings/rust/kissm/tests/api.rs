@@ -1009,7 +1009,9 @@ fn read_points_formats_and_errors() {
     assert_eq!(Format::from_name("kitti_bin_xyzi_f32"), Some(Format::KittiBin));
     assert_eq!(Format::from_name("npy_xyz"), Some(Format::Npy));
     assert_eq!(Format::from_name("ply").map(Format::code), Some(sys::KISSM_FORMAT_PLY));
-    assert_eq!(Format::from_name("las"), None);
+    assert_eq!(Format::from_name("LAS"), Some(Format::Las));
+    assert_eq!(Format::from_name("las").map(Format::code), Some(sys::KISSM_FORMAT_LAS));
+    assert_eq!(Format::from_name("laz"), None);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
