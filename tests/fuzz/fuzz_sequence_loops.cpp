@@ -42,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
     std::vector<std::uint8_t> valid(steps_count + 1);
     for (std::size_t k = 0; k < steps_count; ++k) {
         kissm_fuzz::make_transform(in, &steps[16 * k]);
-        valid[k] = in.u8() % 5 == 0 ? static_cast<std::uint8_t>(in.u8() % 3) : 1;
+        valid[k] = static_cast<std::uint8_t>(in.u8() % 5 == 0 ? in.u8() % 3 : 1);
     }
     for (std::size_t k = 0; k < n && use_priors; ++k) {
         kissm_fuzz::make_transform(in, &priors[16 * k]);
