@@ -225,9 +225,6 @@ void align_sessions(kissm_matcher &matcher, core::RunContext &ctx, const kissm_f
         if (k == 0 || o.sessions[k] != o.sessions[k - 1]) first.push_back(k);
     first.push_back(n);
     const std::size_t sessions = first.size() - 1;
-    const auto usable = [&](std::size_t source, std::size_t target) {
-        return features[source] != nullptr && features[target] != nullptr;
-    };
     std::vector<core::ScanPair> odometry;
     for (std::size_t s = 0; s < sessions; ++s)
         for (std::size_t k = first[s]; k + 1 < first[s + 1]; ++k) odometry.push_back({k + 1, k});
@@ -277,7 +274,8 @@ void align_sessions(kissm_matcher &matcher, core::RunContext &ctx, const kissm_f
         if (near.size() > per_scan) near.resize(per_scan);
         for (const auto &[d, e] : near) {
             (void)d;
-            if (!std::binary_search(registered.begin(), registered.end(), std::make_pair(k, e)) && usable(k, e))
+            if (!std::binary_search(registered.begin(), registered.end(),
+                                    std::make_pair(k, e))) // register_pairs skips scans without features
                 across.push_back({k, e});
         }
     }
