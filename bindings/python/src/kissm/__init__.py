@@ -152,9 +152,10 @@ def refine(
         return matcher.refine(source, target, initial)
 
 
-# The batch API (kissm.batch), a submodule that needs everything above; importing it imports no Dask or Ray; and
-# multiway registration (kissm.multiway.align), the batch API and the pose graph together.
-from . import batch, multiway  # noqa: E402
+# The batch API (kissm.batch), a submodule that needs everything above; importing it imports no Dask or Ray;
+# multiway registration (kissm.multiway.align), the batch API and the pose graph together; and the readers and
+# writers of kissm.io (E57, bags, TUM/KITTI poses), whose dependencies are imported only when called.
+from . import batch, io, multiway  # noqa: E402
 
 __all__ = [
     "FORMATS",
@@ -192,6 +193,7 @@ __all__ = [
     "batch",
     "multiway",
     "ground_mask",
+    "io",
     "library_path",
     "read_points",
     "refine",

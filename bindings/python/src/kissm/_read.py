@@ -8,8 +8,9 @@ from typing import Union
 
 import numpy as np
 
-from ._errors import check
+from ._errors import Error, check
 from ._ffi import ffi, lib
+from ._laz import is_laz, laspy_with_lazrs, laz_missing, read_laz
 
 #: Names accepted by :func:`read_points` (those of the ``kissm`` CLI's ``--format``).
 FORMATS: dict[str, int] = {
@@ -37,9 +38,13 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
 
     Formats: PLY (ascii, binary), PCD (ascii, binary), KITTI ``.bin`` (float32 x y z intensity), ``.npy``
     (float32/float64, (N, 3) or (N, k >= 3)), whitespace ``xyz`` text (.xyz .txt .pts .asc), LAS 1.0-1.4
-    (.las, uncompressed, point formats 0-10: scale and offset applied in float64, points flagged withheld left
-    out; LAZ raises ParseError), and raw float32 x y z triples with ``format="bin_xyz"``. ``"auto"`` picks by
-    extension, then by content.
+    (.las, point formats 0-10: scale and offset applied in float64, points flagged withheld left out), and raw
+    float32 x y z triples with ``format="bin_xyz"``. ``"auto"`` picks by extension, then by content.
+
+    LAZ (compressed LAS, any name: its header says it is compressed) is read with ``"auto"`` or ``"las"``
+    through laspy and its lazrs backend, installed by ``pip install kissm[las]``: the same points, bit for bit,
+    as the library returns for that data stored uncompressed. Without them it raises
+    :class:`kissm.UnsupportedFormatError` naming that command.
 
     Returns:
         A new (N, 3) float64 C-contiguous array. Non-finite points are kept as they are (the registration's
@@ -47,7 +52,8 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
 
     Raises:
         kissm.IoError: the file cannot be opened or read (an OSError).
-        kissm.ParseError, kissm.UnsupportedFormatError: the content is malformed or of no known format.
+        kissm.ParseError, kissm.UnsupportedFormatError: the content is malformed or of no known format (or LAZ
+            without laspy and lazrs).
         ValueError: ``format`` is not one of :data:`FORMATS`.
     """
     if format not in FORMATS:
@@ -56,8 +62,18 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
     encoded = os.fsencode(path)
     if b"\0" in encoded:
         raise ValueError("path contains a NUL character")
+    laz = format in ("auto", "las") and is_laz(encoded)
+    if laz:
+        laspy = laspy_with_lazrs()
+        if laspy is not None:
+            return read_laz(laspy, encoded)
     out = ffi.new("kissm_cloud **")
-    check(lib.kissm_read_points(encoded, FORMATS[format], out))
+    try:
+        check(lib.kissm_read_points(encoded, FORMATS[format], out))
+    except Error as e:
+        if laz:  # the library cannot decompress: name what can
+            raise laz_missing(encoded, e) from e
+        raise
     cloud = ffi.gc(out[0], lib.kissm_cloud_destroy)
     try:
         count = int(lib.kissm_cloud_count(cloud))

@@ -35,6 +35,7 @@ from ._candidates import (
 from ._config import RefineMode
 from ._errors import InvalidArgumentError
 from ._matcher import Features
+from ._pose_files import kitti_lines, quaternion, tum_lines, write_lines
 from ._pose_graph import PoseGraph
 from ._read import read_points
 from ._result import Result
@@ -109,19 +110,13 @@ class Alignment:
         position as its timestamp unless ``timestamps`` gives one per scan); scans not placed are left out."""
         if timestamps is not None and len(timestamps) != len(self.keys):
             raise InvalidArgumentError(f"write_tum: {len(timestamps)} timestamps for {len(self.keys)} scans")
-        lines = []
-        for position, pose in enumerate(self.poses):
-            if not self.placed[position]:
-                continue
-            stamp = float(timestamps[position]) if timestamps is not None else float(position)
-            values = (stamp, *(float(v) for v in pose[:3, 3]), *_quaternion(pose[:3, :3]))
-            lines.append(" ".join(repr(v) for v in values))
-        _write(path, lines)
+        stamps = timestamps if timestamps is not None else range(len(self.keys))
+        write_lines(path, tum_lines(self.poses, stamps, self.placed))
 
     def write_kitti(self, path: str | os.PathLike[str]) -> None:
         """Every scan's pose in the KITTI odometry format: the first three rows of the 4x4, row-major, one line per
         scan in order (``nan`` entries for a scan that is not placed, so that line k stays scan k)."""
-        _write(path, [" ".join(repr(float(v)) for v in pose[:3, :].reshape(-1)) for pose in self.poses])
+        write_lines(path, kitti_lines(self.poses))
 
     def write_g2o(self, path: str | os.PathLike[str]) -> None:
         """The graph in g2o's format: a ``VERTEX_SE3:QUAT`` per placed scan (its pose) and an ``EDGE_SE3:QUAT`` per
@@ -140,7 +135,7 @@ class Alignment:
             info = edge.information[np.ix_(order, order)] * np.outer(scale, scale)
             upper = [repr(float(info[i, j])) for i in range(6) for j in range(i, 6)]
             lines.append(f"EDGE_SE3:QUAT {edge.target} {edge.source} {_g2o_pose(edge.transform)} {' '.join(upper)}")
-        _write(path, lines)
+        write_lines(path, lines)
 
 
 def align(
@@ -497,37 +492,10 @@ def _information(result: Result) -> np.ndarray:
     return np.diag([sigma_rotation**-2] * 3 + [sigma_translation**-2] * 3)
 
 
-def _quaternion(rotation: np.ndarray) -> tuple[float, float, float, float]:
-    """(qx, qy, qz, qw) of a rotation matrix, w >= 0."""
-    m = rotation
-    trace = float(np.trace(m))
-    if trace > 0:
-        s = math.sqrt(trace + 1.0) * 2
-        q = (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
-        q = 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s
-    elif m[1, 1] > m[2, 2]:
-        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
-        q = (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s
-    else:
-        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
-        q = (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s
-    x, y, z, w = (float(v) for v in q)
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    sign = -1.0 if w < 0 else 1.0
-    return sign * x / norm, sign * y / norm, sign * z / norm, sign * w / norm
-
-
 def _g2o_pose(pose: np.ndarray) -> str:
-    qx, qy, qz, qw = _quaternion(pose[:3, :3])
+    qx, qy, qz, qw = quaternion(pose[:3, :3])
     t = pose[:3, 3]
     return " ".join(repr(float(v)) for v in (t[0], t[1], t[2], qx, qy, qz, qw))
-
-
-def _write(path: str | os.PathLike[str], lines: list[str]) -> None:
-    with open(path, "w", encoding="utf-8") as f:
-        f.write("".join(line + "\n" for line in lines))
 
 
 __all__ = ["Alignment", "Edge", "align", "align_sessions", "session_clouds"]
