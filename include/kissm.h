@@ -191,6 +191,11 @@ KISSM_API const char *kissm_last_error_message(void);
  * facades, pillars at a regular spacing, a symmetric object) that matches as well one period along or turned onto
  * its own symmetry. The pose returned is one of them; a prior or a check from elsewhere must choose. */
 #define KISSM_REASON_AMBIGUOUS 14
+/** Refinement ran and the aligned clouds stay more than 0.37 voxel apart (kissm_result.refine_rmse) while the pose
+ * is weakly constrained (kissm_result.refine_condition below 0.09): a partial match of repeated structure (the
+ * ground and one facade of a street lined up, the rest apart, the pose free to slide). Right poses measured are
+ * either tighter or better conditioned (docs/design/accuracy.md, "The simulated city's wrong poses"). */
+#define KISSM_REASON_LOOSE_AND_WEAK 15
 
 /**
  * @brief Describes a reason code.

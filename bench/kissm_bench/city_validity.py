@@ -14,6 +14,10 @@ scans apart (half of them with headings more than 45 degrees apart: crossings), 
 refine_mode="gicp")`` (``--refine``) on features computed once per scan; every result's numbers go to a JSON line
 with its error against the exact relative pose (wrong: more than 2 degrees or 2 voxels off).
 
+``sets``: every pair of the shared multi-scan sets (the later scan into the earlier), raw and with the source turned
+and moved ``--turns`` times, recorded the same way (``how`` is the set's name): what a rule costs the multiway
+job's pairs.
+
 ``rules``: reads those lines and the validity study's records (``bench/validity_study.py --priors --records``:
 the real data raw, turned and moved, GICP and coarse, refinement from priors, the synthetic scenes), compares the
 numbers of the wrong and right valid drive results, and lists the single thresholds and pairs of thresholds that
@@ -22,6 +26,7 @@ the study; ``--rule`` costs a rule of one's own. Rules are applied after the fac
 field that is NaN, e.g. the residual of an unrefined pose, leaves the rule silent).
 
     python bench/city_validity_study.py drive DRIVE --out d.jsonl [--scans N] [--far 400] [--extra I,J ...]
+    python bench/city_validity_study.py sets --turns 3 [--refine none] --out sets.jsonl
     python bench/validity_study.py --threads 1 --priors --records study.jsonl
     python bench/city_validity_study.py rules d1.jsonl d2.jsonl ... --real study.jsonl \\
         [--rule "refuse if refine_rmse_voxels > 0.35 and refine_condition < 0.09"]
@@ -39,6 +44,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .common import DATA_HELP, default_data
 
 MAX_ANGLE_DEG, MAX_VOXELS = 2.0, 2.0
 VOXEL = 0.5
@@ -108,7 +115,9 @@ def choose_pairs(
     return pairs
 
 
-def row(result: Any, i: int, j: int, how: str, truth: np.ndarray, distance: float) -> dict[str, Any]:
+def row(
+    result: Any, i: int, j: int, how: str, truth: np.ndarray, distance: float, voxel: float = VOXEL
+) -> dict[str, Any]:
     out: dict[str, Any] = {"target": i, "source": j, "how": how, "distance_m": distance}
     out["valid"] = bool(result.valid)
     out["reason"] = result.reason
@@ -116,7 +125,7 @@ def row(result: Any, i: int, j: int, how: str, truth: np.ndarray, distance: floa
     if np.isfinite(transform).all():
         deg, m = pose_error(transform, truth)
         out["error_deg"], out["error_m"] = deg, m
-        out["right"] = deg <= MAX_ANGLE_DEG and m <= MAX_VOXELS * VOXEL
+        out["right"] = deg <= MAX_ANGLE_DEG and m <= MAX_VOXELS * voxel
     else:
         out["error_deg"] = out["error_m"] = None
         out["right"] = False
@@ -158,6 +167,57 @@ def drive_main(args: argparse.Namespace) -> int:
                 if count % 200 == 199:
                     print(f"  pairs {count + 1}/{len(pairs)} {time.monotonic() - t0:.0f} s", file=sys.stderr)
     print(f"  done in {time.monotonic() - t0:.0f} s", file=sys.stderr)
+    return 0
+
+
+def random_motion(rng: np.random.Generator, reach: float) -> np.ndarray:
+    """A rigid motion with a uniformly random rotation and a translation of up to ``reach`` per axis."""
+    q = rng.normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    t = np.eye(4)
+    t[:3, :3] = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+    t[:3, 3] = rng.uniform(-reach, reach, size=3)
+    return t
+
+
+def sets_main(args: argparse.Namespace) -> int:
+    """Every pair of every shared multi-scan set, the later scan into the earlier (``kissm.multiway.align``'s
+    "all"), each result recorded as the drive step records its pairs (``how`` is the set's name)."""
+    import kissm
+
+    from .data import SCAN_SETS, read_scan_set
+
+    root = args.data
+    with open(args.out, "w", encoding="utf-8") as out:
+        for scan_set in SCAN_SETS:
+            names, files, formats, poses = read_scan_set(root / scan_set.folder)
+            clouds = [kissm.read_points(f, format=k) for f, k in zip(files, formats, strict=True)]
+            rng = np.random.default_rng(args.seed)
+            with kissm.Matcher(voxel_size=scan_set.voxel, refine_mode=args.refine, num_threads=args.threads) as m:
+                targets = [m.compute_features(c) for c in clouds]
+                for turn in range(args.turns + 1):
+                    # Turned: every source moved by a random rigid motion T (the sources' frames no longer near the
+                    # targets'), so the relative pose is truth @ inv(T).
+                    motions = [np.eye(4) if turn == 0 else random_motion(rng, 10 * scan_set.voxel) for _ in clouds]
+                    sources = (
+                        targets
+                        if turn == 0
+                        else [
+                            m.compute_features(c @ t[:3, :3].T + t[:3, 3]) for c, t in zip(clouds, motions, strict=True)
+                        ]
+                    )
+                    for j in range(len(names)):
+                        for i in range(j):
+                            r = m.register_features(sources[j], targets[i])
+                            truth = np.linalg.inv(poses[names[i]]) @ poses[names[j]] @ np.linalg.inv(motions[j])
+                            record = row(r, i, j, scan_set.label, truth, 0.0, scan_set.voxel)
+                            record["turn"] = turn
+                            out.write(json.dumps(record) + "\n")
+            print(f"  {scan_set.label}: {len(names)} scans", file=sys.stderr, flush=True)
     return 0
 
 
@@ -431,6 +491,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     d.add_argument("--threads", type=int, default=1)
     d.add_argument("--refine", default="gicp", help="the Matcher's refine_mode (gicp)")
     d.add_argument("--out", type=Path, required=True, help="JSON lines, one per pair")
+    s = sub.add_parser("sets", help="register every pair of the shared multi-scan sets and record every result")
+    s.add_argument("--data", type=Path, default=default_data(), help=DATA_HELP)
+    s.add_argument("--threads", type=int, default=1)
+    s.add_argument("--refine", default="gicp", help="the Matcher's refine_mode (gicp)")
+    s.add_argument("--turns", type=int, default=0, help="also each pair with its source turned and moved, N times (0)")
+    s.add_argument("--seed", type=int, default=7, help="the turns' draw (7)")
+    s.add_argument("--out", type=Path, required=True, help="JSON lines, one per pair")
     r = sub.add_parser("rules", help="compare wrong and right valid results; rules that refuse every wrong one")
     r.add_argument("drives", nargs="+", type=Path, help="the drive step's JSON lines")
     r.add_argument(
@@ -448,4 +515,4 @@ def main(argv: Sequence[str] | None = None) -> int:
         help='a rule to cost: "overlap >= 0.85 and ambiguity <= 0.45" (kept when all hold) or "refuse if ..."',
     )
     args = parser.parse_args(argv)
-    return drive_main(args) if args.command == "drive" else rules_main(args)
+    return {"drive": drive_main, "sets": sets_main, "rules": rules_main}[args.command](args)

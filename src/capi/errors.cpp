@@ -138,6 +138,8 @@ const char *kissm_reason_string(int32_t reason) {
     case KISSM_REASON_LOOSE_ALIGNMENT: return "the refined clouds stay apart (a local optimum beside the right pose)";
     case KISSM_REASON_AMBIGUOUS:
         return "a second, distinct pose has nearly as much support (a repetitive or symmetric scene)";
+    case KISSM_REASON_LOOSE_AND_WEAK:
+        return "the refined clouds stay loosely apart and the pose can slide (a partial match of repeated structure)";
     default: return "unknown reason";
     }
 }

@@ -61,6 +61,7 @@ constexpr int32_t reason_code(Reason reason) {
     case Reason::Tilted: return KISSM_REASON_TILTED;
     case Reason::LooseAlignment: return KISSM_REASON_LOOSE_ALIGNMENT;
     case Reason::Ambiguous: return KISSM_REASON_AMBIGUOUS;
+    case Reason::LooseAndWeak: return KISSM_REASON_LOOSE_AND_WEAK;
     }
     return KISSM_REASON_NONE;
 }

@@ -55,6 +55,8 @@ Reason prior_validity(const RefinedEvidence &refined, const RefinedRule &rule) {
     if (!rule.allow_degenerate && !(refined.condition >= rule.min_condition)) return Reason::Unconstrained;
     if (!refined.converged) return Reason::NotConverged;
     if (!(refined.rmse <= rule.max_rmse)) return Reason::LooseAlignment;
+    // Under allow_degenerate too: the wrong poses it refuses are turned, not only slid along the weak direction.
+    if (refined.rmse > rule.loose_rmse && !(refined.condition >= kWeakCondition)) return Reason::LooseAndWeak;
     // A degenerate pose the caller accepts is uncertain along its weak directions by definition.
     if (!(rule.allow_degenerate && refined.degenerate) &&
         !(kRefinedRotationSigmas * refined.rotation_sigma <= rule.max_rotation_uncertainty))

@@ -315,7 +315,8 @@ static void test_reason_strings(void) {
                                KISSM_REASON_NOT_CONVERGED,
                                KISSM_REASON_TILTED,
                                KISSM_REASON_LOOSE_ALIGNMENT,
-                               KISSM_REASON_AMBIGUOUS};
+                               KISSM_REASON_AMBIGUOUS,
+                               KISSM_REASON_LOOSE_AND_WEAK};
     const int count = (int)(sizeof reasons / sizeof reasons[0]);
     const char *unknown = kissm_reason_string(12345);
     int i, j;

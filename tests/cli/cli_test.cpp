@@ -867,10 +867,22 @@ void test_validity_options() {
     const uint64_t inliers = static_cast<uint64_t>(b.at("final_inliers").number);
     CHECK_MSG(std::isfinite(u) && u > 0.0, "rotation_uncertainty %s", b.at("rotation_uncertainty").text.c_str());
     CHECK(b.at("inlier_coverage").is(Json::Type::Null));
-    // One ulp past it the coarse rule declines, and the pose is verified by refinement (GICP) under the refined
-    // rule: held to a coverage no inlier set reaches, the verification fails and the coarse decision stands.
-    check_decision_flips(plain + "--min-inlier-coverage 1 ", "--max-rotation-uncertainty", "rotation_uncertainty", u,
-                         0.0, KISSM_REASON_UNCERTAIN_ROTATION, base);
+    // A bound below twice the uncertainty (kCoarseConfirmSigmas) has the pose verified by refinement (GICP) under the
+    // refined rule: held to a coverage no inlier set reaches, the verification fails and the pose is not valid, for
+    // the verification's reason; one ulp past the uncertainty itself the coarse rule declines first and its reason
+    // stands. The coarse pose is kept either way.
+    check_decision_flips(plain + "--min-inlier-coverage 1 ", "--max-rotation-uncertainty", "rotation_uncertainty",
+                         2.0 * u, 0.0, KISSM_REASON_CLUSTERED_INLIERS, base);
+    {
+        const Run declined = run(plain + "--min-inlier-coverage 1 --max-rotation-uncertainty " +
+                                 exact(std::nextafter(u, 0.0)) + " --json");
+        CHECK_EQ_INT(reason_of(declined, "one ulp past the uncertainty"), KISSM_REASON_UNCERTAIN_ROTATION);
+        CHECK(json_line_value(declined.out, "transform") == json_line_value(base.out, "transform"));
+        CHECK_EQ_INT(
+            reason_of(run(plain + "--min-inlier-coverage 1 --max-rotation-uncertainty " + exact(u) + " --json"),
+                      "at the uncertainty, verified and refused"),
+            KISSM_REASON_CLUSTERED_INLIERS);
+    }
     {
         // Under the default refined rule the verification accepts it: the refined pose, valid, the solver's pose kept
         // as coarse_transform, the refinement's numbers reported.

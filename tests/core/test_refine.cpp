@@ -626,7 +626,7 @@ static void test_validity_rules() {
     loose.rotation_uncertainty = std::numeric_limits<double>::infinity(); // all inliers on one point
     CHECK(coarse_validity(100, loose, coarse) == Reason::UncertainRotation);
 
-    const RefinedRule rule{10, 0.1, 0.4, 1e-2, 0.25, 0.1, false};
+    const RefinedRule rule{10, 0.1, 0.4, 1e-2, 0.25, 0.1, 0.1, false}; // the loose-and-weak box off
     RefinedEvidence good;
     good.num_correspondences = 6;
     good.overlap = 0.4;
@@ -718,6 +718,32 @@ static void test_validity_rules() {
     e = good;
     e.rmse = 1.0, e.inlier_coverage = 0.0;
     CHECK(refined_validity(10, spread, e, rule) == Reason::ClusteredInliers);
+    // Loose and weak: a residual above loose_rmse with a condition below kWeakCondition, after the residual bound
+    // and before the rotation; under allow_degenerate too, and a condition that is not a number counts as weak.
+    {
+        RefinedRule box = rule;
+        box.loose_rmse = 0.05;
+        e = good; // rmse 0.1, condition 0.01
+        CHECK(prior_validity(e, box) == Reason::LooseAndWeak);
+        CHECK(refined_validity(10, spread, e, box) == Reason::LooseAndWeak);
+        e.condition = kWeakCondition;
+        CHECK(prior_validity(e, box) == Reason::None);
+        e.condition = std::nextafter(kWeakCondition, 0.0);
+        CHECK(prior_validity(e, box) == Reason::LooseAndWeak);
+        e.rmse = 0.05;
+        CHECK(prior_validity(e, box) == Reason::None);
+        e.rmse = std::nextafter(0.1, 1.0);
+        CHECK(prior_validity(e, box) == Reason::LooseAlignment);
+        e = good;
+        e.rotation_sigma = std::numeric_limits<double>::infinity();
+        CHECK(prior_validity(e, box) == Reason::LooseAndWeak);
+        box.allow_degenerate = true;
+        e = good;
+        e.condition = std::numeric_limits<double>::quiet_NaN();
+        CHECK(prior_validity(e, box) == Reason::LooseAndWeak);
+        e.condition = 0.5;
+        CHECK(prior_validity(e, box) == Reason::None);
+    }
 }
 
 int main() {

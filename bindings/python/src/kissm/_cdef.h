@@ -69,6 +69,8 @@ const char *kissm_last_error_message(void);
 
 #define KISSM_REASON_AMBIGUOUS 14
 
+#define KISSM_REASON_LOOSE_AND_WEAK 15
+
 const char *kissm_reason_string(int32_t reason);
 
 #define KISSM_NONFINITE_REJECT 0

@@ -66,6 +66,10 @@ pub enum Reason {
     /// matches as well one period along or turned onto its own symmetry. A prior or a check from elsewhere must
     /// choose.
     Ambiguous,
+    /// With refinement: the refined clouds stay more than 0.37 voxel apart ([`Refinement::rmse`]) while the pose
+    /// is weakly constrained ([`Refinement::condition`] below 0.09): a partial match of repeated structure (a
+    /// street's ground and one facade lined up, the rest apart, the pose free to slide along it).
+    LooseAndWeak,
     /// A reason this version of the crate does not know (from a newer library), with its code.
     Other(i32),
 }
@@ -86,6 +90,7 @@ c_codes!(Reason, "KISSM_REASON_", "reason", Other {
     Tilted => sys::KISSM_REASON_TILTED,
     Ambiguous => sys::KISSM_REASON_AMBIGUOUS,
     LooseAlignment => sys::KISSM_REASON_LOOSE_ALIGNMENT,
+    LooseAndWeak => sys::KISSM_REASON_LOOSE_AND_WEAK,
 });
 
 impl Reason {

@@ -496,7 +496,13 @@ fn reasons_round_trip() {
         Reason::Ambiguous.to_string(),
         "a second, distinct pose has nearly as much support (a repetitive or symmetric scene)"
     );
-    assert_eq!(Reason::from_code(15), Reason::Other(15));
+    assert_eq!(Reason::from_code(sys::KISSM_REASON_LOOSE_AND_WEAK), Reason::LooseAndWeak);
+    assert_eq!(Reason::LooseAndWeak.code(), 15);
+    assert_eq!(
+        Reason::LooseAndWeak.to_string(),
+        "the refined clouds stay loosely apart and the pose can slide (a partial match of repeated structure)"
+    );
+    assert_eq!(Reason::from_code(16), Reason::Other(16));
     assert_eq!(Reason::from_code(0), Reason::None);
     assert_eq!(Reason::from_code(99), Reason::Other(99));
     assert_eq!(Reason::Other(99).code(), 99);
