@@ -175,7 +175,9 @@ static double information_rotation_sigma(const double info[36]) {
 
 /* kissm_refine's rule, from the numbers it reports (docs/refinement.md): at least 6 correspondences and
  * overlap >= min_overlap, else LOW_OVERLAP; refine_condition >= min_refine_condition, else UNCONSTRAINED;
- * converged, else NOT_CONVERGED; refine_rmse <= max_refine_rmse_gain * voxel_size, else LOOSE_ALIGNMENT; 2 times
+ * converged, else NOT_CONVERGED; refine_rmse <= max_refine_rmse_gain * voxel_size, else LOOSE_ALIGNMENT; not
+ * refine_rmse > 0.37 voxel with refine_condition < 0.09 (a condition that is not a number counts as weak), else
+ * LOOSE_AND_WEAK; 2 times
  * the information's rotation sigma <= max_rotation_uncertainty, else UNCERTAIN_ROTATION; the config's values,
  * whatever the defaults are. */
 static void check_prior_rule(const char *label, const kissm_result *r, const kissm_config *c) {
@@ -188,6 +190,8 @@ static void check_prior_rule(const char *label, const kissm_result *r, const kis
         expected = KISSM_REASON_NOT_CONVERGED;
     else if (!(r->refine_rmse <= c->max_refine_rmse_gain * c->voxel_size))
         expected = KISSM_REASON_LOOSE_ALIGNMENT;
+    else if (r->refine_rmse > 0.37 * c->voxel_size && !(r->refine_condition >= 0.09))
+        expected = KISSM_REASON_LOOSE_AND_WEAK;
     else if (!(c->allow_degenerate && r->degenerate) &&
              !(2.0 * information_rotation_sigma(r->information) <= c->max_rotation_uncertainty))
         expected = KISSM_REASON_UNCERTAIN_ROTATION;

@@ -267,14 +267,15 @@ inline bool result_sane(const kissm_result &r, const kissm_config &c) {
 }
 
 // A refinement from the caller's pose (kissm_refine, kissm_refine_features) always ran: valid, or
-// LOW_OVERLAP / UNCONSTRAINED / UNCERTAIN_ROTATION / NOT_CONVERGED / LOOSE_ALIGNMENT, with a rigid pose either way
+// LOW_OVERLAP / UNCONSTRAINED / UNCERTAIN_ROTATION / NOT_CONVERGED / LOOSE_ALIGNMENT / LOOSE_AND_WEAK, with a rigid
+// pose either way
 // and no solver numbers (no rotation uncertainty, coverage or ambiguity);
 // coarse_transform is the initial transform made rigid, so within 1e-3 of it.
 inline bool refine_result_sane(const kissm_result &r, const kissm_config &c, const double initial[16]) {
     if (!refine_fields_sane(r, c) || std::isnan(r.overlap) || !rigid_pose(r)) return false;
     if (!r.valid && r.reason != KISSM_REASON_LOW_OVERLAP && r.reason != KISSM_REASON_UNCONSTRAINED &&
         r.reason != KISSM_REASON_UNCERTAIN_ROTATION && r.reason != KISSM_REASON_NOT_CONVERGED &&
-        r.reason != KISSM_REASON_LOOSE_ALIGNMENT)
+        r.reason != KISSM_REASON_LOOSE_ALIGNMENT && r.reason != KISSM_REASON_LOOSE_AND_WEAK)
         return false;
     if (!std::isnan(r.rotation_uncertainty) || !std::isnan(r.inlier_coverage) || !std::isnan(r.ambiguity)) return false;
     if (!(r.confidence >= 0.0 && r.confidence <= 1.0)) return false;
