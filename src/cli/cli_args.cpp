@@ -9,7 +9,29 @@
 
 #include <kissm.h>
 
+#include "commands.hpp"
+#include "near_match.hpp"
+
 namespace kissm_cli {
+
+namespace {
+
+// The command's --help printer, whose text lists every option it takes (nullptr for an unknown command).
+void (*help_of(const std::string &command))(std::FILE *) {
+    for (const auto &[name, print] : command_helps())
+        if (command == name) return print;
+    return nullptr;
+}
+
+} // namespace
+
+const std::vector<std::pair<std::string, void (*)(std::FILE *)>> &command_helps() {
+    static const std::vector<std::pair<std::string, void (*)(std::FILE *)>> helps = {
+        {"register", print_register_help}, {"refine", print_refine_help}, {"demo", print_demo_help},
+        {"ground", print_ground_help},     {"batch", print_batch_help},   {"simulate", print_simulate_help},
+        {"align", print_align_help}};
+    return helps;
+}
 
 ArgCursor::ArgCursor(std::string command, std::vector<std::string> args)
     : command_(std::move(command)), args_(std::move(args)) {}
@@ -59,8 +81,12 @@ bool ArgCursor::take_flag(const char *name, bool *flag, const char *alias) const
 }
 
 void ArgCursor::unknown() const {
-    throw UsageError("unknown option '" + name_ + "' for 'kissm " + command_ + "' (see 'kissm " + command_ +
-                     " --help')");
+    std::string hint;
+    if (is_option_ && name_.compare(0, 2, "--") == 0) {
+        if (auto *print = help_of(command_)) hint = did_you_mean(name_, options_in_help(print));
+    }
+    throw UsageError("unknown option '" + one_line(name_) + "' for 'kissm " + command_ + "'" + hint + " (see 'kissm " +
+                     command_ + " --help')");
 }
 
 double parse_double(const std::string &option, const std::string &text) {

@@ -4,8 +4,10 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kissm_cli {
@@ -22,6 +24,9 @@ public:
 
 // Walks over a command's arguments. Options are "--name value", "--name=value" or flags; "--" ends the
 // options; everything else is positional.
+// Every command's name with its --help printer, in `kissm --help` order (for suggestions).
+const std::vector<std::pair<std::string, void (*)(std::FILE *)>> &command_helps();
+
 class ArgCursor {
 public:
     ArgCursor(std::string command, std::vector<std::string> args);

@@ -22,6 +22,7 @@
 
 #include "cli_args.hpp"
 #include "commands.hpp"
+#include "near_match.hpp"
 
 namespace kissm_cli {
 namespace {
@@ -87,7 +88,10 @@ int run(const std::vector<std::string> &args) {
         } else if (rest[0] == "align") {
             print_align_help(stdout);
         } else {
-            throw UsageError("no help for unknown command '" + one_line(rest[0]) + "' (try 'kissm --help')");
+            std::vector<std::string> commands;
+            for (const auto &entry : command_helps()) commands.push_back(entry.first);
+            throw UsageError("no help for unknown command '" + one_line(rest[0]) + "'" +
+                             did_you_mean(rest[0], commands) + " (try 'kissm --help')");
         }
         return kExitOk;
     }
@@ -102,10 +106,14 @@ int run(const std::vector<std::string> &args) {
     if (command == "batch") return run_batch(rest);
     if (command == "simulate") return run_simulate(rest);
     if (command == "align") return run_align(rest);
+    std::vector<std::string> commands;
+    for (const auto &entry : command_helps()) commands.push_back(entry.first);
     if (!command.empty() && command[0] == '-') {
-        throw UsageError("unknown option '" + one_line(command) + "' (try 'kissm --help')");
+        throw UsageError("unknown option '" + one_line(command) + "'" + did_you_mean(command, {"--help", "--version"}) +
+                         " (try 'kissm --help')");
     }
-    throw UsageError("unknown command '" + one_line(command) + "' (try 'kissm --help')");
+    throw UsageError("unknown command '" + one_line(command) + "'" + did_you_mean(command, commands) +
+                     " (try 'kissm --help')");
 }
 
 } // namespace

@@ -283,8 +283,19 @@ void test_usage() {
 
     expect_usage_error("", "missing command");
     expect_usage_error("frobnicate", "unknown command");
+    CHECK(!contains(run("frobnicate").err, "did you mean")); // nothing near: no guess
     expect_usage_error("--frobnicate", "--frobnicate");
     expect_usage_error("help frobnicate", "frobnicate");
+    // Issue 36: a typo names the nearest command or option, taken from the --help texts.
+    expect_usage_error("regster a b", "unknown command 'regster' (did you mean 'register'?)");
+    expect_usage_error("aling", "(did you mean 'align'?)");
+    expect_usage_error("help regster", "(did you mean 'register'?)");
+    expect_usage_error("--verison", "(did you mean '--version'?)");
+    expect_usage_error("register a b --vxoel 0.3",
+                       "unknown option '--vxoel' for 'kissm register' (did you mean '--voxel'?)");
+    expect_usage_error("register a b --voxel=0.3 --refne gicp", "(did you mean '--refine'?)");
+    expect_usage_error("align s.tsv --voxel 1 --out o --pairz all", "(did you mean '--pairs'?)");
+    expect_usage_error("batch p.tsv --voxel 1 --out o --resum", "(did you mean '--resume'?)");
 }
 
 void test_errors() {

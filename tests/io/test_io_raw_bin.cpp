@@ -41,6 +41,13 @@ void test_sizes() {
     const std::string x = records(false, kPoints);
     EXPECT_FAILURE(dir.write("p.raw", x.substr(0, 35)), FileFormat::BinXyz, ErrorKind::Parse,
                    "size 35 bytes is not a multiple of 12");
+    // A size that fits the other layout names it (issue 36): x y z triples read as KITTI, and the reverse.
+    EXPECT_FAILURE(dir.write("xyz.bin", x.substr(0, 36)), FileFormat::KittiBin, ErrorKind::Parse,
+                   "size 36 bytes is not a multiple of 16 (float32 x y z intensity records): truncated or not this "
+                   "format; it is a multiple of 12: read it as KISSM_FORMAT_BIN_XYZ, --format bin_xyz (float32 x y z)");
+    EXPECT_FAILURE(dir.write("xyzi.raw", k.substr(0, 32)), FileFormat::BinXyz, ErrorKind::Parse,
+                   "is not a multiple of 12 (float32 x y z records): truncated or not this format; it is a multiple of "
+                   "16: read it as KISSM_FORMAT_KITTI_BIN, --format kitti_bin");
     CHECK_EVERY_CUT(dir, "cut.bin", k, FileFormat::KittiBin, kPoints, CutRule::ParseOrPrefix);
     CHECK_EVERY_CUT(dir, "cut.raw", x, FileFormat::BinXyz, kPoints, CutRule::ParseOrPrefix);
     // A prefix holding exactly two records reads as those two points.
