@@ -49,12 +49,19 @@ Eigen::Matrix3d so3_left_jacobian_inverse(const Eigen::Vector3d &w) {
     if (theta < kSmallAngle) return Eigen::Matrix3d::Identity() - 0.5 * W + (1.0 / 12.0) * W * W;
     // (1 + cos) / sin = cot(theta / 2): finite up to theta = pi, where the plain ratio is 0 / 0.
     const double c = 1.0 / (theta * theta) - std::cos(0.5 * theta) / (2.0 * theta * std::sin(0.5 * theta));
-    return Eigen::Matrix3d::Identity() - 0.5 * W + c * W * W;
+    // W W = w w^T - theta^2 I: an outer product rather than a 3x3 product (every logarithm comes through here).
+    Eigen::Matrix3d out = (c * w) * w.transpose() - 0.5 * W;
+    out.diagonal().array() += 1.0 - c * theta * theta;
+    return out;
 }
 
-// The coupling block Q(w, v) of SE(3)'s left Jacobian [[J_l(w), 0], [Q, J_l(w)]] (rotation first).
+// The coupling block Q(w, v) of SE(3)'s left Jacobian [[J_l(w), 0], [Q, J_l(w)]] (rotation first):
+// Q = V / 2 + a (P V + V P + P V P) + b (P P V + V P P - 3 P V P) + c (P V P P + P P V P) with P = hat(w),
+// V = hat(v) (Barfoot's series summed). The products of hat matrices reduce to outer products (P w = 0, and with
+// d = w.v, u = w x v: P V = v w^T - d I, P V P = -d P, P P V = u w^T - d P, V P P = -w u^T - d P, P P = w w^T -
+// |w|^2 I), so Q is assembled from a few rank-one terms: the pose graph's normal equations form one per edge and
+// step, and the seventeen 3x3 products of the literal formula were a tenth of a solve's instructions.
 Eigen::Matrix3d se3_q(const Eigen::Vector3d &w, const Eigen::Vector3d &v) {
-    const Eigen::Matrix3d P = hat(w), V = hat(v);
     const double theta = w.norm();
     double a, b, c;
     if (theta < kSmallAngle) {
@@ -70,8 +77,16 @@ Eigen::Matrix3d se3_q(const Eigen::Vector3d &w, const Eigen::Vector3d &v) {
         b = (t2 + 2.0 * co - 2.0) / (2.0 * t4);
         c = (2.0 * theta - 3.0 * s + theta * co) / (2.0 * t5);
     }
-    return 0.5 * V + a * (P * V + V * P + P * V * P) + b * (P * P * V + V * P * P - 3.0 * P * V * P) +
-           c * (P * V * P * P + P * P * V * P);
+    const double d = w.dot(v);
+    const Eigen::Vector3d u = w.cross(v);
+    // a (v w^T + w v^T - 2 d I - d P) + b (u w^T - w u^T + d P) - 2 c d (w w^T - theta^2 I), plus V / 2.
+    const Eigen::Vector3d av = a * v, bu = b * u, cw = (2.0 * c * d) * w;
+    const double diagonal = 2.0 * d * (c * theta * theta - a), skew = d * (b - a);
+    Eigen::Matrix3d q = (av + bu) * w.transpose() + w * (av - bu - cw).transpose();
+    q.diagonal().array() += diagonal;
+    const Eigen::Vector3d k = skew * w + 0.5 * v; // skew P + V / 2 = hat(skew w + v / 2)
+    q(0, 1) -= k.z(), q(0, 2) += k.y(), q(1, 0) += k.z(), q(1, 2) -= k.x(), q(2, 0) -= k.y(), q(2, 1) += k.x();
+    return q;
 }
 
 } // namespace

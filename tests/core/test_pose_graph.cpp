@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The pose graph core: SE(3)'s exponential, logarithm and right Jacobian against finite differences; the optimum of
 // consistent and noisy graphs (exact poses, a vanishing gradient); wrong robust edges rejected without bending the
-// map, also when every edge is a candidate; unplaced nodes; bitwise repeatability; cancellation.
+// map, also when every edge is a candidate; unplaced nodes; the factorisation's pattern following the weights;
+// bitwise repeatability; cancellation.
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -12,6 +13,7 @@
 
 #include "core/failure.hpp"
 #include "core/pose_graph.hpp"
+#include "core/pose_graph_lm.hpp"
 #include "core/se3.hpp"
 #include "harness.h"
 
@@ -257,6 +259,43 @@ void test_unplaced_nodes() {
     if (s.placed[10]) CHECK(pose_distance(s.poses[10], truth[0].inverse() * truth[10]) < 1e-6 || s.accepted[last - 1]);
 }
 
+// The factorisation's pattern holds the edges of non-zero weight when it is analysed (pose_graph_lm.cpp): a solve
+// whose edges of weight 0 take part again on the same workspace must analyse again and land where a new workspace
+// lands, bit for bit; an edge whose weight falls to 0 keeps its block and needs no new analysis.
+void test_workspace_pattern_follows_the_weights() {
+    const Loop l = make_loop(30, 0.01, 0.05, 8);
+    const std::size_t m = l.edges.size();
+    std::vector<long> variable(30);
+    for (std::size_t i = 0; i < 30; ++i) variable[i] = static_cast<long>(i) - 1; // node 0 fixed
+    std::vector<Rigid> start(30);
+    for (std::size_t i = 1; i < 30; ++i) start[i] = start[i - 1] * l.edges[i - 1].measured.inverse(); // odometry
+    std::vector<double> odometry_only(m, 1.0), all(m, 1.0);
+    for (std::size_t e = 0; e < m; ++e)
+        if (l.edges[e].robust) odometry_only[e] = 0.0;
+    const LmOptions options;
+
+    LmWorkspace reused;
+    std::vector<Rigid> chain = start;
+    levenberg_marquardt(l.edges, odometry_only, variable, chain, options, reused, nullptr);
+    const long chain_blocks = reused.ldlt.lower_blocks(); // the odometry's chain alone
+    std::vector<Rigid> again = start, fresh_poses = start;
+    reused.lambda = 1e-6; // the damping a new workspace starts with
+    levenberg_marquardt(l.edges, all, variable, again, options, reused, nullptr);
+    CHECK(reused.ldlt.lower_blocks() > chain_blocks);
+    LmWorkspace fresh;
+    levenberg_marquardt(l.edges, all, variable, fresh_poses, options, fresh, nullptr);
+    CHECK(reused.ldlt.lower_blocks() == fresh.ldlt.lower_blocks());
+    for (std::size_t i = 0; i < 30; ++i) {
+        CHECK(std::memcmp(again[i].R.data(), fresh_poses[i].R.data(), sizeof(double) * 9) == 0);
+        CHECK(std::memcmp(again[i].t.data(), fresh_poses[i].t.data(), sizeof(double) * 3) == 0);
+    }
+    // Weights falling to 0 keep the pattern: the closures' blocks stay as zeros and the odometry's optimum is found.
+    std::vector<Rigid> back = start;
+    levenberg_marquardt(l.edges, odometry_only, variable, back, options, reused, nullptr);
+    CHECK(reused.ldlt.lower_blocks() == fresh.ldlt.lower_blocks());
+    for (std::size_t i = 0; i < 30; ++i) CHECK(pose_distance(back[i], chain[i]) < 1e-9);
+}
+
 void test_bitwise_repeatable() {
     const Loop l = make_loop(30, 0.01, 0.05, 9);
     const PoseGraphSolution a = optimize_pose_graph(30, l.edges, 3, 22.4577, nullptr);
@@ -292,6 +331,7 @@ int main() {
     RUN_TEST(test_wrong_loop_closures_are_rejected);
     RUN_TEST(test_wrong_candidates_in_an_all_robust_graph);
     RUN_TEST(test_unplaced_nodes);
+    RUN_TEST(test_workspace_pattern_follows_the_weights);
     RUN_TEST(test_bitwise_repeatable);
     RUN_TEST(test_cancelled);
     return TEST_SUMMARY();
