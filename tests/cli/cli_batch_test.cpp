@@ -352,6 +352,40 @@ void test_batch_run() {
     const Json first = json_parse(lines_of(read_file(work("gicp.jsonl")))[0]);
     CHECK(first.at("refine").text == "gicp" && first.at("information").is(Json::Type::Array));
     std::fprintf(stderr, "first run of 7 pairs: %.2f s\n", one_s);
+
+    // A `format` column reads a row's clouds in its format (issue 35): src.ply's points as bare float32 triples
+    // under a name no reader knows, read as bin_xyz on the rows that say so; an empty field keeps the run's
+    // (auto: the same file is then an error); a name that is no format is a usage error naming the line.
+    {
+        kissm_cloud *cloud = nullptr;
+        REQUIRE(kissm_read_points(work("src.ply").c_str(), KISSM_FORMAT_AUTO, &cloud) == KISSM_OK);
+        std::vector<float> xyz(3 * kissm_cloud_count(cloud));
+        for (size_t i = 0; i < xyz.size(); ++i) xyz[i] = static_cast<float>(kissm_cloud_data(cloud)[i]);
+        kissm_cloud_destroy(cloud);
+        write_file(work("src.points"), std::string(reinterpret_cast<const char *>(xyz.data()), 4 * xyz.size()));
+    }
+    write_file(work("formats.tsv"), "source\ttarget\tformat\tgt\nsrc.points\ttgt.ply\t\tgt_src_tgt.txt\n"
+                                    "src.points\tsrc.points\tbin_xyz\t\nsrc.points\tsrc.points\t bin_xyz_f32 \t\n");
+    const Run formats = run({"batch", work("formats.tsv"), "--voxel", kVoxel, "--out", work("formats.jsonl"), "-q"});
+    CHECK_MSG(formats.code == 1, "format column: exit %d (%s)", formats.code, formats.err.c_str());
+    const std::vector<std::string> format_lines = lines_of(read_file(work("formats.jsonl")));
+    REQUIRE(format_lines.size() == 3);
+    for (const std::string &line : format_lines) {
+        const Json j = json_parse(line);
+        const double pair = j.at("pair").as_double();
+        if (pair == 1) {
+            CHECK_MSG(j.at("status").text == "error", "the run's format (auto) cannot read src.points: %s",
+                      line.c_str());
+        } else {
+            CHECK_MSG(j.at("status").text == "ok" && j.at("valid").boolean, "pair %g: %s", pair, line.c_str());
+            const std::vector<double> T = j.at("transform").flat();
+            REQUIRE(T.size() == 16);
+            for (int i = 0; i < 16; ++i) CHECK_NEAR(T[static_cast<size_t>(i)], (i % 5 == 0) ? 1.0 : 0.0, 1e-6);
+        }
+    }
+    write_file(work("badformat.tsv"), "source\ttarget\tformat\nsrc.ply\ttgt.ply\tplyy\n");
+    expect_usage_error({"batch", work("badformat.tsv"), "--voxel", kVoxel, "--out", work("bad.jsonl")},
+                       "line 2: format");
 }
 
 void test_batch_resume() {

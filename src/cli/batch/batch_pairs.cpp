@@ -309,6 +309,7 @@ PairsTable parse_pairs(const std::string &text, const std::string &name) {
     const int source_col = header_column(t.header, "source", t.header_where);
     const int target_col = header_column(t.header, "target", t.header_where);
     const int gt_col = header_column(t.header, "gt", t.header_where);
+    const int format_col = header_column(t.header, "format", t.header_where);
     if (source_col < 0 || target_col < 0) {
         throw UsageError(t.header_where + ": the header has no '" + (source_col < 0 ? "source" : "target") +
                          "' column (expected tab-separated column names: source, target and optionally gt)");
@@ -322,6 +323,8 @@ PairsTable parse_pairs(const std::string &text, const std::string &name) {
         row.source = r.fields[static_cast<size_t>(source_col)];
         row.target = r.fields[static_cast<size_t>(target_col)];
         if (gt_col >= 0) row.gt = r.fields[static_cast<size_t>(gt_col)];
+        if (format_col >= 0 && !trimmed(r.fields[static_cast<size_t>(format_col)]).empty())
+            row.format = parse_format(r.where + ": format", trimmed(r.fields[static_cast<size_t>(format_col)]));
         if (row.source.empty() || row.target.empty()) {
             throw UsageError(r.where + ": empty " + (row.source.empty() ? "source" : "target") + " path");
         }

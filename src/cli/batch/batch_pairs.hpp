@@ -22,6 +22,9 @@ struct PairRow {
     // whose source and target are the paths, resolved against the pairs file and read with the run's formats.
     std::string source_file, target_file;
     int32_t source_file_format = 0, target_file_format = 0;
+    // `kissm batch`: the row's `format` column (a KISSM_FORMAT_* for both clouds, over the run's --format), or -1
+    // when the file has no such column or the row leaves it empty.
+    int32_t format = -1;
 };
 
 struct PairsTable {
@@ -30,10 +33,10 @@ struct PairsTable {
 };
 
 // Parses a pairs file's text; `name` names it in messages. The first line that is neither blank nor a '#'
-// comment is the header: tab-separated column names, among which `source` and `target` (required) and `gt`
-// (optional); other columns are ignored. Every later line that is neither blank nor a comment is a pair with
-// exactly as many tab-separated fields as the header; a trailing '\r' is ignored. Throws UsageError naming the
-// line on any problem.
+// comment is the header: tab-separated column names, among which `source` and `target` (required), `gt` and
+// `format` (optional: a --format name for both clouds of the row); other columns are ignored. Every later line that is
+// neither blank nor a comment is a pair with exactly as many tab-separated fields as the header; a trailing '\r' is
+// ignored. Throws UsageError naming the line on any problem.
 PairsTable parse_pairs(const std::string &text, const std::string &name);
 // The same from a file (a UsageError when it cannot be read).
 PairsTable read_pairs_file(const std::string &path);

@@ -113,14 +113,14 @@ FeatureCache::Key cloud_key(const std::string &path, int32_t format) {
 }
 
 // A row's clouds: its own files and formats when it has them (`kissm align`'s scans), else its paths resolved
-// against the pairs file, with the run's formats.
+// against the pairs file, with the row's format column or else the run's formats.
 FeatureCache::Key source_key(const BatchRun &run, const PairRow &row) {
     if (!row.source_file.empty()) return cloud_key(row.source_file, row.source_file_format);
-    return cloud_key(resolve_pair_path(run.pairs_file, row.source), run.source_format);
+    return cloud_key(resolve_pair_path(run.pairs_file, row.source), row.format >= 0 ? row.format : run.source_format);
 }
 FeatureCache::Key target_key(const BatchRun &run, const PairRow &row) {
     if (!row.target_file.empty()) return cloud_key(row.target_file, row.target_file_format);
-    return cloud_key(resolve_pair_path(run.pairs_file, row.target), run.target_format);
+    return cloud_key(resolve_pair_path(run.pairs_file, row.target), row.format >= 0 ? row.format : run.target_format);
 }
 
 // Appends the lines, one write and flush each (a killed run loses no finished pair and leaves at most one
