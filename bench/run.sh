@@ -72,12 +72,12 @@ fi
 py="$venv/bin/python"
 pip() { "$py" -m pip --disable-pip-version-check "$@"; }
 echo "bench: $("$py" --version) in $venv"
-stamp="$venv/.peers-installed-2" # -2: pypatchworkpp joined the peers
+stamp="$venv/.peers-installed-3" # -2: pypatchworkpp joined the peers; -3: laspy with lazrs (read_bench.py)
 if [[ ! -f $stamp ]]; then
   pip install --quiet --upgrade pip
   # The peers named in the issue, pinned; numpy and matplotlib within tested major versions.
   pip install --quiet "kiss-matcher==1.0.2" "open3d-cpu==0.20.0" "small-gicp==1.0.1" "pypatchworkpp==1.4.1" \
-    "numpy>=1.24,<3" "matplotlib>=3.7,<4"
+    "laspy[lazrs]>=2.7,<3" "numpy>=1.24,<3" "matplotlib>=3.7,<4"
   touch "$stamp"
 fi
 # kissm from this checkout, rebuilt every time (incrementally, in a build directory kept in the venv).
