@@ -315,7 +315,10 @@ typedef struct kissm_config {
     /** Worker threads, 0..1024; 0 = all hardware threads. Results do not depend on it. Default 0. */
     int32_t num_threads;
 
-    /** Metres (or the cloud's unit); > 0. Every length below scales with it. Default 0.3. */
+    /** Metres (or the cloud's unit); > 0, or 0 for automatic: each call then describes its clouds with the voxel
+     * kissm_suggest_voxel_size() gives for them together (kissm_result.voxel_size_used reports it; features
+     * computed apart get their own cloud's suggestion; its errors are the call's). Every length below scales with
+     * it. Default 0.3. */
     double voxel_size;
     /** Normal radius = gain * voxel_size; in (0, fpfh_radius_gain]. Default 3.5 (paper). */
     double normal_radius_gain;
@@ -656,6 +659,10 @@ typedef struct kissm_result {
      * (docs/design/accuracy.md, "Confidence"). 0 without a pose; NaN when the call failed. It reads none of
      * kissm_config's thresholds. Runs its fit did not see held no wrong pose at 0.95 or above. */
     double confidence;
+    /** The voxel size the clouds were described with (metres): kissm_config.voxel_size, or under voxel_size 0
+     * (automatic) the one suggested for both clouds (kissm_suggest_voxel_size()); from features, theirs. 0 when
+     * the call failed. */
+    double voxel_size_used;
     /* New fields are only ever appended here. */
 } kissm_result;
 
@@ -798,6 +805,29 @@ KISSM_API int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *sourc
 KISSM_API int32_t kissm_ground_mask(kissm_matcher *matcher, const kissm_points *points, uint8_t *out_mask);
 
 /** @} */
+
+/**
+ * @brief Suggests a voxel size for clouds that are to be described alike: one cloud, a pair (source and target,
+ *        in either order) or a set of scans.
+ *
+ * Each cloud's own voxel is the smallest of 2^(k/8) metres (k an integer) at which its grid holds at most 3000
+ * occupied voxels (a quarter of its points when it has fewer than 12000); the suggestion is the smallest of the
+ * clouds' own, raised if needed to keep every cloud within the voxel grid's range. It depends on the points
+ * alone, not on their order nor the clouds' order, and not on any thread count. Non-finite points are ignored.
+ * The rule and its evidence: docs/design/voxel_auto.md. kissm_config.voxel_size = 0 applies it in every call.
+ * @param[in] clouds @p num_clouds clouds; read during the call only.
+ * @param[in] num_clouds 1 to 65536.
+ * @param[out] out_voxel_size The suggestion, > 0; written only on success.
+ * @retval KISSM_OK Done.
+ * @retval KISSM_ERR_NULL_ARGUMENT @p clouds, a cloud's data or @p out_voxel_size is NULL.
+ * @retval KISSM_ERR_INVALID_ARGUMENT @p num_clouds is 0 or above 65536, or a kissm_points field is out of range.
+ * @retval KISSM_ERR_EMPTY_INPUT A cloud has no finite point.
+ * @retval KISSM_ERR_TOO_FEW_POINTS A cloud has fewer than 4 finite points, or they all coincide.
+ * @retval KISSM_ERR_VOXEL_RANGE A cloud's finite points span more than a double holds, or so little that no voxel
+ *         grid fits them.
+ * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
+ */
+KISSM_API int32_t kissm_suggest_voxel_size(const kissm_points *clouds, uint64_t num_clouds, double *out_voxel_size);
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Features: a cloud described once, matched against many                                           */

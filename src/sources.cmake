@@ -6,6 +6,7 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/radix_sort.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/voxelize.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/voxel_suggest.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/radius_search.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/normals.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/ground.cpp
@@ -43,6 +44,7 @@ set(KISSM_CAPI_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/capi/errors.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/config.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/points.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/capi/voxel_suggest.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/result.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/matcher.cpp
   ${CMAKE_CURRENT_LIST_DIR}/capi/features.cpp

@@ -316,6 +316,10 @@ int32_t kissm_align_features(kissm_matcher *matcher, const kissm_features *const
         require_non_null(features, "features");
         check_scans(num_scans);
         const kissm_align_options o = checked_options(options, num_scans);
+        if (matcher->params.voxel_size == 0.0) // the loop radius and the pairs need the one voxel of every scan
+            core::fail(core::ErrorKind::InvalidArgument,
+                       "matcher's config.voxel_size is 0 (automatic); an alignment needs one voxel for every scan: "
+                       "set it to kissm_suggest_voxel_size() of all the scans and compute their features with it");
         for (uint64_t k = 0; k < num_scans; ++k) {
             if (features[k] != nullptr && !core::same_descriptor_settings(features[k]->data.params, matcher->params))
                 core::fail(core::ErrorKind::FeaturesMismatch,

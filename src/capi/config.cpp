@@ -156,9 +156,11 @@ kissm_config validated_config(const kissm_config *given) {
     c.struct_size = sizeof(kissm_config);
 
     KISSM_REQUIRE_IN_LIMITS(num_threads);
-    if (!limits::voxel_size.contains(c.voxel_size))
-        fail(ErrorKind::InvalidArgument,
-             "config.voxel_size is " + number(c.voxel_size) + "; it must be a finite length > 0");
+    // 0 asks for the voxel suggested from each call's clouds (core/voxel_suggest.hpp).
+    if (c.voxel_size != 0.0 && !limits::voxel_size.contains(c.voxel_size))
+        fail(ErrorKind::InvalidArgument, "config.voxel_size is " + number(c.voxel_size) +
+                                             "; it must be a finite length > 0, or 0 for a voxel suggested from the "
+                                             "points (automatic)");
     KISSM_REQUIRE_IN_LIMITS(fpfh_radius_gain);
     require_in(c.normal_radius_gain, limits::normal_radius_gain_below(c.fpfh_radius_gain), "normal_radius_gain");
     KISSM_REQUIRE_IN_LIMITS(max_linearity);

@@ -14,6 +14,7 @@ namespace capi {
 // refuses a narrowing copy).
 #define KISSM_RESULT_SAME_FIELDS(X)                                                                                    \
   X(num_source_points)                                                                                                 \
+  X(voxel_size_used)                                                                                                   \
   X(num_target_points)                                                                                                 \
   X(num_source_nonfinite)                                                                                              \
   X(num_target_nonfinite)                                                                                              \

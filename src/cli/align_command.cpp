@@ -112,6 +112,9 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
         throw UsageError("align expects 1 scans file, got " + std::to_string(opt.pair.files.size()) + see);
     }
     require_voxel("align", opt.pair);
+    if (opt.pair.voxel_auto) // every pair must share one voxel; per-pair suggestions would differ
+        throw UsageError("align: --voxel auto is not supported yet; give --voxel V (kissm_suggest_voxel_size of all "
+                         "the scans is the automatic choice for a set)");
     if (opt.out.empty()) throw UsageError("align needs --out FILE, the poses (one line per scan)" + see);
     if (opt.have_window && opt.pairs != "sequence") throw UsageError("--window applies to --pairs sequence only");
     const bool sessions = opt.pairs == "sessions";

@@ -92,6 +92,8 @@ int run_batch_command(const BatchOptions &given) {
     run.target_format = opt.pair.target_format;
     run.pairs_file = pairs_file;
     run.has_gt_column = table.has_gt_column;
+    // --voxel auto: one voxel for every cloud of the file (all rows, so that --resume continues with the same one).
+    if (opt.pair.voxel_auto) run.config.voxel_size = batch_auto_voxel(run, table.rows);
     for (const PairRow &row : table.rows) {
         if (!is_done[static_cast<size_t>(row.index - 1)]) run.pending.push_back(row);
     }

@@ -134,8 +134,9 @@ void print_human(PairCommand command, const PairOptions &opt, const kissm_config
                 static_cast<unsigned long long>(result.num_source_points));
     std::printf("  target: %s (%llu points)\n", opt.files[1].c_str(),
                 static_cast<unsigned long long>(result.num_target_points));
-    std::printf("  voxel %g, threads %d%s, refinement %s, files read in %.1f ms\n", opt.voxel, opt.threads,
-                opt.threads == 0 ? " (all)" : "", refine_mode_name(opt.refine_mode), read_ms);
+    std::printf("  voxel %g%s, threads %d%s, refinement %s, files read in %.1f ms\n", opt.voxel,
+                opt.voxel_auto ? " (auto)" : "", opt.threads, opt.threads == 0 ? " (all)" : "",
+                refine_mode_name(opt.refine_mode), read_ms);
     if (command == PairCommand::Register &&
         (opt.ground_up.preset != 0 || config.suppression != KISSM_SUPPRESS_NONE || config.rotation_dof != 3)) {
         const int32_t preset = opt.ground_up.preset;
@@ -241,7 +242,7 @@ void require_voxel(const char *command, const PairOptions &opt) {
     if (!opt.have_voxel && opt.ground_up.preset == 0) { // every preset gives a voxel size
         throw UsageError(std::string(command) +
                          " needs --voxel V, the voxel size in the clouds' unit (e.g. --voxel 0.3 for outdoor LiDAR "
-                         "in metres), or a --preset that gives one");
+                         "in metres), --voxel auto (suggested from the clouds), or a --preset that gives one");
     }
 }
 
@@ -258,7 +259,9 @@ bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, Pa
     constexpr int32_t kAnyInt = std::numeric_limits<int32_t>::max(); // the library checks the range
     const std::string name = cur.current();
     if (name == "--voxel") {
-        opt.voxel = parse_positive(name, cur.value());
+        const std::string value = cur.value();
+        opt.voxel_auto = value == "auto";
+        opt.voxel = opt.voxel_auto ? 0.0 : parse_positive(name, value); // 0: the library suggests one per pair
         opt.have_voxel = true;
     } else if (name == "--threads") {
         opt.threads = parse_int32(name, cur.value(), 0, 4096);
@@ -444,6 +447,7 @@ int run_pair(PairCommand command, const PairOptions &given) {
         if (status != KISSM_OK) throw UsageError("cannot refine " + pair + ": " + message);
     }
 
+    if (opt.voxel_auto) opt.voxel = result.voxel_size_used; // what the pictures and reports show
     // Files first, so that a write error is reported before anything is printed.
     write_outputs(command, opt, source.get(), target.get(), result);
     if (opt.json) {

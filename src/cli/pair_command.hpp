@@ -53,6 +53,7 @@ struct PairOptions {
     int32_t target_format = KISSM_FORMAT_AUTO;
     bool have_voxel = false;
     double voxel = 0.0;
+    bool voxel_auto = false; // --voxel auto: the library's suggestion for the pair (voxel then reports it)
     int32_t threads = 0;
     bool have_threads = false;        // --threads given (batch's default is 1 per job, not all)
     int32_t min_inliers = -1;         // register only; -1: library default

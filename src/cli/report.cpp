@@ -158,6 +158,7 @@ void add_result_json(JsonWriter &json, const kissm_result &r, int32_t refine_mod
     json.field("refine_iterations", r.refine_iterations);
     json.field("refine_converged", r.refine_converged != 0);
     json.field("final_inliers", r.num_final_inliers);
+    json.field("voxel_size_used", r.voxel_size_used);
     json.key("counts");
     json.begin_object();
     json.field("source_points", r.num_source_points);

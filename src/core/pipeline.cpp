@@ -19,6 +19,7 @@
 #include "pose_solver.hpp"
 #include "pruning.hpp"
 #include "radius_search.hpp"
+#include "voxel_suggest.hpp"
 #include "voxelize.hpp"
 
 KISSM_DETAIL_BEGIN
@@ -50,6 +51,15 @@ public:
 private:
     std::chrono::steady_clock::time_point last_;
 };
+
+// Params with voxel_size 0 (automatic) get the voxel suggested for `clouds` together; others are returned as given.
+Params with_voxel_for(const Params &params, const std::vector<PointsView> &clouds,
+                      const std::vector<const char *> &names) {
+    if (params.voxel_size != 0.0) return params;
+    Params p = params;
+    p.voxel_size = suggest_voxel_size(clouds, names);
+    return p;
+}
 
 } // namespace
 
@@ -232,9 +242,13 @@ std::size_t features_bytes(const CloudFeatures &f) {
            f.descriptor_index.bytes() + f.keypoint_grid.bytes() + f.index.bytes();
 }
 
-CloudFeatures describe_cloud(const PointsView &view, const Params &params, const std::string &name, RunContext &ctx) {
+CloudFeatures describe_cloud(const PointsView &view, const Params &given, const std::string &name, RunContext &ctx) {
     CloudFeatures f;
+    Stopwatch clock;
+    const Params params = with_voxel_for(given, {view}, {name.c_str()}); // a cloud alone: its own suggestion
+    const double suggest_ms = clock.lap();
     voxelize_cloud(view, params, name, 0.0, f, ctx);
+    f.time_voxelize_ms += suggest_ms;
     describe_voxels(params, name, 0.0, 1.0, true, f, ctx);
     index_descriptors({&f}, Grids::All, ctx);
     return f;
@@ -251,6 +265,23 @@ std::pair<CloudFeatures, CloudFeatures> describe_both(const PointsView &source, 
     describe_voxels(params, "source", 0.0, 0.5, with_descriptors, p.first, ctx);
     describe_voxels(params, "target", 0.5, 1.0, with_descriptors, p.second, ctx);
     if (with_descriptors) index_descriptors({&p.first, &p.second}, Grids::ForThePlaceGate, ctx);
+    return p;
+}
+
+// The matcher's params for features described apart: under voxel_size 0 (automatic) the features' own voxel, which
+// must then be one voxel for both (each cloud's own suggestion differs in general: the pair's is needed).
+Params params_for_features(const CloudFeatures &source, const CloudFeatures &target, const Params &params) {
+    if (params.voxel_size != 0.0) return params;
+    if (source.params.voxel_size != target.params.voxel_size) {
+        std::ostringstream msg;
+        msg.precision(17);
+        msg << "source features were computed with voxel size " << source.params.voxel_size << " and target features "
+            << "with " << target.params.voxel_size << "; with an automatic voxel size both must use one voxel (compute "
+            << "them with the voxel kissm_suggest_voxel_size gives for both clouds together)";
+        fail(ErrorKind::FeaturesMismatch, msg.str());
+    }
+    Params p = params;
+    p.voxel_size = source.params.voxel_size;
     return p;
 }
 
@@ -383,6 +414,7 @@ Registration described_counts(const CloudFeatures &source, const CloudFeatures &
     r.num_target_keypoints = target.descriptors.keypoint.size();
     r.num_source_suppressed = source.num_suppressed, r.num_target_suppressed = target.num_suppressed;
     r.noise_bound = params.solver_noise_bound();
+    r.voxel_size_used = params.voxel_size;
     return r;
 }
 
@@ -565,18 +597,21 @@ Registration register_described(const CloudFeatures &source, const CloudFeatures
     return r;
 }
 
-Registration register_points(const PointsView &source, const PointsView &target, const Params &params,
-                             RunContext &ctx) {
+Registration register_points(const PointsView &source, const PointsView &target, const Params &given, RunContext &ctx) {
+    Stopwatch clock;
+    const Params params = with_voxel_for(given, {source, target}, {"source", "target"});
+    const double suggest_ms = clock.lap();
     const auto clouds = describe_pair(source, target, params, ctx);
     Registration r = register_described(clouds.first, clouds.second, params, ctx);
-    r.time_voxelize_ms = clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
+    r.time_voxelize_ms = suggest_ms + clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
     r.time_features_ms = clouds.first.time_features_ms + clouds.second.time_features_ms;
     r.time_suppression_ms = clouds.first.time_suppression_ms + clouds.second.time_suppression_ms;
     return r;
 }
 
-Registration register_features(const CloudFeatures &source, const CloudFeatures &target, const Params &params,
+Registration register_features(const CloudFeatures &source, const CloudFeatures &target, const Params &given,
                                RunContext &ctx) {
+    const Params params = params_for_features(source, target, given);
     require_same_settings(source, target, params);
     return register_described(source, target, params, ctx);
 }
@@ -591,6 +626,7 @@ Registration refine_described(const CloudFeatures &source, const CloudFeatures &
     r.num_source_nonfinite = source.num_nonfinite, r.num_target_nonfinite = target.num_nonfinite;
     r.num_source_voxels = source.voxels.points.size(), r.num_target_voxels = target.voxels.points.size();
     r.noise_bound = params.solver_noise_bound(); // keypoints stay 0: refinement uses no descriptor
+    r.voxel_size_used = params.voxel_size;
     r.coarse_rotation = R;
     r.coarse_translation = t;
     r.solved = true;
@@ -605,23 +641,28 @@ Registration refine_described(const CloudFeatures &source, const CloudFeatures &
 } // namespace
 
 Registration refine_points(const PointsView &source, const PointsView &target, const Eigen::Matrix3d &initial_rotation,
-                           const Eigen::Vector3d &initial_translation, const Params &params, RunContext &ctx) {
+                           const Eigen::Vector3d &initial_translation, const Params &given, RunContext &ctx) {
+    Stopwatch clock;
+    const Params params = with_voxel_for(given, {source, target}, {"source", "target"});
+    const double suggest_ms = clock.lap();
     const auto clouds = describe_both(source, target, params, false, ctx);
     Registration r = refine_described(clouds.first, clouds.second, initial_rotation, initial_translation, params, ctx);
-    r.time_voxelize_ms = clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
+    r.time_voxelize_ms = suggest_ms + clouds.first.time_voxelize_ms + clouds.second.time_voxelize_ms;
     r.time_features_ms = clouds.first.time_features_ms + clouds.second.time_features_ms;
     return r;
 }
 
 Registration refine_features(const CloudFeatures &source, const CloudFeatures &target,
                              const Eigen::Matrix3d &initial_rotation, const Eigen::Vector3d &initial_translation,
-                             const Params &params, RunContext &ctx) {
+                             const Params &given, RunContext &ctx) {
+    const Params params = params_for_features(source, target, given);
     require_same_settings(source, target, params);
     return refine_described(source, target, initial_rotation, initial_translation, params, ctx);
 }
 
-std::vector<std::uint8_t> ground_mask(const PointsView &view, const Params &params, RunContext &ctx) {
+std::vector<std::uint8_t> ground_mask(const PointsView &view, const Params &given, RunContext &ctx) {
     ctx.checkpoint(Stage::Voxelize, 0.0);
+    const Params params = with_voxel_for(given, {view}, {"points"});
     const InputCloud input = gather_enough_points(view, params, "points", ctx);
     std::vector<std::uint64_t> keys;
     const VoxelCloud voxels = voxelize(input, params.voxel_size, "points", ctx, &keys);

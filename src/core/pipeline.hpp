@@ -80,6 +80,7 @@ struct Registration {
     // Suppression (ground.hpp) and the yaw-only solver (NaN unless rotation_dof = 1 solved).
     std::uint64_t num_source_suppressed = 0, num_target_suppressed = 0;
     double tilt = std::numeric_limits<double>::quiet_NaN(); // radians, see yaw_solver.hpp
+    double voxel_size_used = 0.0; // the voxel the clouds were described with (the suggestion's under voxel_size 0)
     double time_voxelize_ms = 0, time_features_ms = 0, time_matching_ms = 0, time_pruning_ms = 0, time_solver_ms = 0,
            time_refine_ms = 0, time_suppression_ms = 0;
 };

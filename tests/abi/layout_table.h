@@ -18,7 +18,7 @@
 #define KISSM_LAYOUT_STRUCTS(X)                                                                                        \
   X(kissm_config, KISSM_STRUCT_CONFIG, 304)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
-  X(kissm_result, KISSM_STRUCT_RESULT, 1264)                                                                           \
+  X(kissm_result, KISSM_STRUCT_RESULT, 1272)                                                                           \
   X(kissm_align_options, KISSM_STRUCT_ALIGN_OPTIONS, 72)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
@@ -122,7 +122,8 @@
   X(kissm_result, num_weak_directions, int32_t, 956, 4)                                                                \
   X(kissm_result, weak_directions, double[36], 960, 288)                                                               \
   X(kissm_result, ambiguity, double, 1248, 8)                                                                          \
-  X(kissm_result, confidence, double, 1256, 8)
+  X(kissm_result, confidence, double, 1256, 8)                                                                         \
+  X(kissm_result, voxel_size_used, double, 1264, 8)
 
 #define KISSM_LAYOUT_ALIGN_OPTIONS(X)                                                                                  \
   X(kissm_align_options, struct_size, uint32_t, 0, 4)                                                                  \

@@ -607,6 +607,7 @@ int scn_result_is_reset(const kissm_result *r) {
     if (!isnan(r->inlier_coverage)) SCN_FAIL("inlier_coverage %g", r->inlier_coverage);
     if (!isnan(r->ambiguity)) SCN_FAIL("ambiguity %g", r->ambiguity);
     if (!isnan(r->confidence)) SCN_FAIL("confidence %g", r->confidence);
+    if (r->voxel_size_used != 0.0) SCN_FAIL("voxel_size_used %g", r->voxel_size_used);
     if (r->time_refine_ms != 0.0) SCN_FAIL("time_refine_ms %g", r->time_refine_ms);
     if (r->num_refine_correspondences != 0)
         SCN_FAIL("num_refine_correspondences %llu", (unsigned long long)r->num_refine_correspondences);

@@ -416,8 +416,17 @@ static void test_nonfinite(void) {
 /* ---------------------------------------------------------------------------------------------- */
 
 static void test_voxel_size(void) {
-    const double bad[] = {0.0, -0.0, -0.3, -1e-9, NAN, INFINITY, -INFINITY};
+    const double bad[] = {-0.3, -1e-9, -1e-300, NAN, INFINITY, -INFINITY};
     size_t i;
+    /* 0 (and -0) is the automatic voxel size: valid. */
+    for (i = 0; i < 2; ++i) {
+        kissm_config c = scn_config(i == 0 ? 0.0 : -0.0);
+        kissm_matcher *m = NULL;
+        CHECK_EQ_INT(kissm_config_validate(&c), KISSM_OK);
+        CHECK_EQ_INT(kissm_create(&c, &m), KISSM_OK);
+        check_usable(m, "voxel_size 0");
+        kissm_destroy(m);
+    }
     for (i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
         kissm_config c = scn_config(bad[i]);
         kissm_matcher *m = SENTINEL_MATCHER;
@@ -537,6 +546,72 @@ typedef struct field_case {
     double value;
     const char *word; /* the message must name this */
 } field_case;
+
+/* kissm_suggest_voxel_size: NULLs, counts, bad views and clouds without a length; the output keeps its value. */
+static void test_suggest_voxel_size(void) {
+    kissm_points p[2];
+    double v = -7.0;
+    scn_cloud dup, few;
+    const double nan_xyz[12] = {NAN, 0, 0, NAN, 1, 1, NAN, 2, 2, NAN, 3, 3};
+    p[0] = scn_points(&g_pair.source), p[1] = scn_points(&g_pair.target);
+    CHECK_EQ_INT(kissm_suggest_voxel_size(NULL, 1, &v), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("clouds"));
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 1, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("out_voxel_size"));
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 0, &v), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("num_clouds"));
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 65537, &v), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("num_clouds"));
+    p[1].scalar_type = 7;
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(msg_has("clouds[1]->scalar_type"));
+    p[1] = scn_points(&g_pair.target);
+    p[1].data = NULL;
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(msg_has("clouds[1]->data"));
+    p[1] = scn_points(&g_pair.target);
+    p[0].count = 0;
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_ERR_EMPTY_INPUT);
+    CHECK(msg_has("clouds[0]"));
+    /* every point non-finite: no length to measure */
+    p[0].data = nan_xyz, p[0].count = 4, p[0].stride_bytes = 0, p[0].scalar_type = KISSM_SCALAR_FLOAT64;
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_ERR_EMPTY_INPUT);
+    CHECK(msg_has("clouds[0]"));
+    /* 3 finite points */
+    scn_cloud_init(&few);
+    scn_cloud_push(&few, 0, 0, 0), scn_cloud_push(&few, 1, 0, 0), scn_cloud_push(&few, 0, 1, 0);
+    scn_cloud_push(&few, NAN, 0, 0), scn_cloud_push(&few, 0, INFINITY, 0);
+    p[0] = scn_points(&few);
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_ERR_TOO_FEW_POINTS);
+    CHECK(msg_has("clouds[0]"));
+    /* all points on one spot */
+    scn_cloud_init(&dup);
+    scn_make_duplicates(&dup, 100, 1.0, 2.0, 3.0);
+    p[0] = scn_points(&g_pair.source), p[1] = scn_points(&dup);
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_ERR_TOO_FEW_POINTS);
+    CHECK(msg_has("clouds[1]") && msg_has("coincide"));
+    CHECK(v == -7.0);
+    /* and through a matcher at voxel_size 0: the same status, the result reset */
+    {
+        kissm_config c = scn_config(0.0);
+        kissm_matcher *m = NULL;
+        kissm_result r;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        scn_result_poison(&r);
+        CHECK_EQ_INT(kissm_register(m, &p[0], &p[1], &r), KISSM_ERR_TOO_FEW_POINTS);
+        CHECK(msg_has("target") && msg_has("coincide"));
+        CHECK(scn_result_is_reset(&r));
+        check_usable(m, "a cloud without extent at voxel_size 0");
+        kissm_destroy(m);
+    }
+    /* non-finite points are ignored: the finite ones decide */
+    p[0] = scn_points(&g_pair.source), p[1] = scn_points(&g_pair.target);
+    CHECK_EQ_INT(kissm_suggest_voxel_size(p, 2, &v), KISSM_OK);
+    CHECK(v > 0.0);
+    scn_cloud_free(&dup);
+    scn_cloud_free(&few);
+    CHECK(strcmp(kissm_last_error_message(), "") == 0);
+}
 
 static void set_field(kissm_config *c, int field, double v) {
     switch (field) {
@@ -1529,6 +1604,7 @@ int main(void) {
     RUN_TEST(test_valid_strides);
     RUN_TEST(test_nonfinite);
     RUN_TEST(test_voxel_size);
+    RUN_TEST(test_suggest_voxel_size);
     RUN_TEST(test_config_fields);
     RUN_TEST(test_struct_sizes);
     RUN_TEST(test_degenerate);

@@ -44,6 +44,46 @@ static void report_difference(const char *what, const kissm_result *a, const kis
     scn_result_print("other", b);
 }
 
+/* The automatic voxel size (voxel_size 0, docs/design/voxel_auto.md): the registration at every thread count, with
+ * the same voxel_size_used, and with the source's points shuffled. */
+static void test_auto_voxel_thread_counts(void) {
+    const int32_t counts[] = {1, 2, 3, 8, 0};
+    kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target), sp;
+    kissm_result reference, r;
+    scn_cloud shuffled;
+    size_t i;
+    for (i = 0; i < sizeof(counts) / sizeof(counts[0]); ++i) {
+        kissm_config c = scn_config(0.0);
+        kissm_matcher *m = NULL;
+        c.num_threads = counts[i];
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        scn_result_poison(i == 0 ? &reference : &r);
+        CHECK_EQ_INT(kissm_register(m, &s, &t, i == 0 ? &reference : &r), KISSM_OK);
+        if (i > 0) {
+            CHECK_MSG(scn_result_equal(&reference, &r), "auto voxel, num_threads %d", (int)counts[i]);
+            report_difference("auto voxel", &reference, &r);
+        } else {
+            CHECK(reference.valid == 1 && reference.voxel_size_used > 0.0);
+        }
+        kissm_destroy(m);
+    }
+    scn_cloud_init(&shuffled);
+    scn_cloud_copy(&shuffled, &g_pair.source);
+    scn_cloud_shuffle(&shuffled, 11);
+    sp = scn_points(&shuffled);
+    {
+        kissm_config c = scn_config(0.0);
+        kissm_matcher *m = NULL;
+        c.num_threads = 2;
+        REQUIRE(kissm_create(&c, &m) == KISSM_OK);
+        CHECK_EQ_INT(kissm_register(m, &sp, &t, &r), KISSM_OK);
+        CHECK(r.voxel_size_used == reference.voxel_size_used);
+        CHECK(memcmp(r.transform, reference.transform, sizeof r.transform) == 0);
+        kissm_destroy(m);
+    }
+    scn_cloud_free(&shuffled);
+}
+
 static void test_thread_counts(void) {
     const int32_t counts[] = {1, 2, 3, 4, 8, 0};
     kissm_points s = scn_points(&g_pair.source), t = scn_points(&g_pair.target);
@@ -383,6 +423,7 @@ static void test_refine_determinism(void) {
 int main(void) {
     scn_make_pair(&g_pair, 5, 15.0, 0.01);
     RUN_TEST(test_thread_counts);
+    RUN_TEST(test_auto_voxel_thread_counts);
     RUN_TEST(test_repeated_calls);
     RUN_TEST(test_fifty_runs);
 #ifdef HAVE_FORK

@@ -39,6 +39,7 @@ inline std::vector<std::string> contract_keys(bool refine_command) {
                           "refine_iterations",
                           "refine_converged",
                           "final_inliers",
+                          "voxel_size_used",
                           "counts",
                           "inlier_ratio",
                           "residual_rms",

@@ -306,7 +306,9 @@ void test_errors() {
 
     expect_usage_error("register " + ab + " --voxel 0.3 --bogus", "--bogus");
     expect_usage_error("register " + ab + " --bogus=1 --voxel 0.3", "--bogus");
-    expect_usage_error("register " + ab, "--voxel");
+    expect_usage_error("register " + ab, "--voxel auto"); // the message names the automatic choice
+    expect_usage_error("register " + ab + " --voxel Auto", "--voxel");
+    expect_usage_error("align " + quote(a) + " --voxel auto --out " + quote(work("poses.tsv")), "--voxel auto");
     for (const char *bad : {"0", "-1", "-0.5", "nan", "NaN", "inf", "-inf", "abc", "0.3x", "1e999", "''", "' 0.3'"}) {
         expect_usage_error("register " + ab + " --voxel " + bad, "--voxel");
     }
@@ -529,6 +531,23 @@ void test_json() {
     }
     const Run coarse = run("register " + quote(source) + " " + quote(target) + " --voxel 0.3 --json");
     CHECK_EQ_INT(coarse.code, 0);
+    CHECK(json_parse(coarse.out).at("voxel_size_used").as_double() == 0.3);
+    // --voxel auto: the library's suggestion for the pair (kissm_suggest_voxel_size), the same in voxel_size and
+    // voxel_size_used, and the registration at that voxel given.
+    const Run automatic = run("register " + quote(source) + " " + quote(target) + " --voxel auto --json");
+    CHECK_MSG(automatic.code == 0, "register --voxel auto exited with %d: %s", automatic.code, automatic.err.c_str());
+    check_result_json(automatic.out, "register --voxel auto");
+    const Json a = json_parse(automatic.out);
+    CHECK(a.at("voxel_size").text == a.at("voxel_size_used").text && a.at("voxel_size_used").as_double() > 0.0);
+    const Run given =
+        run("register " + quote(source) + " " + quote(target) + " --voxel " + a.at("voxel_size_used").text + " --json");
+    CHECK(json_line_value(given.out, "transform") == json_line_value(automatic.out, "transform"));
+    // ... and `kissm batch --voxel auto` takes one voxel for all the file's clouds: here the pair's.
+    const std::string pairs = work("auto_pairs.tsv"), results = work("auto_results.jsonl");
+    REQUIRE(write_file(pairs, "source\ttarget\n" + source + "\t" + target + "\n"));
+    const Run batch = run("batch " + quote(pairs) + " --voxel auto --quiet --out " + quote(results));
+    CHECK_MSG(batch.code == 0, "batch --voxel auto exited with %d: %s", batch.code, batch.err.c_str());
+    CHECK(contains(read_file(results), "\"voxel_size_used\": " + a.at("voxel_size_used").text));
     CHECK(json_line_value(coarse.out, "transform") == json_line_value(demo.out, "coarse_transform"));
     CHECK(json_line_value(coarse.out, "information") == "null");
 

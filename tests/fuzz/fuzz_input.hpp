@@ -241,7 +241,7 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
     // A valid refined pose passed the refined rule's dense part (docs/refinement.md).
     if (r.valid && (r.num_refine_correspondences < 6 || !(r.overlap >= c.min_overlap) ||
                     (!c.allow_degenerate && !(r.refine_condition >= c.min_refine_condition)) ||
-                    r.refine_converged != 1 || !(r.refine_rmse <= c.max_refine_rmse_gain * c.voxel_size)))
+                    r.refine_converged != 1 || !(r.refine_rmse <= c.max_refine_rmse_gain * r.voxel_size_used)))
         return false;
     return r.time_refine_ms >= 0.0 && r.time_total_ms >= r.time_refine_ms;
 }
@@ -250,6 +250,10 @@ inline bool refine_fields_sane(const kissm_result &r, const kissm_config &c) {
 // final inliers; an invalid one reports why; either way the refinement's fields are sane.
 inline bool result_sane(const kissm_result &r, const kissm_config &c) {
     if (!refine_fields_sane(r, c)) return false;
+    // The voxel used: the config's, or under voxel_size 0 (automatic) a suggestion, > 0 and finite.
+    if (c.voxel_size != 0.0 ? r.voxel_size_used != c.voxel_size
+                            : !(r.voxel_size_used > 0.0 && std::isfinite(r.voxel_size_used)))
+        return false;
     // The ambiguity: in [0, 1] when the solver found a pose (its rotation uncertainty is then a number), else NaN.
     if (std::isnan(r.rotation_uncertainty) ? !std::isnan(r.ambiguity) : !(r.ambiguity >= 0.0 && r.ambiguity <= 1.0))
         return false;

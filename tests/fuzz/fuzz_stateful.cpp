@@ -49,6 +49,10 @@ void fuzz_alignment(kissm_fuzz::Bytes &in, kissm_matcher *m, kissm_features *con
         for (int k = 1; k < 3; ++k) valid = valid && pattern[k] >= pattern[k - 1] && pattern[k] - pattern[k - 1] <= 1;
     }
     kissm_alignment *a = nullptr;
+    kissm_config config;
+    config.struct_size = sizeof config;
+    require(kissm_get_config(m, &config) == KISSM_OK);
+    valid = valid && config.voxel_size != 0.0; // an automatic voxel size cannot align: refused by name
     const int32_t st = kissm_align_features(m, features, 3, &o, &a);
     require(st == KISSM_OK || st == KISSM_ERR_INVALID_ARGUMENT || st == KISSM_ERR_OUT_OF_MEMORY);
     require((st == KISSM_OK) == (a != nullptr) && (st != KISSM_ERR_INVALID_ARGUMENT || !valid));
@@ -133,7 +137,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
         case 2: { // register from features: same as the direct call when both exist
             if (!features[a] || !features[b]) break;
             const int32_t st = kissm_register_features(m, features[a], features[b], &r);
-            require(st == KISSM_OK || st == KISSM_ERR_OUT_OF_MEMORY);
+            // Under voxel_size 0 each cloud's features have their own suggested voxel: two voxels are refused.
+            require(st == KISSM_OK || st == KISSM_ERR_OUT_OF_MEMORY ||
+                    (config.voxel_size == 0.0 && st == KISSM_ERR_FEATURES_MISMATCH));
             if (st != KISSM_OK) break;
             require(kissm_fuzz::result_sane(r, config));
             const int slot = 3 * a + b;
@@ -167,9 +173,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             break;
         }
         case 15: fuzz_alignment(in, m, features); break;
-        case 3: // a cancel request while no call runs: cleared when the next call starts
+        case 3: { // a cancel request while no call runs: cleared when the next call starts; and the voxel suggestion
+            // for the pair, the same either way round
             kissm_cancel(m);
+            const kissm_points ab[2] = {pa, pb}, ba[2] = {pb, pa};
+            double v = -1.0, w = -2.0;
+            const int32_t st = kissm_suggest_voxel_size(ab, 2, &v);
+            require(kissm_fuzz::expected_status(st) && st != KISSM_ERR_CANCELLED);
+            require(st == KISSM_OK ? v > 0.0 && std::isfinite(v) : v == -1.0);
+            // Either way round: the same voxel, or a failure (which cloud's, and so which status, follows the order).
+            const int32_t swapped = kissm_suggest_voxel_size(ba, 2, &w);
+            require((swapped == KISSM_OK) == (st == KISSM_OK) && (st != KISSM_OK || w == v));
             break;
+        }
         default: { // the config reads back as given
             kissm_config back;
             std::memset(&back, 0, sizeof back);

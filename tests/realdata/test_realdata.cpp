@@ -5,7 +5,8 @@
 // valid when it is wrong, in any mode; LiDAR and indoor pairs must all succeed; object scans (the bunny) must
 // succeed in most runs, and refinement must register more of them than the coarse pose alone (it trusts the
 // dense alignment where the coarse rule needs more inliers). Refined LiDAR poses must be closer to the ground
-// truth than the coarse ones (medians).
+// truth than the coarse ones (medians). The automatic voxel size (voxel_size 0) registers every variant too, as
+// the kind's voxel must, and never valid and wrong.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -115,6 +116,14 @@ int main() {
             CHECK_MSG(kissm_create(&config, &matchers[mode]) == KISSM_OK, "kissm_create: %s",
                       kissm_last_error_message());
         }
+        kissm_matcher *auto_matcher = nullptr; // voxel_size 0: the pair's suggestion (docs/design/voxel_auto.md)
+        {
+            kissm_config config;
+            kissm_config_init(&config, sizeof(config));
+            config.voxel_size = 0.0;
+            config.num_threads = 2;
+            CHECK_MSG(kissm_create(&config, &auto_matcher) == KISSM_OK, "kissm_create: %s", kissm_last_error_message());
+        }
         const bool lidar = kind.max_trans_m >= 2.0;
         Rng rng{12345u + static_cast<unsigned long long>(runs)}; // fixed seeds, one stream per pair
         for (int variant = 0, last = rotations(); variant <= last; ++variant) {
@@ -166,8 +175,30 @@ int main() {
                 if (kind.must_succeed)
                     CHECK_MSG(success, "%s variant %d %s failed", pair_dir.c_str(), variant, kModeNames[mode]);
             }
+            if (auto_matcher != nullptr) { // the automatic voxel: as the kind's voxel must, and never valid and wrong
+                kissm_result result;
+                result.struct_size = sizeof(result);
+                CHECK_MSG(kissm_register(auto_matcher, &src, &tgt, &result) == KISSM_OK, "%s: %s", pair_dir.c_str(),
+                          kissm_last_error_message());
+                const Mat3 got{{result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3],
+                                result.rotation[4], result.rotation[5], result.rotation[6], result.rotation[7],
+                                result.rotation[8]}};
+                const double rre = result.valid ? rotation_error_deg(got, expect_r) : NAN;
+                const double rte = result.valid ? std::sqrt(std::pow(result.translation[0] - expect_t[0], 2) +
+                                                            std::pow(result.translation[1] - expect_t[1], 2) +
+                                                            std::pow(result.translation[2] - expect_t[2], 2))
+                                                : NAN;
+                const bool success = result.valid && rre < kind.max_rot_deg && rte < kind.max_trans_m;
+                std::printf("%-52s rot%d auto    %s RRE=%7.3f deg RTE=%8.4f m voxel=%.6g reason=%s\n", pair_dir.c_str(),
+                            variant, success ? "OK  " : "FAIL", rre, rte, result.voxel_size_used,
+                            kissm_reason_string(result.reason));
+                CHECK_MSG(!(result.valid && !success), "%s variant %d auto: valid but wrong (%.2f deg, %.4f m)",
+                          pair_dir.c_str(), variant, rre, rte);
+                if (kind.must_succeed) CHECK_MSG(success, "%s variant %d auto failed", pair_dir.c_str(), variant);
+            }
         }
         for (kissm_matcher *m : matchers) kissm_destroy(m);
+        kissm_destroy(auto_matcher);
     }
     for (int mode = 0; mode < kNumModes; ++mode)
         std::printf("real data, %s: %d/%d runs succeeded (objects %d/%d); LiDAR median error %.3f deg, %.4f m\n",

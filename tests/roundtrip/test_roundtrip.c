@@ -62,6 +62,9 @@ static const golden_case kCases[] = {
     /* An ambiguity bound below what the yard's best competing pose reaches: AMBIGUOUS, the refined pose kept. */
     {"yard_float64_v0.25_gicp_max_ambiguity", KISSM_SCALAR_FLOAT64, 0.25, KISSM_REFINE_GICP, 0, KISSM_VIEWPOINT_FIXED,
      KISSM_SUPPRESS_NONE, 3, 0.0, 0.0, 0, 0.05},
+    /* The automatic voxel size (voxel_size 0): the pair's suggestion, reported in voxel_size_used. */
+    {"yard_float64_auto", KISSM_SCALAR_FLOAT64, 0.0, KISSM_REFINE_NONE, 0, KISSM_VIEWPOINT_LOCAL, KISSM_SUPPRESS_NONE,
+     3, 0.0, 0.0, 0, -1.0},
 };
 
 static const char *viewpoint_name(int32_t mode) {
@@ -177,7 +180,7 @@ static int run_case(const golden_case *gc, int32_t threads, kissm_result *result
     X(num_refine_correspondences) X(refine_iterations) X(refine_converged) X(num_source_suppressed)     \
     X(num_target_suppressed) X(degenerate) X(num_weak_directions)
 /* The doubles and arrays of doubles, by their golden.json names (NaN is written as null). */
-#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt) X(ambiguity) X(confidence)
+#define SCALAR_FIELDS(X) X(residual_rms) X(overlap) X(refine_rmse) X(refine_condition) X(rotation_uncertainty) X(inlier_coverage) X(tilt) X(ambiguity) X(confidence) X(voxel_size_used)
 #define ARRAY_FIELDS(X) X(transform, 16) X(coarse_transform, 16) X(information, 36) X(weak_directions, 36)
 /* clang-format on */
 

@@ -105,7 +105,7 @@ def assert_matches_cli(result: kissm.Result, cli: dict[str, Any], refine_mode: s
     assert result.num_final_inliers == cli["final_inliers"]
     for key, field in COUNTS.items():
         assert getattr(result, field) == cli["counts"][key], field
-    for name in ("inlier_ratio", "residual_rms", "noise_bound"):
+    for name in ("inlier_ratio", "residual_rms", "noise_bound", "voxel_size_used"):
         _assert_same_bits(name, getattr(result, name), cli[name])
     if refine_mode is not None:
         assert cli["refine"] == refine_mode.replace("_", "-")  # the CLI spells it point-to-plane

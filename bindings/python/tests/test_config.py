@@ -109,7 +109,7 @@ def test_fields_round_trip_into_the_c_struct() -> None:
 @pytest.mark.parametrize(
     ("field", "value", "message"),
     [
-        ("voxel_size", 0.0, "config.voxel_size is 0; it must be a finite length > 0"),
+        ("voxel_size", -0.5, "config.voxel_size is -0.5; it must be a finite length > 0, or 0 for a voxel suggested"),
         ("voxel_size", -1.0, "config.voxel_size is -1"),
         ("voxel_size", float("nan"), "config.voxel_size is nan"),
         ("voxel_size", float("inf"), "config.voxel_size is inf"),
@@ -173,6 +173,17 @@ def test_invalid_values_raise_valueerror_with_the_library_message(field: str, va
     assert str(info.value).startswith("kissm_config_validate: ")  # the library's message, verbatim
     with pytest.raises(kissm.InvalidArgumentError, match=f"config.{field}"):
         kissm.Matcher(**{field: value})
+
+
+def test_voxel_size_auto() -> None:
+    """'auto' (and 0, the C spelling, which becomes it) reaches the C config as 0; other strings are TypeErrors."""
+    for given in ("auto", 0, 0.0):
+        c = kissm.Config(voxel_size=given)
+        assert c.voxel_size == "auto" and c._to_c().voxel_size == 0.0
+        assert c == kissm.Config(voxel_size="auto") and eval(repr(c), {"kissm": kissm}) == c
+    assert kissm.Matcher(voxel_size="auto").config.voxel_size == "auto"
+    with pytest.raises(TypeError, match="'auto'"):
+        kissm.Config(voxel_size="Auto")
 
 
 def test_out_of_int32_range_is_a_valueerror() -> None:

@@ -55,6 +55,7 @@ DOUBLES = [
     "tilt",
     "ambiguity",
     "confidence",
+    "voxel_size_used",
 ]
 ARRAYS = ["transform", "coarse_transform", "information"]
 #: The weak directions: 36 doubles in the file (row-major 6x6, the rows beyond num_weak_directions NaN), the

@@ -236,6 +236,30 @@ std::string batch_line_error(const PairRow &row, bool has_gt_column, const std::
     return json.str();
 }
 
+double batch_auto_voxel(const BatchRun &run, const std::vector<PairRow> &rows) {
+    std::map<FeatureCache::Key, CloudPtr> clouds;
+    for (const PairRow &row : rows)
+        for (const FeatureCache::Key &key : {source_key(run, row), target_key(run, row)}) {
+            if (clouds.count(key) != 0) continue;
+            kissm_cloud *raw = nullptr;
+            if (kissm_read_points(key.first.c_str(), key.second, &raw) != KISSM_OK) continue; // its pairs report it
+            clouds.emplace(key, CloudPtr(raw));
+        }
+    // Only the clouds with a suggestion of their own take part: one without (no extent, too few points) fails its
+    // own pairs, as it would with a voxel given, instead of the whole batch.
+    std::vector<kissm_points> usable;
+    for (const auto &entry : clouds) {
+        kissm_points points{};
+        double own = 0.0;
+        if (kissm_cloud_points(entry.second.get(), &points) == KISSM_OK &&
+            kissm_suggest_voxel_size(&points, 1, &own) == KISSM_OK)
+            usable.push_back(points);
+    }
+    double voxel = 0.0;
+    if (usable.empty() || kissm_suggest_voxel_size(usable.data(), usable.size(), &voxel) != KISSM_OK) return 0.0;
+    return voxel;
+}
+
 BatchCounts run_batch_pairs(const BatchRun &run) {
     FeatureCache cache;
     for (const PairRow &row : run.pending) {

@@ -39,6 +39,11 @@ struct BatchCounts {
 // cannot be written or a matcher cannot be made.
 BatchCounts run_batch_pairs(const BatchRun &run);
 
+// The voxel of `--voxel auto` for a batch: kissm_suggest_voxel_size of every cloud `rows` name (read once here), so
+// that any two of them match, as kissm.batch's "auto" does; unreadable clouds and clouds without a suggestion of
+// their own are left to fail their pairs. 0 (each pair then fails) when no cloud is usable.
+double batch_auto_voxel(const BatchRun &run, const std::vector<PairRow> &rows);
+
 // The results line of one pair (with its final newline). The fields depend on the inputs only, never on
 // timing, so that a pair's line is the same bytes at any --jobs and after --resume:
 // pair, source, target, [gt,] status "ok" with the register --json fields but time_ms (valid, reason, ...,

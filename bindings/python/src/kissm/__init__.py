@@ -56,6 +56,7 @@ from ._points import as_point_array
 from ._pose_graph import PoseGraph, PoseGraphSolution
 from ._read import read_points
 from ._result import Result
+from ._voxel import suggest_voxel_size
 
 # Re-exported data and type aliases are assigned here, so that each carries its docstring in the API reference.
 
@@ -105,13 +106,24 @@ def _with_refine(refine: RefineMode | int | None, config: dict[str, Any]) -> dic
     return {**config, "refine_mode": refine}
 
 
+VoxelSize: TypeAlias = _config.VoxelSize
+"""What :attr:`Config.voxel_size` accepts: a length above 0, or ``"auto"`` (:func:`suggest_voxel_size` of each
+call's clouds)."""
+
+
 def register(
-    source: PointsLike, target: PointsLike, voxel_size: float, *, refine: RefineMode | int | None = None, **config: Any
+    source: PointsLike,
+    target: PointsLike,
+    voxel_size: VoxelSize,
+    *,
+    refine: RefineMode | int | None = None,
+    **config: Any,
 ) -> Result:
     """Register ``source`` against ``target`` once: ``Matcher(voxel_size=voxel_size, **config).register(...)``.
 
-    ``voxel_size`` (the clouds' unit) has no default because it depends on the data: 0.3-0.5 for outdoor
-    LiDAR in metres, about 0.05 for indoor RGB-D fragments. ``refine`` (``"gicp"`` or ``"point_to_plane"``)
+    ``voxel_size`` (the clouds' unit) has no default because it depends on the data: ``"auto"`` chooses it from
+    both clouds (:func:`suggest_voxel_size`; ``Result.voxel_size_used`` reports it), or give a length: 0.3-0.5 for
+    outdoor LiDAR in metres, about 0.05 for indoor RGB-D fragments. ``refine`` (``"gicp"`` or ``"point_to_plane"``)
     refines the global solver's pose in the same call: it sets :attr:`Config.refine_mode`. Other keyword
     arguments are :class:`Config` fields, e.g. ``num_threads=2`` or ``nonfinite_policy="drop"``. To register
     many pairs, keep a :class:`Matcher`.
@@ -120,7 +132,7 @@ def register(
         return matcher.register(source, target)
 
 
-def ground_mask(points: PointsLike, voxel_size: float, **config: Any) -> np.ndarray:
+def ground_mask(points: PointsLike, voxel_size: VoxelSize, **config: Any) -> np.ndarray:
     """Which points of ``points`` (in the sensor's frame) are ground under the model of ``suppression='ground'``:
     ``Matcher(voxel_size=voxel_size, **config).ground_mask(points)``, a bool array of ``len(points)``.
 
@@ -136,7 +148,7 @@ def refine(
     source: PointsLike,
     target: PointsLike,
     initial: TransformLike,
-    voxel_size: float,
+    voxel_size: VoxelSize,
     *,
     refine: RefineMode | int | None = None,
     **config: Any,
@@ -188,6 +200,7 @@ __all__ = [
     "UnsupportedFormatError",
     "ViewpointMode",
     "VoxelRangeError",
+    "VoxelSize",
     "__version__",
     "as_point_array",
     "batch",
@@ -195,6 +208,7 @@ __all__ = [
     "ground_mask",
     "io",
     "library_path",
+    "suggest_voxel_size",
     "read_points",
     "refine",
     "register",

@@ -325,6 +325,8 @@ typedef struct kissm_result {
     double ambiguity;
 
     double confidence;
+
+    double voxel_size_used;
 } kissm_result;
 
 int32_t kissm_result_init(kissm_result *result, uint32_t struct_size);
@@ -346,6 +348,8 @@ int32_t kissm_refine(kissm_matcher *matcher, const kissm_points *source, const k
     const double initial_transform[16], kissm_result *result);
 
 int32_t kissm_ground_mask(kissm_matcher *matcher, const kissm_points *points, uint8_t *out_mask);
+
+int32_t kissm_suggest_voxel_size(const kissm_points *clouds, uint64_t num_clouds, double *out_voxel_size);
 
 typedef struct kissm_features kissm_features;
 

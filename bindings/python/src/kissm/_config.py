@@ -46,6 +46,9 @@ _ENUMS: dict[str, dict[str, int]] = {
     "suppression": SUPPRESSIONS,
 }
 _VECTOR_FIELDS = ("viewpoint", "up")
+VoxelSize = float | Literal["auto"]
+#: The C value of voxel_size "auto": the library suggests the voxel from each call's clouds.
+_AUTO_VOXEL = 0.0
 
 _FLOAT_FIELDS = (
     "voxel_size",
@@ -99,6 +102,8 @@ def _enum_name(field: str, value: int) -> str | int:
 def _values_of(c: Any) -> dict[str, Any]:
     """The settings of a C ``kissm_config *`` as Config fields."""
     values: dict[str, Any] = {name: float(getattr(c, name)) for name in _FLOAT_FIELDS}
+    if values["voxel_size"] == _AUTO_VOXEL:
+        values["voxel_size"] = "auto"
     values.update({name: int(getattr(c, name)) for name in _INT_FIELDS})
     values.update({name: bool(getattr(c, name)) for name in _BOOL_FIELDS})
     for name in _VECTOR_FIELDS:
@@ -152,9 +157,11 @@ class Config:
     one from another with :meth:`replace`.
     """
 
-    voxel_size: float = _DEFAULTS["voxel_size"]
-    """Voxel edge length, > 0; the one setting to choose per data set (0.3-0.5 m for outdoor LiDAR, about 0.05 m for
-    indoor RGB-D fragments)."""
+    voxel_size: VoxelSize = _DEFAULTS["voxel_size"]
+    """Voxel edge length, > 0, or ``"auto"``: the voxel :func:`kissm.suggest_voxel_size` gives for each call's clouds
+    together (features computed apart: each cloud's own; ``Result.voxel_size_used`` reports the voxel a call used; 0
+    is the C spelling of ``"auto"`` and becomes it). Otherwise the one setting to choose per data set (0.3-0.5 m for
+    outdoor LiDAR, about 0.05 m for indoor RGB-D fragments)."""
     num_threads: int = _DEFAULTS["num_threads"]
     """Worker threads per call, 0..1024; 0 = all hardware threads. Results never depend on it."""
     normal_radius_gain: float = _DEFAULTS["normal_radius_gain"]
@@ -261,8 +268,13 @@ class Config:
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__  # frozen: normalise through object
+        if isinstance(self.voxel_size, str) and self.voxel_size != "auto":
+            raise TypeError(f"Config.voxel_size must be a real number or 'auto', not {self.voxel_size!r}")
         for name in _FLOAT_FIELDS:
-            set_field(self, name, _as_float(name, getattr(self, name)))
+            if name != "voxel_size" or self.voxel_size != "auto":
+                set_field(self, name, _as_float(name, getattr(self, name)))
+        if self.voxel_size == _AUTO_VOXEL:
+            set_field(self, "voxel_size", "auto")
         for name in _INT_FIELDS:
             set_field(self, name, _as_int(name, getattr(self, name)))
         for name in _BOOL_FIELDS:
@@ -296,7 +308,8 @@ class Config:
         """A fresh ``kissm_config *`` holding these settings (no callbacks)."""
         c = _new_c_config()
         for name in _FLOAT_FIELDS:
-            setattr(c, name, getattr(self, name))
+            value = getattr(self, name)
+            setattr(c, name, _AUTO_VOXEL if value == "auto" else value)
         for name in _INT_FIELDS + _BOOL_FIELDS + tuple(_ENUMS):
             value = getattr(self, name)
             if isinstance(value, str):

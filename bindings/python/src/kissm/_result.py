@@ -42,6 +42,7 @@ _FLOAT_FIELDS = (
     "tilt",
     "ambiguity",
     "confidence",
+    "voxel_size_used",
 )
 _TIME_FIELDS = (
     "time_voxelize_ms",
@@ -253,6 +254,9 @@ class Result:
     ``ambiguity`` (1 up to 0.6, a pick among equals from 0.8), and after :meth:`Matcher.refine` of ``overlap`` and
     ``refine_rmse`` (docs/design/accuracy.md, "Confidence"). 0 without a pose. It reads no ``Config`` threshold. Runs
     its fit did not see held no wrong pose at 0.95 or above: a threshold for loop closures."""
+    voxel_size_used: float
+    """The voxel size the clouds were described with: ``Config.voxel_size``, or under ``voxel_size="auto"`` the one
+    :func:`kissm.suggest_voxel_size` gives for both clouds (from features, theirs)."""
 
     @classmethod
     def _from_c(cls, r: Any) -> Result:

@@ -19,7 +19,7 @@ import dataclasses
 import math
 import os
 from collections.abc import Hashable, Mapping, Sequence
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -32,13 +32,14 @@ from ._candidates import (
     reckoned_poses,
     similar_candidates,
 )
-from ._config import RefineMode
+from ._config import Config, RefineMode
 from ._errors import InvalidArgumentError
 from ._matcher import Features
 from ._pose_files import kitti_lines, quaternion, tum_lines, write_lines
 from ._pose_graph import PoseGraph
 from ._read import read_points
 from ._result import Result
+from .batch import _args as batch_args
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -140,7 +141,7 @@ class Alignment:
 
 def align(
     clouds: Sequence[Any] | Mapping[Any, Any],
-    voxel_size: float | None = None,
+    voxel_size: float | Literal["auto"] | None = None,
     *,
     pairs: str | Sequence[tuple[Hashable, Hashable]] = "all",
     priors: Any = None,
@@ -177,9 +178,10 @@ def align(
     position to check it: of the valid registrations between two pieces, only the largest set that agrees on where
     the pieces lie joins the graph (docs/multiway.md, "Loop candidates by similarity").
 
-    ``voxel_size``, ``refine`` (``"gicp"`` by default: its information weighs the edges; ``None`` or ``"none"``
-    gives coarse poses, whose edges get an information from the rotation uncertainty alone and are weighed
-    equally otherwise) and any other :class:`kissm.Config` field are the registrations' settings;
+    ``voxel_size`` (``"auto"``: :func:`kissm.suggest_voxel_size` of every cloud together, the files read once for
+    it; not with :class:`kissm.Features`), ``refine`` (``"gicp"`` by default: its information weighs the edges;
+    ``None`` or ``"none"`` gives coarse poses, whose edges get an information from the rotation uncertainty alone
+    and are weighed equally otherwise) and any other :class:`kissm.Config` field are the registrations' settings;
     ``executor``, ``progress`` and ``threads_per_job`` are :func:`kissm.batch.register_many`'s. ``bound`` is the
     pose graph's (:meth:`kissm.PoseGraph.optimize`).
 
@@ -211,6 +213,7 @@ def align(
     prior_positions = check_sequence_options(
         sequence, priors, len(keys), loop_radius, loop_gap, loops_per_scan, similar_per_scan
     )
+    voxel_size = _one_voxel(voxel_size, by_key)
     runner = _Runner(executor, progress, threads_per_job, voxel_size, refine, config)
     held_out: set[int] = set()
     if sequence and len(keys) > 1:
@@ -250,7 +253,7 @@ def session_clouds(sessions: Sequence[Sequence[Any] | Mapping[Any, Any]]) -> dic
 
 def align_sessions(
     sessions: Sequence[Sequence[Any] | Mapping[Any, Any]],
-    voxel_size: float | None = None,
+    voxel_size: float | Literal["auto"] | None = None,
     *,
     stride: int = 10,
     loop_radius: float | None = None,
@@ -288,6 +291,7 @@ def align_sessions(
     keys = list(by_key)
     position: dict[Any, int] = {key: k for k, key in enumerate(keys)}
     check_sequence_options(True, None, len(keys), loop_radius, loop_gap, loops_per_scan)
+    voxel_size = _one_voxel(voxel_size, by_key)
     runner = _Runner(executor, progress, threads_per_job, voxel_size, refine, config)
     radius = runner.radius(loop_radius)
     usable = runner.describe(by_key)
@@ -341,6 +345,15 @@ def align_sessions(
         results += runner.register(wanted, usable)
         alignment = _solve(keys, edges(), bound, len(results))
     return alignment
+
+
+def _one_voxel(voxel_size: float | Literal["auto"] | None, clouds: Mapping[Any, Any]) -> float | None:
+    """``voxel_size``, with ``"auto"`` made the one voxel of every cloud together (every round of an alignment, and
+    its loop radius, needs the same voxel)."""
+    if voxel_size != "auto":
+        return voxel_size
+    inputs = [batch_args.check_cloud(key, cloud) for key, cloud in clouds.items()]
+    return float(batch_args.set_voxel_size(Config(voxel_size="auto"), inputs).voxel_size)
 
 
 class _Runner:

@@ -3,7 +3,7 @@
 //! that transform instead, like `kissm refine SRC TGT --initial T.txt`.
 //!
 //! ```text
-//! cargo run --release --example register -- SRC TGT --voxel V [--threads N] [--json]
+//! cargo run --release --example register -- SRC TGT --voxel V|auto [--threads N] [--json]
 //!     [--refine gicp|point-to-plane|none] [--initial T.txt]
 //!     [--format FMT | --format-src FMT --format-tgt FMT]
 //! ```
@@ -17,7 +17,7 @@
 //! `threads`, `valid`, `reason`, `reason_code`, `initial_transform` with `--initial`, `transform`,
 //! `rotation`, `translation`, `coarse_transform`, `refine`, `information`, `overlap`, `refine_rmse`,
 //! `refine_condition`, `degenerate`, `weak_directions` (the rows in use: `[]` when none), `inlier_coverage`,
-//! `refine_iterations`, `refine_converged`, `final_inliers`, `counts` (with `source_suppressed`,
+//! `refine_iterations`, `refine_converged`, `final_inliers`, `voxel_size_used`, `counts` (with `source_suppressed`,
 //! `target_suppressed`), `inlier_ratio`, `residual_rms`, `noise_bound`, `inlier_extent`,
 //! `rotation_uncertainty`, `tilt`, `ambiguity`, `confidence`, `time_ms` (with `suppression`), `read_ms`), the same layout and the same
 //! number format: the shortest of `%.15g`, `%.16g` and `%.17g` that reads back to the exact double, `null`
@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use kissm::{Config, Format, Matcher, RefineMode, Registration};
 
-const USAGE: &str = "usage: register SRC TGT --voxel V [--threads N] [--json] \
+const USAGE: &str = "usage: register SRC TGT --voxel V|auto [--threads N] [--json] \
                      [--refine gicp|point-to-plane|none] [--initial T.txt] \
                      [--format FMT | --format-src FMT --format-tgt FMT]\n\
                      FMT: auto, ply, pcd, kitti_bin, bin_xyz, npy, xyz or las";
@@ -130,7 +130,12 @@ fn parse_args() -> Result<Options, String> {
             "-h" | "--help" => return Err(String::new()),
             "--voxel" => {
                 let text = value("--voxel")?;
-                opt.voxel = Some(text.parse().map_err(|_| format!("--voxel: '{text}' is not a number"))?);
+                // "auto": 0, the library's suggestion for the pair (reported as voxel_size_used).
+                opt.voxel = Some(if text == "auto" {
+                    0.0
+                } else {
+                    text.parse().map_err(|_| format!("--voxel: '{text}' is not a number or auto"))?
+                });
             }
             "--threads" => {
                 let text = value("--threads")?;
@@ -274,7 +279,7 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("version", json_string(kissm::version())),
         ("source", json_string(&opt.files[0])),
         ("target", json_string(&opt.files[1])),
-        ("voxel_size", json_number(opt.voxel.unwrap_or(f64::NAN))),
+        ("voxel_size", json_number(reg.voxel_size_used)),
         ("threads", opt.threads.to_string()),
         ("valid", reg.valid.to_string()),
         ("reason", json_string(reg.reason.as_str())),
@@ -299,6 +304,7 @@ fn to_json(opt: &Options, reg: &Registration, initial: Option<&[[f64; 4]; 4]>, r
         ("refine_iterations", fine.map_or(0, |f| f.iterations).to_string()),
         ("refine_converged", fine.is_some_and(|f| f.converged).to_string()),
         ("final_inliers", reg.final_inliers().to_string()),
+        ("voxel_size_used", json_number(reg.voxel_size_used)),
         ("counts", json_object(&counts, 4)),
         ("inlier_ratio", json_number(reg.inlier_ratio)),
         ("residual_rms", json_number(reg.residual_rms)),
@@ -326,8 +332,9 @@ fn print_summary(opt: &Options, reg: &Registration, read_ms: f64) {
     println!("  source: {} ({} points)", opt.files[0], reg.counts.source_points);
     println!("  target: {} ({} points)", opt.files[1], reg.counts.target_points);
     println!(
-        "  voxel {}, threads {}, refinement {}, files read in {:.1} ms",
-        opt.voxel.unwrap_or(f64::NAN),
+        "  voxel {}{}, threads {}, refinement {}, files read in {:.1} ms",
+        reg.voxel_size_used,
+        if opt.voxel == Some(0.0) { " (auto)" } else { "" },
         opt.threads,
         refine_name(opt.refine_mode()),
         read_ms

@@ -313,7 +313,8 @@ impl Config {
     config_getters! {
         /// Worker threads per call; 0 = all hardware threads. Results do not depend on it.
         num_threads: count,
-        /// Voxel size in the clouds' unit (metres for LiDAR); every radius and bound scales with it.
+        /// Voxel size in the clouds' unit (metres for LiDAR); every radius and bound scales with it. 0 when it is
+        /// automatic ([`ConfigBuilder::voxel_size_auto`]).
         voxel_size: f64,
         /// Normal estimation radius, in voxel sizes.
         normal_radius_gain: f64,
@@ -530,10 +531,20 @@ impl ConfigBuilder {
         self
     }
 
+    /// An automatic voxel size: each call describes its clouds with the voxel
+    /// [`suggest_voxel_size`](crate::suggest_voxel_size) gives for them together (reported in
+    /// [`Registration::voxel_size_used`](crate::Registration::voxel_size_used)); features computed apart get their
+    /// own cloud's. The C value 0 of `kissm_config.voxel_size`.
+    pub fn voxel_size_auto(mut self) -> Self {
+        self.raw.voxel_size = 0.0;
+        self
+    }
+
     builder_setters! {
         /// Worker threads, 0..=1024; 0 (the default) = all hardware threads. Results do not depend on it.
         num_threads: count,
-        /// Voxel size in the clouds' unit, > 0 (default 0.3). Try 0.3-0.5 for outdoor LiDAR in metres, 0.05
+        /// Voxel size in the clouds' unit, > 0 (default 0.3), or 0 for automatic
+        /// ([`voxel_size_auto`](ConfigBuilder::voxel_size_auto)). Try 0.3-0.5 for outdoor LiDAR in metres, 0.05
         /// for indoor RGB-D fragments.
         voxel_size: f64,
         /// Normal radius in voxel sizes, in (0, fpfh_radius_gain] (default 3.5).

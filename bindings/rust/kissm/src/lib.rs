@@ -193,7 +193,7 @@ pub use config::NonfinitePolicy;
 pub use config::{Config, ConfigBuilder, NonFinitePolicy, Preset, RefineMode, Suppression, Viewpoint};
 pub use error::{status_string, Error, ErrorKind};
 pub use matcher::{CancelHandle, Features, Matcher, SIGNATURE_SIZE};
-pub use points::{read_points, read_points_with_format, AsPoints, Cloud, Format, PointsView};
+pub use points::{read_points, read_points_with_format, suggest_voxel_size, AsPoints, Cloud, Format, PointsView};
 pub use pose_graph::{PoseGraph, PoseGraphCancelHandle, PoseGraphSolution};
 pub use registration::{Counts, Reason, Refinement, Registration, Timings};
 

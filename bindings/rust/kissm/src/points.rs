@@ -358,3 +358,26 @@ pub fn read_points_with_format(path: impl AsRef<Path>, format: Format) -> Result
         .map(|raw| Cloud { raw })
         .ok_or_else(|| Error::new(sys::KISSM_ERR_INTERNAL, "kissm_read_points succeeded but returned no cloud"))
 }
+
+/// The voxel size an automatic voxel size ([`ConfigBuilder::voxel_size_auto`](crate::ConfigBuilder::voxel_size_auto))
+/// uses for these clouds together (`kissm_suggest_voxel_size`): one cloud, a pair (in either order) or a set of
+/// scans to be described alike. Each cloud's own voxel is the smallest of 2^(k/8) (k an integer, in the clouds'
+/// unit) whose grid holds at most 3000 occupied voxels (a quarter of its points below 12000); the suggestion is
+/// the smallest of the clouds' own. It depends on the points alone; non-finite points are ignored.
+///
+/// ```
+/// let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
+/// let b = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0], [2.0, 2.0, 2.0]];
+/// let v = kissm::suggest_voxel_size(&[&a, &b])?;
+/// assert_eq!(v, kissm::suggest_voxel_size(&[&b, &a])?);
+/// # Ok::<(), kissm::Error>(())
+/// ```
+pub fn suggest_voxel_size(clouds: &[&dyn AsPoints]) -> Result<f64, Error> {
+    let views: Vec<PointsView<'_>> = clouds.iter().map(|c| c.as_points()).collect();
+    let raw: Vec<sys::kissm_points> = views.iter().map(|v| *v.as_raw()).collect();
+    let mut voxel = 0.0;
+    // SAFETY: raw holds raw.len() views of data that `clouds` borrows for the whole call; voxel is writable.
+    let status = unsafe { sys::kissm_suggest_voxel_size(raw.as_ptr(), raw.len() as u64, &mut voxel) };
+    Error::check(status)?;
+    Ok(voxel)
+}

@@ -322,6 +322,10 @@ pub struct Registration {
     /// [`Matcher::refine`](crate::Matcher::refine) of the overlap and the residual. 0 without a pose. It reads no
     /// [`Config`](crate::Config) threshold. Runs its fit did not see held no wrong pose at 0.95 or above.
     pub confidence: f64,
+    /// The voxel size the clouds were described with: [`Config::voxel_size`](crate::Config::voxel_size), or
+    /// under an automatic voxel size ([`ConfigBuilder::voxel_size_auto`](crate::ConfigBuilder::voxel_size_auto))
+    /// the one [`suggest_voxel_size`](crate::suggest_voxel_size) gives for both clouds (from features, theirs).
+    pub voxel_size_used: f64,
     /// Milliseconds per stage.
     pub timings: Timings,
 }
@@ -407,6 +411,7 @@ impl Registration {
             tilt: r.tilt,
             ambiguity: r.ambiguity,
             confidence: r.confidence,
+            voxel_size_used: r.voxel_size_used,
             timings: Timings {
                 voxelize_ms: r.time_voxelize_ms,
                 features_ms: r.time_features_ms,
@@ -498,6 +503,7 @@ impl Registration {
                     self.tilt,
                     self.ambiguity,
                     self.confidence,
+                    self.voxel_size_used,
                 ],
                 &[
                     other.inlier_ratio,
@@ -507,6 +513,7 @@ impl Registration {
                     other.tilt,
                     other.ambiguity,
                     other.confidence,
+                    other.voxel_size_used,
                 ],
             )
             && bits(&self.inlier_extent, &other.inlier_extent)

@@ -329,7 +329,7 @@ fn invalid(builder: kissm::ConfigBuilder, field: &str) {
 #[test]
 fn invalid_config_values_are_errors_not_panics() {
     let b = Config::builder;
-    invalid(b().voxel_size(0.0), "voxel_size");
+    invalid(b().voxel_size(-1e-300), "voxel_size"); // 0 is the automatic voxel size (tests/voxel_auto.rs)
     invalid(b().voxel_size(-0.5), "voxel_size");
     invalid(b().voxel_size(f64::NAN), "voxel_size");
     invalid(b().voxel_size(f64::INFINITY), "voxel_size");
@@ -428,7 +428,8 @@ fn invalid_config_values_are_errors_not_panics() {
     let err = Matcher::new(&Config::from_raw(raw)).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::InvalidArgument);
     assert!(err.message().contains("voxel_size"), "{err}");
-    assert!(Matcher::with_voxel_size(0.0).is_err());
+    assert!(Matcher::with_voxel_size(-0.1).is_err());
+    assert!(Matcher::with_voxel_size(0.0).is_ok()); // automatic
 }
 
 #[test]

@@ -110,6 +110,7 @@ fn compare(case: &Json, reg: &Registration) -> Vec<String> {
         ("tilt", reg.tilt),
         ("ambiguity", reg.ambiguity),
         ("confidence", reg.confidence),
+        ("voxel_size_used", reg.voxel_size_used),
     ];
     for (key, got) in doubles {
         same(key.into(), case.get(key).num(), got);

@@ -36,7 +36,7 @@ fn field_offset(strukt: &str, field: &str) -> Option<usize> {
             information, overlap, refine_rmse, refine_condition, rotation_uncertainty, inlier_coverage,
             time_refine_ms, num_refine_correspondences, refine_iterations, refine_converged, num_source_suppressed,
             num_target_suppressed, time_suppression_ms, tilt, degenerate, num_weak_directions, weak_directions,
-            ambiguity, confidence),
+            ambiguity, confidence, voxel_size_used),
         _ => None,
     }
 }

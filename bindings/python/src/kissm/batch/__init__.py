@@ -25,7 +25,7 @@ from typing import Any
 from .._config import Config, RefineMode
 from .._errors import Error, InternalError
 from .._matcher import Features
-from ._args import batch_config, check_cloud, check_clouds, check_pairs, engine_name
+from ._args import batch_config, check_cloud, check_clouds, check_pairs, engine_name, set_voxel_size
 from ._progress import Reporter, check_progress
 from ._values import CloudFile, PairResult, Progress
 from ._work import Sink, Work
@@ -96,7 +96,8 @@ def describe_many(
     clouds = check_clouds(clouds)
     cfg = batch_config(threads_per_job, voxel_size, refine, preset, config, overrides)
     keys = list(clouds)
-    work = Work(cfg, keys, [check_cloud(k, clouds[k]) for k in keys], [], keep_features=True)
+    inputs = [check_cloud(k, clouds[k]) for k in keys]
+    work = Work(set_voxel_size(cfg, inputs), keys, inputs, [], keep_features=True)
     sink = _run(executor, work, progress)
     out: dict[Hashable, Features | Error] = {}
     for key, given, value in zip(keys, work.inputs, sink.features, strict=True):
@@ -163,6 +164,7 @@ def register_many(
             index.setdefault(key, len(index))
     keys = list(index)
     inputs = [check_cloud(k, clouds[k]) for k in keys]
+    cfg = set_voxel_size(cfg, inputs)
     work = Work(cfg, keys, inputs, [(index[s], index[t]) for s, t in checked_pairs], keep_features=False)
     sink = _run(executor, work, progress)
     out = [pair for pair in sink.pairs if pair is not None]

@@ -15,7 +15,8 @@ from .._config import PRESETS, Config
 from .._errors import Error, InvalidArgumentError
 from .._matcher import Features
 from .._points import as_point_array
-from .._read import FORMATS
+from .._read import FORMATS, read_points
+from .._voxel import suggest_voxel_size
 from ._values import CloudFile
 
 #: What a cloud becomes once checked: points (an (N, 3) array), a file to read on the worker, or features
@@ -144,3 +145,20 @@ def engine_name(executor: object) -> str:
         f"executor must be None, a concurrent.futures.Executor, a dask.distributed Client or 'ray', "
         f"not {type(executor).__name__}"
     )
+
+
+def set_voxel_size(cfg: Config, inputs: Sequence[Checked]) -> Config:
+    """``cfg`` with ``voxel_size="auto"`` made the one voxel of every cloud of the batch together
+    (:func:`kissm.suggest_voxel_size` of them all), so that any two of them match; other configs as given. The files
+    are read here for it; features described before carry their own voxel, so they cannot take part."""
+    if cfg.voxel_size != "auto":
+        return cfg
+    points = []
+    for cloud in inputs:
+        if isinstance(cloud, Features):
+            raise InvalidArgumentError(
+                "voxel_size='auto' needs every cloud's points, not features described before: describe them with "
+                "voxel_size=kissm.suggest_voxel_size(*clouds) instead"
+            )
+        points.append(read_points(cloud.path, format=cloud.format) if isinstance(cloud, CloudFile) else cloud)
+    return cfg.replace(voxel_size=suggest_voxel_size(*points)) if points else cfg
