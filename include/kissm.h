@@ -113,7 +113,7 @@ KISSM_API uint32_t kissm_abi_version(void);
 #define KISSM_ERR_FEATURES_MISMATCH -10  /**< Features computed under a different configuration. */
 #define KISSM_ERR_IO -11                 /**< A file could not be opened or read. */
 #define KISSM_ERR_PARSE -12              /**< A file is malformed, truncated or of an unsupported layout. */
-#define KISSM_ERR_UNSUPPORTED_FORMAT -13 /**< A file's format is not recognised. */
+#define KISSM_ERR_UNSUPPORTED_FORMAT -13 /**< A file's format is not recognised (or not built in: LAZ). */
 #define KISSM_ERR_INTERNAL -14           /**< A bug in kissm: please report it with the message. */
 
 /**
@@ -1005,7 +1005,7 @@ KISSM_API int32_t kissm_features_signature(const kissm_features *features, doubl
  * @defgroup files Point files
  * @brief Reading clouds: PLY (ascii, binary), PCD (ascii, binary), KITTI .bin (float32 xyzi), .npy
  *        (float32 / float64, shape (N, 3) or (N, >=3)), whitespace xyz text (.xyz, .txt, .pts, .asc), LAS 1.0-1.4
- *        (.las, uncompressed).
+ *        (.las; .laz when built with KISSM_WITH_LAZ).
  * @{
  */
 
@@ -1017,8 +1017,10 @@ KISSM_API int32_t kissm_features_signature(const kissm_features *features, doubl
 #define KISSM_FORMAT_XYZ 5       /**< Whitespace-separated xyz text. */
 #define KISSM_FORMAT_BIN_XYZ 6   /**< float32 x y z, no intensity. */
 /**
- * ASPRS LAS 1.0-1.4, uncompressed, point data record formats 0-10: x y z only, scale and offset applied in
- * double precision; points flagged withheld are left out. LAZ (compressed) files fail with #KISSM_ERR_PARSE.
+ * ASPRS LAS 1.0-1.4, point data record formats 0-10: x y z only, scale and offset applied in double
+ * precision; points flagged withheld are left out. LAZ (LASzip-compressed LAS, the same header) is read when
+ * the library was built with the CMake option KISSM_WITH_LAZ (off by default); otherwise it fails with
+ * #KISSM_ERR_UNSUPPORTED_FORMAT ("LAZ support was not built in").
  */
 #define KISSM_FORMAT_LAS 7
 
@@ -1035,7 +1037,8 @@ typedef struct kissm_cloud kissm_cloud;
  * @retval KISSM_ERR_INVALID_ARGUMENT @p format is not a KISSM_FORMAT_* value.
  * @retval KISSM_ERR_IO The file could not be opened or read.
  * @retval KISSM_ERR_PARSE The file is malformed, truncated or of an unsupported layout.
- * @retval KISSM_ERR_UNSUPPORTED_FORMAT The file's format is not recognised.
+ * @retval KISSM_ERR_UNSUPPORTED_FORMAT The file's format is not recognised, or it is LAZ and this library
+ *         was built without LAZ support.
  * @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.
  */
 KISSM_API int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);
@@ -1050,6 +1053,13 @@ KISSM_API void kissm_cloud_destroy(kissm_cloud *cloud);
  * @return The number of points; 0 for NULL.
  */
 KISSM_API uint64_t kissm_cloud_count(const kissm_cloud *cloud);
+/**
+ * @brief Number of points the reader left out of the cloud on purpose: for LAS and LAZ, the points flagged
+ *        withheld (not in kissm_cloud_count()); 0 for every other format, which leaves nothing out.
+ * @param[in] cloud The cloud.
+ * @return The number of points left out; 0 for NULL.
+ */
+KISSM_API uint64_t kissm_cloud_num_withheld(const kissm_cloud *cloud);
 /**
  * @brief The cloud's coordinates.
  * @param[in] cloud The cloud.

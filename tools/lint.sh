@@ -11,6 +11,7 @@
 #   mypy (mypy.ini)                  mypy --strict on bench/ (its scripts and kissm_bench) and tools/*.py, with
 #                                    the mypy that bindings/python/lint.sh pins
 #   bindings/rust/lint.sh            cargo fmt --check, cargo clippy --all-targets -- -D warnings
+#   src/io/laz_rs                    the same two on the LAZ decompressor's C ABI crate (KISSM_WITH_LAZ)
 # clang-format and shellcheck come from tools/setup.sh (apt-get as root); the Python tools from PyPI into a
 # venv, the Rust ones with the toolchain (rustup components).
 #
@@ -96,6 +97,13 @@ for sub in bindings/python/lint.sh bindings/rust/lint.sh; do
   step "$sub"
   if ! bash "$sub"; then fail "$sub"; fi
 done
+
+# ---- the LAZ decompressor's crate (src/io/laz_rs, built by CMake only with KISSM_WITH_LAZ=ON) ----------------
+step "src/io/laz_rs: cargo fmt --check, cargo clippy -- -D warnings"
+laz_target=${KISSM_BUILD_DIR:-$here/build}/laz_rs-lint
+if ! (cd src/io/laz_rs && cargo fmt --check && CARGO_TARGET_DIR=$laz_target cargo clippy --locked --release --all-targets -- -D warnings); then
+  fail "src/io/laz_rs (cargo fmt in src/io/laz_rs fixes the formatting)"
+fi
 
 # ---- the repository's own Python outside the package ----------------------------------------------------
 # bindings/python/lint.sh made the venv (its pinned ruff and mypy, and numpy for numpy's types); the settings are

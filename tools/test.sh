@@ -4,8 +4,8 @@
 #   1. the linters (tools/lint.sh: clang-format, shellcheck, SPDX lines, whitespace, ruff, mypy, rustfmt,
 #      clippy), first because they take seconds;
 #   2. the C/C++ suite (CTest: per stage, C API, readers, CLI, real data, ABI, reliability, the .deb and
-#      .tar.gz install test, the README's C snippet, the Doxygen build), then the same suite under
-#      ASan + UBSan and the concurrency tests under TSan;
+#      .tar.gz install test, the README's C snippet, the Doxygen build), the LAZ reader built in
+#      (tools/laz_check.sh), then the same suite under ASan + UBSan and the concurrency tests under TSan;
 #   3. the Python binding: pytest against `pip install ./bindings/python`, then its packages (sdist and
 #      manylinux wheel, each installed into a fresh venv and tested there);
 #   4. a seconds-long benchmark smoke run;
@@ -48,6 +48,10 @@ step lint bash "$here/tools/lint.sh"
 echo "== C/C++ tests (CTest) =="
 step ctest ctest --test-dir "$build" --output-on-failure --parallel 2 --timeout 900 \
   --output-junit "$build/ctest-junit.xml"
+
+# The LAZ reader (KISSM_WITH_LAZ=ON, off by default): the readers and their tests only, in build-laz/.
+step laz bash "$here/tools/laz_check.sh"
+junit+=(--junit "laz=$here/build-laz/ctest-junit.xml")
 
 if [[ ${KISSM_SKIP_SANITIZERS:-0} != 1 ]]; then
   step "asan+ubsan" bash "$here/tools/sanitize.sh" asan

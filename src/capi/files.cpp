@@ -36,7 +36,7 @@ int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cl
             core::fail(core::ErrorKind::InvalidArgument,
                        "format is " + std::to_string(format) + "; use a KISSM_FORMAT_* value");
         auto c = std::make_unique<kissm_cloud>();
-        c->xyz = core::read_points_file(path, file_format_of(format));
+        c->xyz = core::read_points_file(path, file_format_of(format), &c->withheld);
         *out_cloud = c.release();
         return ok();
     });
@@ -44,6 +44,7 @@ int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cl
 
 void kissm_cloud_destroy(kissm_cloud *cloud) { delete cloud; }
 uint64_t kissm_cloud_count(const kissm_cloud *cloud) { return cloud ? cloud->xyz.size() / 3 : 0; }
+uint64_t kissm_cloud_num_withheld(const kissm_cloud *cloud) { return cloud ? cloud->withheld : 0; }
 const double *kissm_cloud_data(const kissm_cloud *cloud) {
     return (cloud && !cloud->xyz.empty()) ? cloud->xyz.data() : nullptr;
 }

@@ -31,6 +31,7 @@ struct kissm_features {
 
 struct kissm_cloud {
     std::vector<double> xyz;
+    std::uint64_t withheld = 0; // points the reader left out on purpose (LAS/LAZ withheld)
 };
 
 struct kissm_pose_graph {

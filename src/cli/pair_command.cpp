@@ -11,6 +11,7 @@
 #include "cli_args.hpp"
 #include "commands.hpp"
 #include "json_writer.hpp"
+#include "las_writer.hpp"
 #include "picture/alignment_figure.hpp"
 #include "picture/png_writer.hpp"
 #include "picture/top_view.hpp"
@@ -64,10 +65,26 @@ void write_outputs(PairCommand command, const PairOptions &opt, const kissm_clou
     const size_t source_count = static_cast<size_t>(kissm_cloud_count(source));
     if (!opt.out_aligned.empty()) {
         if (have_pose) {
-            const std::vector<std::string> comments = {std::string("kissm ") + kissm_version_string() +
-                                                       ": source moved into the target frame"};
-            if (!write_ply_xyz(opt.out_aligned, source_xyz, source_count, result.transform, comments, &error)) {
-                throw UsageError(error);
+            if (is_las_path(opt.out_aligned)) {
+                // The target's scale and offset when it is LAS/LAZ: the aligned points land on its grid.
+                LasFrame frame;
+                if (!read_las_frame(opt.files[1], &frame))
+                    frame = las_frame_for(source_xyz, source_count, result.transform);
+                size_t written = 0;
+                if (!write_las_xyz(opt.out_aligned, source_xyz, source_count, result.transform, frame, &written,
+                                   &error)) {
+                    throw UsageError(error);
+                }
+                if (written < source_count) {
+                    std::fprintf(stderr, "kissm: %zu non-finite points left out of '%s' (LAS cannot hold them)\n",
+                                 source_count - written, opt.out_aligned.c_str());
+                }
+            } else {
+                const std::vector<std::string> comments = {std::string("kissm ") + kissm_version_string() +
+                                                           ": source moved into the target frame"};
+                if (!write_ply_xyz(opt.out_aligned, source_xyz, source_count, result.transform, comments, &error)) {
+                    throw UsageError(error);
+                }
             }
         } else {
             std::fprintf(stderr, "kissm: no pose was estimated; '%s' not written\n", opt.out_aligned.c_str());
@@ -219,6 +236,12 @@ CloudPtr read_cloud(const char *role, const std::string &path, int32_t format) {
         throw UsageError(std::string("cannot read ") + role + " '" + one_line(path) +
                          "': " + library_error(status, path));
     }
+    // A LAS/LAZ file's withheld points are not registered; say how many, since the file's own count differs.
+    const uint64_t withheld = kissm_cloud_num_withheld(cloud);
+    if (withheld > 0) {
+        std::fprintf(stderr, "kissm: %s '%s': %llu points flagged withheld left out\n", role, one_line(path).c_str(),
+                     static_cast<unsigned long long>(withheld));
+    }
     return CloudPtr(cloud);
 }
 
@@ -321,6 +344,9 @@ bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, Pa
         opt.out_transform = cur.value();
     } else if (with_outputs && name == "--out-aligned") {
         opt.out_aligned = cur.value();
+        if (is_laz_path(opt.out_aligned))
+            throw UsageError("--out-aligned: kissm does not write LAZ ('" + opt.out_aligned +
+                             "'); name a .las or .ply file");
     } else if (with_outputs && name == "--out-topview") {
         opt.out_topview = cur.value();
     } else if (!cur.take_flag("--drop-nonfinite", &opt.drop_nonfinite) &&
@@ -528,8 +554,11 @@ void print_pair_output_help(std::FILE *out) {
                  "                          is written as null\n"
                  "  --out-transform FILE    write the 4x4 transform as 4 lines of 4 numbers (%%.17g); NaN when\n"
                  "                          no pose was estimated. `kissm refine --initial FILE` reads it\n"
-                 "  --out-aligned FILE.ply  write SOURCE moved into TARGET's frame (binary little-endian PLY,\n"
-                 "                          float64 x y z); skipped when no pose was estimated\n"
+                 "  --out-aligned FILE      write SOURCE moved into TARGET's frame; skipped when no pose was\n"
+                 "                          estimated. FILE.las: LAS 1.2 point format 0, with TARGET's scale and\n"
+                 "                          offset when TARGET is LAS/LAZ (else 0.0001 around the cloud's centre);\n"
+                 "                          non-finite points left out. Any other name: binary little-endian PLY,\n"
+                 "                          float64 x y z\n"
                  "  --out-topview FILE.png  top-down picture: before and after (source orange, target blue);\n"
                  "                          with refinement also a detail under the coarse and refined poses\n"
                  "  -v, --verbose           print the library's log messages on stderr\n"

@@ -4,12 +4,17 @@
 // where the points start (the VLRs between the header and the points, and the EVLRs after them, are not
 // read); each record starts with X, Y, Z as int32 and x = X * scale_x + offset_x is computed in double, so
 // georeferenced coordinates (offsets of 1e6 m and more) keep every digit the file stores.
-// Points flagged withheld are left out (the reader API has no way to report how many: see src/io/README.md).
+// Points flagged withheld are left out and counted (kissm_cloud_num_withheld).
+// LAZ (the same header, the records LASzip-compressed) goes through io/laz_records.hpp when built in.
 #include "core/detail_namespace.hpp"
+#include "core/failure.hpp"
 #include "core/little_endian.hpp"
 #include "io/file_bytes.hpp"
 #include "io/format_readers.hpp"
+#include "io/las_layout.hpp"
+#include "io/laz_records.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -21,29 +26,7 @@ KISSM_DETAIL_BEGIN
 
 namespace {
 
-// Public header block sizes: LAS 1.0-1.2, 1.3 (adds the waveform data start), 1.4 (EVLRs, 64-bit counts).
-constexpr std::size_t kHeader12 = 227;
-constexpr std::size_t kHeader13 = 235;
-constexpr std::size_t kHeader14 = 375;
-
-// Field offsets in the public header block.
-constexpr std::size_t kVersionMajor = 24;
-constexpr std::size_t kVersionMinor = 25;
-constexpr std::size_t kHeaderSize = 94;
-constexpr std::size_t kOffsetToPoints = 96;
-constexpr std::size_t kFormatId = 104;
-constexpr std::size_t kRecordLength = 105;
-constexpr std::size_t kLegacyCount = 107;
-constexpr std::size_t kScale = 131;  // x, y, z float64
-constexpr std::size_t kOffset = 155; // x, y, z float64
-constexpr std::size_t kCount64 = 247;
-
-// The minimum record length of point data record formats 0 to 10.
-constexpr std::uint16_t kMinRecord[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
-
-// The withheld flag: bit 7 of the classification byte (formats 0-5), bit 2 of the classification flags
-// byte (formats 6-10); both live in byte 15 of the record.
-constexpr std::size_t kFlagsByte = 15;
+using namespace las; // las_layout.hpp
 
 std::string number_text(double v) {
     char buf[32];
@@ -60,6 +43,8 @@ struct LasHeader {
     std::uint64_t header_size = 0;
     std::uint64_t point_offset = 0;
     int format = 0;
+    bool compressed = false; // LAZ
+    std::uint32_t vlr_count = 0;
     std::uint64_t record_length = 0;
     std::uint64_t count = 0;
     double scale[3] = {1, 1, 1};
@@ -99,11 +84,16 @@ LasHeader parse_header(const std::string &path, std::string_view bytes) {
         fail_parse(path, "truncated: the offset to point data " + std::to_string(h.point_offset) +
                              " is beyond the file's " + std::to_string(bytes.size()) + " bytes");
 
-    const int id = *at(bytes, kFormatId);
+    h.vlr_count = load_le<std::uint32_t>(at(bytes, kVlrCount));
+    const int stored_id = *at(bytes, kFormatId);
     // LASzip marks compressed files by setting bit 7 (and, in old versions, bit 6) of the format id.
-    if (id & 0xC0)
-        fail_parse(path, "LAZ (compressed) is not supported yet (point data record format id " + std::to_string(id) +
-                             " has the compression bit set)");
+    h.compressed = (stored_id & 0xC0) != 0;
+    if (h.compressed && !kLazBuiltIn)
+        fail(ErrorKind::UnsupportedFormat,
+             path + ": LAZ support was not built in (point data record format id " + std::to_string(stored_id) +
+                 " has the compression bit set; configure kissm with -DKISSM_WITH_LAZ=ON, or convert the file to "
+                 ".las)");
+    const int id = stored_id & 0x3F;
     if (id > 10)
         fail_parse(path, "unknown LAS point data record format " + std::to_string(id) + " (0 to 10 are defined)");
     h.format = id;
@@ -136,7 +126,9 @@ LasHeader parse_header(const std::string &path, std::string_view bytes) {
                                  " (it must be finite)");
     }
 
-    // Every record must be in the file before anything is allocated for it.
+    // Every record must be in the file before anything is allocated for it. (Compressed records have no
+    // such bound: memory then follows the points decompressed, io/laz_records.hpp.)
+    if (h.compressed) return h;
     const std::uint64_t left = bytes.size() - h.point_offset;
     std::uint64_t need = 0;
     if (!checked_mul(h.count, h.record_length, need) || need > left)
@@ -148,21 +140,41 @@ LasHeader parse_header(const std::string &path, std::string_view bytes) {
 
 } // namespace
 
-std::vector<double> parse_las(const std::string &path, std::string_view bytes) {
+std::vector<double> parse_las(const std::string &path, std::string_view bytes, std::uint64_t *withheld) {
     const LasHeader h = parse_header(path, bytes);
-    const std::size_t n = static_cast<std::size_t>(h.count);
     const std::size_t len = static_cast<std::size_t>(h.record_length);
-    const std::uint8_t withheld = h.format <= 5 ? 0x80 : 0x04;
+    const std::uint8_t withheld_bit = h.format <= 5 ? 0x80 : 0x04;
     std::vector<double> xyz;
-    xyz.reserve(3 * n);
-    const std::uint8_t *r = at(bytes, static_cast<std::size_t>(h.point_offset));
-    for (std::size_t i = 0; i < n; ++i, r += len) {
-        if (r[kFlagsByte] & withheld) continue;
+    std::uint64_t left_out = 0;
+    const auto take = [&](const std::uint8_t *r) {
+        if (r[kFlagsByte] & withheld_bit) {
+            ++left_out;
+            return;
+        }
         for (std::size_t k = 0; k < 3; ++k) {
             const double raw = load_le_i32(r + 4 * k);
             xyz.push_back(raw * h.scale[k] + h.offset[k]);
         }
+    };
+    if (h.compressed) {
+        // The header's count is not checked against the compressed bytes: reserve no more than the file
+        // could hold at one byte a point, and grow with the points actually decompressed.
+        xyz.reserve(3 * static_cast<std::size_t>(std::min<std::uint64_t>(h.count, bytes.size())));
+        LazLayout l;
+        l.header_size = h.header_size;
+        l.vlr_count = h.vlr_count;
+        l.point_offset = h.point_offset;
+        l.record_length = static_cast<std::uint16_t>(h.record_length);
+        l.count = h.count;
+        for_each_laz_record(path, bytes, l, take);
+        if (withheld) *withheld = left_out;
+        return xyz;
     }
+    const std::size_t n = static_cast<std::size_t>(h.count);
+    xyz.reserve(3 * n);
+    const std::uint8_t *r = at(bytes, static_cast<std::size_t>(h.point_offset));
+    for (std::size_t i = 0; i < n; ++i, r += len) take(r);
+    if (withheld) *withheld = left_out;
     return xyz;
 }
 

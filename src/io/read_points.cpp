@@ -84,7 +84,8 @@ bool from_content(std::string_view bytes, FileFormat &format) {
 
 } // namespace
 
-std::vector<double> read_points_file(const std::string &path, FileFormat format) {
+std::vector<double> read_points_file(const std::string &path, FileFormat format, std::uint64_t *withheld) {
+    if (withheld) *withheld = 0;
     switch (format) {
     case FileFormat::Auto:
     case FileFormat::Ply:
@@ -118,7 +119,7 @@ std::vector<double> read_points_file(const std::string &path, FileFormat format)
     case FileFormat::Npy: return parse_npy(path, bytes);
     case FileFormat::Xyz: return parse_xyz_text(path, bytes);
     case FileFormat::BinXyz: return parse_bin_xyz(path, bytes);
-    case FileFormat::Las: return parse_las(path, bytes);
+    case FileFormat::Las: return parse_las(path, bytes, withheld);
     case FileFormat::Auto: break;
     }
     fail(ErrorKind::Internal, path + ": format detection left no format");

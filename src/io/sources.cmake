@@ -10,4 +10,5 @@ set(KISSM_IO_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/npy_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/xyz_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/las_reader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/laz_records.cpp
 )

@@ -113,6 +113,7 @@ struct kissm_header_test_api {
     int32_t (*read_points)(const char *, int32_t, kissm_cloud **);
     void (*cloud_destroy)(kissm_cloud *);
     uint64_t (*cloud_count)(const kissm_cloud *);
+    uint64_t (*cloud_num_withheld)(const kissm_cloud *);
     const double *(*cloud_data)(const kissm_cloud *);
     int32_t (*cloud_points)(const kissm_cloud *, kissm_points *);
     int32_t (*align_options_init)(kissm_align_options *, uint32_t);
@@ -156,6 +157,7 @@ const struct kissm_header_test_api kissm_header_test_api = {
     .read_points = kissm_read_points,
     .cloud_destroy = kissm_cloud_destroy,
     .cloud_count = kissm_cloud_count,
+    .cloud_num_withheld = kissm_cloud_num_withheld,
     .cloud_data = kissm_cloud_data,
     .cloud_points = kissm_cloud_points,
     .align_options_init = kissm_align_options_init,

@@ -45,6 +45,7 @@ int32_t kissm_features_deserialize(const void *bytes, uint64_t size, kissm_featu
 int32_t kissm_read_points(const char *path, int32_t format, kissm_cloud **out_cloud);
 void kissm_cloud_destroy(kissm_cloud *cloud);
 uint64_t kissm_cloud_count(const kissm_cloud *cloud);
+uint64_t kissm_cloud_num_withheld(const kissm_cloud *cloud);
 const double *kissm_cloud_data(const kissm_cloud *cloud);
 int32_t kissm_cloud_points(const kissm_cloud *cloud, kissm_points *out_points);
 uint32_t kissm_abi_sizeof(int32_t which);

@@ -140,6 +140,9 @@ static void test_null_pointers(void) {
         memset(&view, 0x11, sizeof(view));
         CHECK_EQ_INT(kissm_cloud_points(NULL, &view), KISSM_ERR_NULL_ARGUMENT);
         CHECK(msg_has("cloud"));
+        /* The getters of a NULL cloud answer 0, as documented, and set no error. */
+        CHECK_EQ_INT(kissm_cloud_count(NULL), 0);
+        CHECK_EQ_INT(kissm_cloud_num_withheld(NULL), 0);
     }
     out_m = SENTINEL_MATCHER;
     CHECK_EQ_INT(kissm_create(NULL, &out_m), KISSM_OK); /* NULL config is not an error: defaults */

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* kissm_read_points and the kissm_cloud accessors on files written by the test (PLY, xyz text, KITTI
- * .bin, raw float32 xyz), error statuses, and registering clouds read through the API. C99 + POSIX. */
+ * .bin, raw float32 xyz, LAS with withheld points), error statuses, and registering clouds read through the
+ * API. C99 + POSIX. */
 #define _POSIX_C_SOURCE 200809L
 
 #include <math.h>
@@ -266,6 +267,58 @@ static void test_errors(void) {
     }
 }
 
+static void put_u16(unsigned char *p, unsigned v) {
+    p[0] = (unsigned char)(v & 0xFF);
+    p[1] = (unsigned char)(v >> 8);
+}
+static void put_u32(unsigned char *p, uint32_t v) {
+    int i;
+    for (i = 0; i < 4; ++i) p[i] = (unsigned char)(v >> (8 * i));
+}
+static void put_f64(unsigned char *p, double v) {
+    uint64_t bits;
+    int i;
+    memcpy(&bits, &v, sizeof bits);
+    for (i = 0; i < 8; ++i) p[i] = (unsigned char)(bits >> (8 * i));
+}
+
+/* A LAS 1.2 file (point format 0, scale 0.5, offset 10) of 5 points, points 1 and 3 withheld: 3 points read,
+ * kissm_cloud_num_withheld() 2; every other format leaves nothing out (0). */
+static void test_las_withheld(void) {
+    unsigned char las[227 + 5 * 20];
+    const double expected[9] = {10, 10, 10, 12, 12, 12, 14, 14, 14};
+    kissm_cloud *cloud = NULL;
+    const char *path;
+    int i, k;
+    memset(las, 0, sizeof las);
+    memcpy(las, "LASF", 4);
+    las[24] = 1;
+    las[25] = 2;
+    put_u16(las + 94, 227);
+    put_u32(las + 96, 227);
+    put_u16(las + 105, 20);
+    put_u32(las + 107, 5);
+    for (k = 0; k < 3; ++k) {
+        put_f64(las + 131 + 8 * k, 0.5);
+        put_f64(las + 155 + 8 * k, 10.0);
+    }
+    for (i = 0; i < 5; ++i) {
+        for (k = 0; k < 3; ++k) put_u32(las + 227 + 20 * i + 4 * k, (uint32_t)(2 * i));
+        if (i == 1 || i == 3) las[227 + 20 * i + 15] = 0x80; /* withheld: bit 7 of the classification byte */
+    }
+    path = write_file("withheld.las", las, sizeof las);
+    check_read("las with withheld points", path, KISSM_FORMAT_AUTO, expected, 3);
+    REQUIRE(kissm_read_points(path, KISSM_FORMAT_LAS, &cloud) == KISSM_OK);
+    CHECK_EQ_INT(kissm_cloud_count(cloud), 3);
+    CHECK_EQ_INT(kissm_cloud_num_withheld(cloud), 2);
+    kissm_cloud_destroy(cloud);
+    cloud = NULL;
+    REQUIRE(kissm_read_points(write_text("none.xyz", "1 2 3\n"), KISSM_FORMAT_AUTO, &cloud) == KISSM_OK);
+    CHECK_EQ_INT(kissm_cloud_num_withheld(cloud), 0);
+    kissm_cloud_destroy(cloud);
+    CHECK_EQ_INT(kissm_cloud_num_withheld(NULL), 0);
+}
+
 /* Clouds written as text (%.17g, exact) and as KITTI float32, read back and registered through the API. */
 static void test_register_read_clouds(void) {
     scn_pair pair;
@@ -347,6 +400,7 @@ int main(void) {
     RUN_TEST(test_xyz_text);
     RUN_TEST(test_binary);
     RUN_TEST(test_errors);
+    RUN_TEST(test_las_withheld);
     RUN_TEST(test_register_read_clouds);
     for (i = 0; i < g_num_paths; ++i) unlink(g_paths[i]);
     rmdir(g_dir);

@@ -79,6 +79,10 @@ def test_synthetic_laz_equals_the_c_readers_las(tmp_path: Path, fmt: int, versio
     records = laspy.read(str(plain))
     expected = np.stack([np.asarray(records.X), np.asarray(records.Y), np.asarray(records.Z)], axis=1)[~withheld]
     assert np.array_equal(got, expected.astype(np.float64) * 1e-3 + offset)
+    # The withheld count, as the library's LAS reader reports it for the uncompressed copy.
+    for path in (plain, compressed):
+        points, count = kissm.read_points(path, return_withheld=True)
+        assert np.array_equal(points, got) and count == int(withheld.sum()) > 0
 
 
 def test_laz_named_las_is_read_by_its_header(tmp_path: Path) -> None:

@@ -2,11 +2,14 @@
 """LAS through ``kissm.read_points`` (LAZ: test_io_laz.py): files written byte by byte here (no dependency), and
 files written by laspy (the test extra) from a real cloud of ../shared/data at point formats 0, 1, 3, 6 and
 versions 1.2 and 1.4: the points equal the source's within the scale and laspy's own scaled values bit for bit,
-withheld points are left out, and a georeferenced copy (offsets of 1e6 m) registers with the unshifted pose."""
+withheld points are left out, and a georeferenced copy (offsets of 1e6 m) registers with the unshifted pose. Then the
+CLI's LAS writer (``--out-aligned x.las``) read back by laspy and by kissm."""
 
 from __future__ import annotations
 
+import re
 import struct
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -71,6 +74,8 @@ def test_read_own_bytes(tmp_path: Path, fmt: int, minor: int) -> None:
     assert np.array_equal(got, expected)
     assert np.array_equal(kissm.read_points(path, format="las"), expected)
     assert np.array_equal(kissm.read_points(path, format="auto"), expected)
+    points, withheld = kissm.read_points(path, return_withheld=True)
+    assert np.array_equal(points, expected) and withheld == 1
 
 
 def test_errors(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -81,7 +86,11 @@ def test_errors(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(kissm._read, "laspy_with_lazrs", lambda: None)
     with pytest.raises(kissm.UnsupportedFormatError, match=r"pip install kissm\[las\]") as caught:
         kissm.read_points(laz)
-    assert isinstance(caught.value.__cause__, kissm.ParseError) and "LAZ" in str(caught.value.__cause__)
+    # The package's library is built without LAZ (KISSM_WITH_LAZ is off by default): its refusal, by the format
+    # id's compression bit, is the cause.
+    cause = caught.value.__cause__
+    assert isinstance(cause, kissm.UnsupportedFormatError)
+    assert re.search(r"LAZ support was not built in .*-DKISSM_WITH_LAZ=ON", str(cause))
     short = tmp_path / "short.las"
     short.write_bytes(las_bytes(INTS)[:-1])
     with pytest.raises(kissm.ParseError, match="truncated: the header says 3 points of 28 bytes"):
@@ -155,7 +164,8 @@ def test_laspy_withheld(real_pairs: dict[str, RealPair], tmp_path: Path, fmt: in
     withheld[::7] = True
     path = tmp_path / "withheld.las"
     _write_laspy(path, source, fmt, version, np.floor(source.min(axis=0)), withheld=withheld)
-    got = kissm.read_points(path)
+    got, left_out = kissm.read_points(path, return_withheld=True)
+    assert left_out == int(withheld.sum())
     assert got.shape == (int((~withheld).sum()), 3)
     assert np.max(np.abs(got - source[~withheld])) <= 0.5e-3 + 1e-9
 
@@ -190,3 +200,107 @@ def test_laspy_georeferenced_registers_as_unshifted(real_pairs: dict[str, RealPa
         moved = a.rotation @ centre + a.translation + shift
         moved_geo = b.rotation @ (centre + shift) + b.translation
         assert np.linalg.norm(moved - moved_geo) < max_m, (refine, moved, moved_geo)
+
+
+# ---- the CLI's LAS writer (--out-aligned FILE.las) ---------------------------------------------------------
+
+
+def _register_out_aligned(cli: Path, source: Path, target: Path, out: Path) -> tuple[np.ndarray, Any]:
+    """Runs `kissm register SOURCE TARGET --out-aligned OUT` on the demo pair; returns the transform it wrote
+    and laspy's reading of OUT."""
+    laspy = _laspy()
+    transform = out.parent / "T.txt"
+    args = ["register", str(source), str(target), "--voxel", "0.3", "--threads", "2", "--out-aligned", str(out)]
+    run = subprocess.run(
+        [str(cli), *args, "--out-transform", str(transform)], capture_output=True, text=True, timeout=300
+    )
+    assert run.returncode in (0, 1), run.stderr  # 1: a pose that is not valid is still written
+    T = np.array([[float(v) for v in line.split()] for line in transform.read_text().splitlines()])
+    return T, laspy.read(str(out))
+
+
+def _xyz(las: Any) -> np.ndarray:
+    return np.stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)], axis=1)
+
+
+def test_cli_out_aligned_las_keeps_target_frame(cli: Path, demo_clouds: tuple[Path, Path], tmp_path: Path) -> None:
+    """A georeferenced LAS target (offsets near 1e6 m, 1 mm scale): the aligned source is written with the
+    target's scale and offset, laspy and kissm read the same bits, and every point is R p + t within half a
+    scale step."""
+    source_ply, target_ply = demo_clouds
+    source = kissm.read_points(source_ply)
+    target = kissm.read_points(target_ply)
+    shift = np.array([500_000.0, 4_500_000.0, 100.0])
+    offset = np.floor(target.min(axis=0)) + shift
+    target_las = tmp_path / "target.las"
+    _write_laspy(target_las, target + shift, 3, "1.2", offset)
+    out = tmp_path / "aligned.las"
+    T, written = _register_out_aligned(cli, source_ply, target_las, out)
+    assert written.header.version.major == 1 and written.header.version.minor == 2
+    assert written.header.point_format.id == 0
+    assert np.array_equal(written.header.scales, [1e-3] * 3)
+    assert np.array_equal(written.header.offsets, offset)
+    xyz = _xyz(written)
+    assert np.array_equal(kissm.read_points(out), xyz)
+    moved = source @ T[:3, :3].T + T[:3, 3]
+    assert xyz.shape == moved.shape
+    assert np.max(np.abs(xyz - moved)) <= 0.5e-3 + 1e-9
+    # The pose is the demo's: the aligned source lies on the target (the shift is in the pose).
+    assert np.linalg.norm(T[:3, 3] - shift) < 100
+
+
+def test_cli_out_aligned_las_own_frame(cli: Path, demo_clouds: tuple[Path, Path], tmp_path: Path) -> None:
+    """A target that is not LAS: scale 0.0001 and an offset of whole units near the aligned cloud's centre."""
+    source_ply, target_ply = demo_clouds
+    out = tmp_path / "aligned.LAS"
+    T, written = _register_out_aligned(cli, source_ply, target_ply, out)
+    moved = kissm.read_points(source_ply) @ T[:3, :3].T + T[:3, 3]
+    assert np.array_equal(written.header.scales, [1e-4] * 3)
+    centre = (moved.min(axis=0) + moved.max(axis=0)) / 2
+    assert np.all(np.abs(written.header.offsets - centre) <= 0.5 + 1e-9)
+    assert np.array_equal(written.header.offsets, np.round(written.header.offsets))
+    xyz = _xyz(written)
+    assert np.array_equal(kissm.read_points(out), xyz)
+    assert np.max(np.abs(xyz - moved)) <= 0.5e-4 + 1e-9
+
+
+def test_cli_out_aligned_laz_refused(cli: Path, demo_clouds: tuple[Path, Path], tmp_path: Path) -> None:
+    source_ply, target_ply = demo_clouds
+    run = subprocess.run(
+        [
+            str(cli),
+            "register",
+            str(source_ply),
+            str(target_ply),
+            "--voxel",
+            "0.3",
+            "--out-aligned",
+            str(tmp_path / "x.laz"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert run.returncode == 2
+    assert "--out-aligned: kissm does not write LAZ" in run.stderr
+    assert not (tmp_path / "x.laz").exists()
+
+
+def test_cli_names_withheld_points(cli: Path, demo_clouds: tuple[Path, Path], tmp_path: Path) -> None:
+    """The CLI says how many points flagged withheld it left out of a LAS input (kissm_cloud_num_withheld)."""
+    _laspy()
+    source_ply, target_ply = demo_clouds
+    target = kissm.read_points(target_ply)
+    withheld = np.zeros(len(target), dtype=bool)
+    withheld[::100] = True
+    target_las = tmp_path / "target.las"
+    _write_laspy(target_las, target, 1, "1.2", np.floor(target.min(axis=0)), withheld=withheld)
+    run = subprocess.run(
+        [str(cli), "register", str(source_ply), str(target_las), "--voxel", "0.3", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode in (0, 1), run.stderr
+    assert f"kissm: target '{target_las}': {int(withheld.sum())} points flagged withheld left out" in run.stderr
+    assert "source" not in run.stderr

@@ -400,6 +400,8 @@ void kissm_cloud_destroy(kissm_cloud *cloud);
 
 uint64_t kissm_cloud_count(const kissm_cloud *cloud);
 
+uint64_t kissm_cloud_num_withheld(const kissm_cloud *cloud);
+
 const double *kissm_cloud_data(const kissm_cloud *cloud);
 
 int32_t kissm_cloud_points(const kissm_cloud *cloud, kissm_points *out_points);

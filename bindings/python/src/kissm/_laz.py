@@ -42,8 +42,9 @@ def laspy_with_lazrs() -> Any:
     return laspy if laspy.LazBackend.Lazrs.is_available() else None
 
 
-def read_laz(laspy: Any, path: str | os.PathLike[str] | bytes) -> np.ndarray:
-    """(N, 3) float64 points of the LAZ file ``path``, as the library's LAS reader computes them."""
+def read_laz(laspy: Any, path: str | os.PathLike[str] | bytes) -> tuple[np.ndarray, int]:
+    """(N, 3) float64 points of the LAZ file ``path``, as the library's LAS reader computes them, and the number of
+    points flagged withheld that were left out."""
     name = os.fsdecode(path)
     try:
         las = laspy.read(name, laz_backend=laspy.LazBackend.Lazrs)  # single-threaded: deterministic, no pool
@@ -58,7 +59,7 @@ def read_laz(laspy: Any, path: str | os.PathLike[str] | bytes) -> np.ndarray:
     for k in range(3):
         # The C reader's operation: double(X) * scale + offset, two roundings (no fused multiply-add).
         points[:, k] = raw[k][keep].astype(np.float64) * float(header.scales[k]) + float(header.offsets[k])
-    return points
+    return points, int(keep.size - points.shape[0])
 
 
 def laz_missing(path: str | os.PathLike[str] | bytes, cause: Exception) -> UnsupportedFormatError:

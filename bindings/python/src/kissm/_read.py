@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import os
-from typing import Union
+from typing import Literal, Union, overload
 
 import numpy as np
 
@@ -33,7 +33,17 @@ FORMATS: dict[str, int] = {
 StrPath = Union[str, "os.PathLike[str]", bytes]
 
 
-def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
+@overload
+def read_points(path: StrPath, format: str = ..., *, return_withheld: Literal[False] = ...) -> np.ndarray: ...
+
+
+@overload
+def read_points(path: StrPath, format: str = ..., *, return_withheld: Literal[True]) -> tuple[np.ndarray, int]: ...
+
+
+def read_points(
+    path: StrPath, format: str = "auto", *, return_withheld: bool = False
+) -> np.ndarray | tuple[np.ndarray, int]:
     """Read a point file with the library's readers (the ones the ``kissm`` CLI uses).
 
     Formats: PLY (ascii, binary), PCD (ascii, binary), KITTI ``.bin`` (float32 x y z intensity), ``.npy``
@@ -48,7 +58,9 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
 
     Returns:
         A new (N, 3) float64 C-contiguous array. Non-finite points are kept as they are (the registration's
-        ``nonfinite_policy`` decides).
+        ``nonfinite_policy`` decides). With ``return_withheld=True``, ``(array, withheld)``: ``withheld`` is
+        the number of points the reader left out on purpose (LAS points flagged withheld; 0 for the other
+        formats), ``kissm_cloud_num_withheld`` in C.
 
     Raises:
         kissm.IoError: the file cannot be opened or read (an OSError).
@@ -66,7 +78,8 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
     if laz:
         laspy = laspy_with_lazrs()
         if laspy is not None:
-            return read_laz(laspy, encoded)
+            points, withheld = read_laz(laspy, encoded)
+            return (points, withheld) if return_withheld else points
     out = ffi.new("kissm_cloud **")
     try:
         check(lib.kissm_read_points(encoded, FORMATS[format], out))
@@ -80,6 +93,8 @@ def read_points(path: StrPath, format: str = "auto") -> np.ndarray:
         array = np.empty((count, 3), dtype=np.float64)
         if count:
             ffi.memmove(ffi.from_buffer(array), lib.kissm_cloud_data(cloud), 24 * count)
+        if return_withheld:
+            return array, int(lib.kissm_cloud_num_withheld(cloud))
         return array
     finally:
         ffi.release(cloud)

@@ -1167,7 +1167,8 @@ extern "C" {
  @retval KISSM_ERR_INVALID_ARGUMENT @p format is not a KISSM_FORMAT_* value.
  @retval KISSM_ERR_IO The file could not be opened or read.
  @retval KISSM_ERR_PARSE The file is malformed, truncated or of an unsupported layout.
- @retval KISSM_ERR_UNSUPPORTED_FORMAT The file's format is not recognised.
+ @retval KISSM_ERR_UNSUPPORTED_FORMAT The file's format is not recognised, or it is LAZ and this library
+         was built without LAZ support.
  @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
     pub fn kissm_read_points(
         path: *const ::core::ffi::c_char,
@@ -1185,6 +1186,13 @@ extern "C" {
  @param[in] cloud The cloud.
  @return The number of points; 0 for NULL.*/
     pub fn kissm_cloud_count(cloud: *const kissm_cloud) -> u64;
+}
+extern "C" {
+    /** @brief Number of points the reader left out of the cloud on purpose: for LAS and LAZ, the points flagged
+        withheld (not in kissm_cloud_count()); 0 for every other format, which leaves nothing out.
+ @param[in] cloud The cloud.
+ @return The number of points left out; 0 for NULL.*/
+    pub fn kissm_cloud_num_withheld(cloud: *const kissm_cloud) -> u64;
 }
 extern "C" {
     /** @brief The cloud's coordinates.

@@ -210,8 +210,10 @@ pub enum Format {
     Xyz,
     /// Raw float32 x, y, z triples (no intensity, no header).
     BinXyz,
-    /// LAS 1.0-1.4, uncompressed, point formats 0-10: x, y, z with the file's scale and offset applied in
-    /// float64; points flagged withheld are left out. LAZ files fail with a parse error.
+    /// LAS 1.0-1.4, point formats 0-10: x, y, z with the file's scale and offset applied in float64; points
+    /// flagged withheld are left out. LAZ is read only by a libkissm built with the CMake option
+    /// `KISSM_WITH_LAZ` (off by default, and off in the library this crate builds); otherwise it fails with
+    /// [`ErrorKind::UnsupportedFormat`](crate::ErrorKind::UnsupportedFormat).
     Las,
 }
 
@@ -265,6 +267,13 @@ impl Cloud {
     pub fn len(&self) -> usize {
         // SAFETY: self.raw is a live cloud.
         usize::try_from(unsafe { sys::kissm_cloud_count(self.raw.as_ptr()) }).unwrap_or(0)
+    }
+
+    /// Number of points the reader left out on purpose: for LAS/LAZ the points flagged withheld (not in
+    /// [`Cloud::len`]); 0 for the other formats.
+    pub fn num_withheld(&self) -> u64 {
+        // SAFETY: self.raw is a live cloud.
+        unsafe { sys::kissm_cloud_num_withheld(self.raw.as_ptr()) }
     }
 
     /// Whether the cloud has no points.

@@ -1008,6 +1008,41 @@ fn read_points_formats_and_errors() {
     let unsupported = kissm::read_points(&unknown).unwrap_err();
     assert_eq!(unsupported.kind(), ErrorKind::UnsupportedFormat, "{unsupported}");
 
+    // LAS 1.2, point format 0, scale 1, offset 0: three points, the middle one withheld (bit 7 of byte 15).
+    let mut las = vec![0u8; 227];
+    las[..4].copy_from_slice(b"LASF");
+    las[24] = 1;
+    las[25] = 2;
+    las[94..96].copy_from_slice(&227u16.to_le_bytes());
+    las[96..100].copy_from_slice(&227u32.to_le_bytes());
+    las[105..107].copy_from_slice(&20u16.to_le_bytes());
+    las[107..111].copy_from_slice(&3u32.to_le_bytes());
+    for k in 0..3 {
+        las[131 + 8 * k..139 + 8 * k].copy_from_slice(&1.0f64.to_le_bytes());
+    }
+    for i in 0..3i32 {
+        let mut record = [0u8; 20];
+        for k in 0..3 {
+            record[4 * k..4 * k + 4].copy_from_slice(&(i * 10).to_le_bytes());
+        }
+        if i == 1 {
+            record[15] = 0x80;
+        }
+        las.extend_from_slice(&record);
+    }
+    let las_path = dir.join("withheld.las");
+    std::fs::write(&las_path, &las).unwrap();
+    let las_cloud = kissm::read_points(&las_path).unwrap();
+    assert_eq!(las_cloud.to_vec(), vec![[0.0, 0.0, 0.0], [20.0, 20.0, 20.0]]);
+    assert_eq!(las_cloud.num_withheld(), 1);
+    assert_eq!(cloud.num_withheld(), 0);
+    // The library this crate builds has no LAZ support: a compressed format id is refused as such.
+    las[104] = 0x80;
+    std::fs::write(dir.join("c.laz"), &las).unwrap();
+    let laz = kissm::read_points(dir.join("c.laz")).unwrap_err();
+    assert_eq!(laz.kind(), ErrorKind::UnsupportedFormat, "{laz}");
+    assert!(laz.message().contains("LAZ support was not built in"), "{laz}");
+
     let nul = kissm::read_points("bad\0name.ply").unwrap_err();
     assert_eq!(nul.kind(), ErrorKind::InvalidArgument);
 
