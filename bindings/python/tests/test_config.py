@@ -367,3 +367,13 @@ def test_matcher_overrides_and_config() -> None:
         assert "voxel_size=0.4" in repr(matcher)
     with pytest.raises(TypeError, match="kissm.Config"):
         kissm.Matcher({"voxel_size": 0.4})  # type: ignore[arg-type]
+
+
+def test_a_mistyped_field_names_the_nearest() -> None:
+    """Issue 36: errors that say what to type instead."""
+    with pytest.raises(TypeError, match=r"unknown kissm.Config field 'voxel_sise' \(did you mean 'voxel_size'\?\)"):
+        kissm.Matcher(voxel_sise=0.3)
+    with pytest.raises(TypeError, match=r"'refine_mod' \(did you mean 'refine_mode'\?\)"):
+        kissm.Config().replace(refine_mod="gicp")
+    with pytest.raises(TypeError, match=r"unknown kissm.Config field 'frobnicate'$"):
+        kissm.Config().replace(frobnicate=1)

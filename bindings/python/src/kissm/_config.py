@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import numbers
 from collections.abc import Mapping
 from typing import Any, Literal
@@ -330,6 +331,9 @@ class Config:
 
     def replace(self, **changes: Any) -> Config:
         """A copy with some fields changed (validated like a new Config)."""
+        unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if unknown:
+            raise TypeError(f"unknown kissm.Config field {unknown[0]!r}{did_you_mean(unknown[0])}")
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
@@ -351,3 +355,9 @@ def _config_from_dict(values: Mapping[str, Any]) -> Config:
 def default_config() -> Config:
     """The library's defaults (``kissm_config_init``)."""
     return Config()
+
+
+def did_you_mean(name: str) -> str:
+    """ " (did you mean 'voxel_size'?)" for a mistyped Config field, or "" when none is near."""
+    near = difflib.get_close_matches(name, [f.name for f in dataclasses.fields(Config)], n=1)
+    return f" (did you mean {near[0]!r}?)" if near else ""

@@ -11,7 +11,7 @@ from collections.abc import Hashable, Mapping, Sequence
 from concurrent.futures import Executor
 from typing import Any
 
-from .._config import PRESETS, Config
+from .._config import PRESETS, Config, did_you_mean
 from .._errors import Error, InvalidArgumentError
 from .._matcher import Features
 from .._points import as_point_array
@@ -40,7 +40,9 @@ def batch_config(
         raise InvalidArgumentError(f"threads_per_job must be an int in 1..1024, not {threads_per_job!r}")
     unknown = sorted(set(overrides) - _CONFIG_FIELDS)
     if unknown:
-        raise InvalidArgumentError(f"unknown keyword argument {unknown[0]!r}: not a kissm.Config field")
+        raise InvalidArgumentError(
+            f"unknown keyword argument {unknown[0]!r}: not a kissm.Config field{did_you_mean(unknown[0])}"
+        )
     if "num_threads" in overrides:
         raise InvalidArgumentError("pass threads_per_job, not num_threads: each job runs with threads_per_job threads")
     if "refine_mode" in overrides and refine is not None:
@@ -51,7 +53,10 @@ def batch_config(
         raise InvalidArgumentError(f"config must be a kissm.Config or None, not {type(config).__name__}")
     if voxel_size is None and preset is None and config is None:
         # As kissm.register: the voxel size depends on the data, so it has no silent default.
-        raise InvalidArgumentError("voxel_size is required (or a preset=, or a config=): 0.3-0.5 for outdoor LiDAR")
+        raise InvalidArgumentError(
+            'voxel_size is required: voxel_size="auto" chooses it from the clouds, or give a length in their unit '
+            "(0.3-0.5 for outdoor LiDAR in metres), a preset= (" + ", ".join(map(repr, PRESETS)) + ") or a config="
+        )
     changes = dict(overrides, num_threads=threads_per_job)
     if voxel_size is not None:
         changes["voxel_size"] = voxel_size
