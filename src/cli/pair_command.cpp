@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "pair_command.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -142,6 +143,32 @@ void print_json(PairCommand command, const PairOptions &opt, const kissm_result 
     json.field("read_ms", read_ms);
     json.end_object();
     std::fputs(json.str().c_str(), stdout);
+}
+
+// The largest side of a cloud's bounding box over its finite points (0 when it has none).
+double largest_side(const kissm_points &points) {
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    const auto *xyz = static_cast<const double *>(points.data);
+    for (uint64_t i = 0; i < points.count; ++i) {
+        const double *p = xyz + 3 * i;
+        if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) continue;
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+    }
+    double side = 0.0;
+    for (int k = 0; k < 3; ++k) side = std::max(side, hi[k] - lo[k]);
+    return side;
+}
+
+// "Too few voxels" says what the voxel should be (issue 36): the clouds' size, and the voxel --voxel auto would
+// choose for them. On stderr, one line, so the JSON on stdout stays as it is.
+void print_voxel_hint(const kissm_points &source, const kissm_points &target, double voxel) {
+    const kissm_points both[2] = {source, target};
+    double suggested = 0.0;
+    if (kissm_suggest_voxel_size(both, 2, &suggested) != KISSM_OK) return; // nothing sensible to say
+    std::fprintf(stderr,
+                 "kissm: hint: the clouds span %.4g and %.4g (their bounding boxes' largest sides), too few voxels "
+                 "of %g to describe; --voxel auto would use %.4g\n",
+                 largest_side(source), largest_side(target), voxel, suggested);
 }
 
 void print_human(PairCommand command, const PairOptions &opt, const kissm_config &config, const kissm_result &result,
@@ -482,6 +509,7 @@ int run_pair(PairCommand command, const PairOptions &given) {
         print_human(command, opt, config, result, read_ms);
     }
     std::fflush(stdout);
+    if (result.reason == KISSM_REASON_TOO_FEW_VOXELS) print_voxel_hint(source_points, target_points, opt.voxel);
     return result.valid ? kExitOk : kExitInvalid;
 }
 

@@ -308,6 +308,18 @@ void test_errors() {
     expect_usage_error("register " + ab + " --bogus=1 --voxel 0.3", "--bogus");
     expect_usage_error("register " + ab, "--voxel auto"); // the message names the automatic choice
     expect_usage_error("register " + ab + " --voxel Auto", "--voxel");
+    {
+        // Too few voxels says what the voxel should be (issue 36): the room is 8 wide (its largest side, to the
+        // last point drawn) and --voxel auto's choice; the JSON on stdout is unchanged by it.
+        const Run coarse = run("register " + ab + " --voxel 50 --json");
+        CHECK_EQ_INT(coarse.code, 1);
+        CHECK_MSG(contains(coarse.err,
+                           "kissm: hint: the clouds span 8 and 8 (their bounding boxes' largest sides), too "
+                           "few voxels of 50 to describe; --voxel auto would use "),
+                  "%s", coarse.err.c_str());
+        CHECK(json_parse(coarse.out).at("reason_code").number == KISSM_REASON_TOO_FEW_VOXELS);
+        CHECK(!contains(run("register " + ab + " --voxel 0.3").err, "hint"));
+    }
     expect_usage_error("align " + quote(a) + " --voxel auto --out " + quote(work("poses.tsv")), "--voxel auto");
     for (const char *bad : {"0", "-1", "-0.5", "nan", "NaN", "inf", "-inf", "abc", "0.3x", "1e999", "''", "' 0.3'"}) {
         expect_usage_error("register " + ab + " --voxel " + bad, "--voxel");
