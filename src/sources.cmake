@@ -38,6 +38,8 @@ set(KISSM_CORE_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph_consensus.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/pose_graph.cpp
   ${CMAKE_CURRENT_LIST_DIR}/core/loop_candidates.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/similar_loops.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/core/loop_agreement.cpp
 )
 # The C boundary, by concern (src/capi/boundary.hpp: what every exported function shares).
 set(KISSM_CAPI_SOURCES

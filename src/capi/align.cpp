@@ -13,7 +13,10 @@
 #include "capi/boundary.hpp"
 #include "capi/conversions.hpp"
 #include "capi/handles.hpp"
+#include "core/loop_agreement.hpp"
 #include "core/loop_candidates.hpp"
+#include "core/signature.hpp"
+#include "core/similar_loops.hpp"
 
 using namespace kissm::detail::capi;
 namespace core = kissm::detail;
@@ -42,6 +45,8 @@ kissm_align_options default_options() {
     o.sessions = nullptr;
     o.stride = 10;
     o.reserved = 0;
+    o.similar_per_scan = 3;
+    o.reserved2 = 0;
     return o;
 }
 
@@ -111,6 +116,10 @@ kissm_align_options checked_options(const kissm_align_options *given, uint64_t n
     if (o.stride < 1 || o.stride > kMaxLoopSetting)
         invalid("options->stride is " + std::to_string(o.stride) + "; 1 to " + std::to_string(kMaxLoopSetting));
     if (o.reserved != 0) invalid("options->reserved is " + std::to_string(o.reserved) + "; 0");
+    if (o.similar_per_scan < 0 || o.similar_per_scan > kMaxLoopSetting)
+        invalid("options->similar_per_scan is " + std::to_string(o.similar_per_scan) + "; 0 to " +
+                std::to_string(kMaxLoopSetting));
+    if (o.reserved2 != 0) invalid("options->reserved2 is " + std::to_string(o.reserved2) + "; 0");
     return o;
 }
 
@@ -156,17 +165,75 @@ void register_pairs(kissm_matcher &matcher, core::RunContext &ctx, const kissm_f
     }
 }
 
-// Round 2 of a sequence: the loop candidates of round 1's consecutive registrations (or of the priors).
-std::vector<core::ScanPair> sequence_loops(const kissm_align_options &o, const kissm_alignment &a, double voxel) {
-    const std::size_t n = a.num_scans;
-    if (o.loops_per_scan == 0 || n < 2) return {};
-    const double radius = o.loop_radius > 0.0 ? o.loop_radius : kDefaultRadiusVoxels * voxel;
-    const auto gap = static_cast<std::size_t>(o.loop_gap), per_scan = static_cast<std::size_t>(o.loops_per_scan);
-    if (o.priors != nullptr) return core::loop_candidates(core::prior_places(o.priors, n), radius, gap, per_scan, 0.0);
-    std::vector<const double *> steps(n - 1, nullptr);
+double loop_radius(const kissm_align_options &o, double voxel) {
+    return o.loop_radius > 0.0 ? o.loop_radius : kDefaultRadiusVoxels * voxel;
+}
+
+// Round 1's valid consecutive registrations chained (a sequence without priors).
+core::ScanPlaces sequence_chain(const kissm_alignment &a) {
+    std::vector<const double *> steps(a.num_scans - 1, nullptr);
     for (const AlignedPair &r : a.registrations)
         if (r.source == r.target + 1 && r.result.valid) steps[r.target] = r.result.transform;
-    return core::loop_candidates(core::dead_reckoned(steps, n), radius, gap, per_scan, core::kLoopDrift);
+    return core::dead_reckoned(steps, a.num_scans);
+}
+
+// Each scan's signature (a row of NaN for a scan without features), as kissm_features_signature() gives it.
+std::vector<double> signatures_of(const kissm_features *const *features, std::size_t n) {
+    std::vector<double> rows(core::kSignatureSize * n, std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t k = 0; k < n; ++k) {
+        if (features[k] == nullptr) continue;
+        const auto &f = features[k]->data;
+        core::cloud_signature(f.voxels.points, f.descriptors.keypoint, f.descriptors.values.data(), f.params.voxel_size,
+                              &rows[core::kSignatureSize * k]);
+    }
+    return rows;
+}
+
+// The pieces' labels alone say whether the chain broke: no break, no similarity candidates (and no signatures).
+bool chain_breaks(const core::ScanPlaces &chain) { return !chain.piece.empty() && chain.piece.back() > 0; }
+
+// Round 2 of a sequence: the loop candidates of round 1's consecutive registrations (or of the priors), and
+// without priors those by similarity across the chain's breaks, ordered by (source, target) without repeats as
+// Python's kissm.multiway.align merges them.
+// `chain`: sequence_chain() of round 1 (unread with priors).
+std::vector<core::ScanPair> sequence_loops(const kissm_align_options &o, const core::ScanPlaces &chain,
+                                           const kissm_features *const *features, std::size_t n, double voxel) {
+    if (n < 2) return {};
+    const double radius = loop_radius(o, voxel);
+    const auto gap = static_cast<std::size_t>(o.loop_gap), per_scan = static_cast<std::size_t>(o.loops_per_scan);
+    if (o.priors != nullptr) return core::loop_candidates(core::prior_places(o.priors, n), radius, gap, per_scan, 0.0);
+    std::vector<core::ScanPair> loops = core::loop_candidates(chain, radius, gap, per_scan, core::kLoopDrift);
+    if (o.similar_per_scan == 0 || !chain_breaks(chain)) return loops;
+    const std::vector<core::ScanPair> similar =
+        core::similar_candidates(signatures_of(features, n).data(), core::kSignatureSize, chain.piece, gap,
+                                 static_cast<std::size_t>(o.similar_per_scan));
+    loops.insert(loops.end(), similar.begin(), similar.end());
+    const auto order = [](const core::ScanPair &x, const core::ScanPair &y) {
+        return x.source != y.source ? x.source < y.source : x.target < y.target;
+    };
+    std::sort(loops.begin(), loops.end(), order);
+    loops.erase(std::unique(loops.begin(), loops.end(),
+                            [](const core::ScanPair &x, const core::ScanPair &y) {
+                                return x.source == y.source && x.target == y.target;
+                            }),
+                loops.end());
+    return loops;
+}
+
+// A sequence without priors whose chain breaks: the valid registrations between pieces that the others do not
+// corroborate are held out of the graph (Python's kissm.multiway._uncorroborated).
+void hold_out_uncorroborated(const kissm_align_options &o, const core::ScanPlaces &chain, kissm_alignment &a,
+                             double voxel) {
+    if (o.priors != nullptr || o.similar_per_scan == 0 || a.num_scans < 2 || !chain_breaks(chain)) return;
+    std::vector<core::PieceLink> links;
+    std::vector<AlignedPair *> owners;
+    for (AlignedPair &r : a.registrations) {
+        if (!r.result.valid) continue;
+        links.push_back({r.target, r.source, r.result.transform});
+        owners.push_back(&r);
+    }
+    const std::vector<std::uint8_t> kept = core::corroborated(links, chain, loop_radius(o, voxel), core::kLoopDrift);
+    for (std::size_t k = 0; k < owners.size(); ++k) owners[k]->held_out = kept[k] == 0;
 }
 
 // The edge's weight, as Python's kissm.multiway._information: the refined information when it is all finite,
@@ -196,6 +263,12 @@ void solve(kissm_alignment &a, double bound, const std::atomic<int> *cancel) {
         if (!r.result.valid) continue;
         double information[36];
         edge_information(r.result, information);
+        if (r.held_out) {
+            // Reported as an edge the graph did not accept, as Python reports it; never added.
+            std::copy(information, information + 36, r.information);
+            r.edge = 0;
+            continue;
+        }
         try {
             add_pose_graph_edge(graph, r.source, r.target, r.result.transform, information, r.robust ? 1 : 0);
         } catch (const core::Failure &f) {
@@ -285,6 +358,40 @@ void align_sessions(kissm_matcher &matcher, core::RunContext &ctx, const kissm_f
     }
 }
 
+// step_valid's flags checked (NULL: every step valid), each valid step pointing into `steps` (or, without steps,
+// at the identity: only the pieces are read then).
+std::vector<const double *> checked_chain(std::size_t n, const double *steps, const uint8_t *step_valid) {
+    static const double kIdentity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    std::vector<const double *> chain(n - 1, nullptr);
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+        const uint8_t flag = step_valid ? step_valid[k] : 1;
+        if (flag > 1) invalid("step_valid[" + std::to_string(k) + "] is " + std::to_string(flag) + "; 0 or 1");
+        if (flag == 1) chain[k] = steps ? steps + 16 * k : kIdentity;
+    }
+    return chain;
+}
+
+void check_gap_and_per_scan(uint64_t gap, uint64_t per_scan) {
+    // The radius is not read here: any valid one.
+    check_loop_settings(1.0, "radius", false, gap, "gap", per_scan, "per_scan");
+}
+
+// Pairs as the candidate calls write them: the count always, the pairs when out_pairs is given and has room.
+void write_pairs(const std::vector<core::ScanPair> &pairs, uint64_t *out_pairs, uint64_t capacity,
+                 uint64_t *out_count) {
+    if (out_pairs != nullptr && capacity < pairs.size()) {
+        *out_count = pairs.size();
+        invalid("capacity is " + std::to_string(capacity) + "; the candidates are " + std::to_string(pairs.size()) +
+                " pairs");
+    }
+    *out_count = pairs.size();
+    if (out_pairs == nullptr) return;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        out_pairs[2 * k] = pairs[k].source;
+        out_pairs[2 * k + 1] = pairs[k].target;
+    }
+}
+
 const AlignedPair &registration_at(const kissm_alignment &a, uint64_t index) {
     if (index >= a.registrations.size())
         invalid("index is " + std::to_string(index) + "; the alignment has " + std::to_string(a.registrations.size()) +
@@ -334,8 +441,12 @@ int32_t kissm_align_features(kissm_matcher *matcher, const kissm_features *const
             align_sessions(*matcher, ctx, features, o, *a);
         } else {
             register_pairs(*matcher, ctx, features, first_pairs(o, a->num_scans), *a);
-            if (o.pairs == KISSM_PAIRS_SEQUENCE)
-                register_pairs(*matcher, ctx, features, sequence_loops(o, *a, matcher->config.voxel_size), *a);
+            if (o.pairs == KISSM_PAIRS_SEQUENCE && a->num_scans > 1) {
+                const double voxel = matcher->config.voxel_size;
+                const core::ScanPlaces chain = sequence_chain(*a); // round 1's, before the loops join
+                register_pairs(*matcher, ctx, features, sequence_loops(o, chain, features, a->num_scans, voxel), *a);
+                hold_out_uncorroborated(o, chain, *a, voxel);
+            }
             solve(*a, o.bound, &matcher->cancel_requested);
         }
         *out_alignment = a.release();
@@ -393,24 +504,58 @@ int32_t kissm_sequence_loops(uint64_t num_scans, const double *steps, const uint
         if (priors != nullptr) {
             pairs = core::loop_candidates(core::prior_places(priors, n), radius, gap, per_scan, 0.0);
         } else {
-            std::vector<const double *> chain(n - 1, nullptr);
-            for (std::size_t k = 0; k + 1 < n; ++k) {
-                const uint8_t flag = step_valid ? step_valid[k] : 1;
-                if (flag > 1) invalid("step_valid[" + std::to_string(k) + "] is " + std::to_string(flag) + "; 0 or 1");
-                if (flag == 1) chain[k] = steps + 16 * k;
-            }
-            pairs = core::loop_candidates(core::dead_reckoned(chain, n), radius, gap, per_scan, core::kLoopDrift);
+            pairs = core::loop_candidates(core::dead_reckoned(checked_chain(n, steps, step_valid), n), radius, gap,
+                                          per_scan, core::kLoopDrift);
         }
-        *out_count = pairs.size();
-        if (out_pairs != nullptr) {
-            if (capacity < pairs.size())
-                invalid("capacity is " + std::to_string(capacity) + "; the candidates are " +
-                        std::to_string(pairs.size()) + " pairs");
-            for (std::size_t k = 0; k < pairs.size(); ++k) {
-                out_pairs[2 * k] = pairs[k].source;
-                out_pairs[2 * k + 1] = pairs[k].target;
-            }
+        write_pairs(pairs, out_pairs, capacity, out_count);
+        return ok();
+    });
+}
+
+int32_t kissm_sequence_similar(uint64_t num_scans, const uint8_t *step_valid, const double *signatures, uint64_t gap,
+                               uint64_t per_scan, uint64_t *out_pairs, uint64_t capacity, uint64_t *out_count) {
+    return guarded("kissm_sequence_similar", [&] {
+        require_non_null(out_count, "out_count");
+        require_non_null(signatures, "signatures");
+        check_scans(num_scans);
+        check_gap_and_per_scan(gap, per_scan);
+        const auto n = static_cast<std::size_t>(num_scans);
+        const core::ScanPlaces chain = core::dead_reckoned(checked_chain(n, nullptr, step_valid), n);
+        write_pairs(core::similar_candidates(signatures, core::kSignatureSize, chain.piece,
+                                             static_cast<std::size_t>(gap), static_cast<std::size_t>(per_scan)),
+                    out_pairs, capacity, out_count);
+        return ok();
+    });
+}
+
+int32_t kissm_sequence_corroborated(uint64_t num_scans, const double *steps, const uint8_t *step_valid, double radius,
+                                    uint64_t num_pairs, const uint64_t *pairs, const double *transforms,
+                                    uint8_t *out_kept) {
+    return guarded("kissm_sequence_corroborated", [&] {
+        check_scans(num_scans);
+        if (num_scans > 1) require_non_null(steps, "steps");
+        if (step_valid != nullptr && steps == nullptr) invalid("step_valid is given without steps");
+        if (!std::isfinite(radius) || !(radius > 0.0))
+            invalid("radius is " + number(radius) + "; a finite number above 0");
+        if (num_pairs > kMaxPairs)
+            invalid("num_pairs is " + std::to_string(num_pairs) + "; 0 to " + std::to_string(kMaxPairs));
+        if (num_pairs > 0) {
+            require_non_null(pairs, "pairs");
+            require_non_null(transforms, "transforms");
+            require_non_null(out_kept, "out_kept");
         }
+        const auto n = static_cast<std::size_t>(num_scans);
+        std::vector<core::PieceLink> links(static_cast<std::size_t>(num_pairs));
+        for (std::size_t k = 0; k < links.size(); ++k) {
+            const uint64_t source = pairs[2 * k], target = pairs[2 * k + 1];
+            if (source >= num_scans || target >= num_scans)
+                invalid("pairs[" + std::to_string(k) + "] is (" + std::to_string(source) + ", " +
+                        std::to_string(target) + "); scans are 0 to " + std::to_string(num_scans - 1));
+            links[k] = {static_cast<std::size_t>(target), static_cast<std::size_t>(source), transforms + 16 * k};
+        }
+        const std::vector<std::uint8_t> kept = core::corroborated(
+            links, core::dead_reckoned(checked_chain(n, steps, step_valid), n), radius, core::kLoopDrift);
+        std::copy(kept.begin(), kept.end(), out_kept);
         return ok();
     });
 }

@@ -48,9 +48,10 @@ namespace capi {
 // One registration of kissm_align_features, in the order the pairs ran, with the edge the graph made of it.
 struct AlignedPair {
     std::size_t source = 0, target = 0;
-    kissm_result result; // this kissm's full layout
-    bool robust = true;  // false: a session's odometry, a trusted edge
-    int32_t edge = -1;   // -1: not an edge (not valid, or the graph refused it); 0 rejected; 1 accepted
+    kissm_result result;   // this kissm's full layout
+    bool robust = true;    // false: a session's odometry, a trusted edge
+    bool held_out = false; // a valid registration between pieces of a sequence that the others do not corroborate
+    int32_t edge = -1;     // -1: not an edge (not valid, or the graph refused it); 0 rejected; 1 accepted
     double information[36];
     double residual = 0.0;
 };

@@ -20,6 +20,7 @@
 #include "align/align_pairs.hpp"
 #include "align/align_priors.hpp"
 #include "align/align_scans.hpp"
+#include "align/align_similar.hpp"
 #include "align/align_writers.hpp"
 #include "batch/batch_pairs.hpp"
 #include "batch/batch_resume.hpp"
@@ -40,6 +41,7 @@ struct AlignOptions {
     bool have_window = false;
     bool have_stride = false;
     bool have_loop_radius = false;
+    bool have_similar = false;
     std::string loop_option; // the first loop option given, for the message when --pairs is not sequence
     SequenceOptions sequence;
     double map_voxel = 0.0; // 0: every point
@@ -80,6 +82,9 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
         } else if (name == "--loops-per-scan") {
             opt.sequence.loops_per_scan = parse_int32(name, cur.value(), 0, 1000000);
             if (opt.loop_option.empty()) opt.loop_option = name;
+        } else if (name == "--similar-per-scan") {
+            opt.sequence.similar_per_scan = parse_int32(name, cur.value(), 0, 1000000);
+            opt.have_similar = true;
         } else if (name == "--loop-radius") {
             opt.sequence.loop_radius = parse_positive(name, cur.value());
             opt.have_loop_radius = true;
@@ -129,6 +134,10 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
                          " with loop candidates needs --loop-gap above " + std::to_string(opt.sequence.window) +
                          " (a candidate would repeat a window pair), or --loops-per-scan 0");
     }
+    if (opt.have_similar && opt.pairs != "sequence")
+        throw UsageError("--similar-per-scan applies to --pairs sequence only");
+    if (opt.have_similar && !opt.priors.empty())
+        throw UsageError("--similar-per-scan applies without --priors only (the priors relate every scan)");
     if (opt.map_voxel > 0.0 && opt.map.empty()) throw UsageError("--map-voxel needs --map FILE");
     // Every scan is a source of some pair and a target of another: one format for all.
     if (opt.pair.source_format != opt.pair.target_format) {
@@ -219,13 +228,28 @@ size_t register_pending(const AlignOptions &opt, const kissm_config &config, con
 // are all in the results file by then.
 using NextRound = std::function<std::vector<ScanPair>(const std::vector<DoneRecord> &, const std::vector<ScanPair> &)>;
 
-std::vector<NextRound> later_rounds(const AlignOptions &opt, const std::vector<Scan> &scans,
+// A sequence without priors takes candidates by similarity where its chain breaks (--similar-per-scan).
+bool takes_similar(const AlignOptions &opt) {
+    return opt.pairs == "sequence" && opt.sequence.priors.empty() && opt.sequence.similar_per_scan > 0;
+}
+
+std::vector<NextRound> later_rounds(const AlignOptions &opt, const kissm_config &config, const std::vector<Scan> &scans,
                                     const std::vector<ScanPair> &round1) {
     std::vector<NextRound> rounds;
-    if (opt.pairs == "sequence" && opt.sequence.loops_per_scan > 0) {
-        rounds.push_back([&opt, &scans, round1](const std::vector<DoneRecord> &records, const std::vector<ScanPair> &) {
-            return sequence_loops(scans.size(), round1, records, opt.sequence);
-        });
+    if (opt.pairs == "sequence" && (opt.sequence.loops_per_scan > 0 || takes_similar(opt))) {
+        rounds.push_back(
+            [&opt, &config, &scans, round1](const std::vector<DoneRecord> &records, const std::vector<ScanPair> &) {
+                const std::vector<ScanPair> loops = sequence_loops(scans.size(), round1, records, opt.sequence);
+                if (!takes_similar(opt)) return loops;
+                const SequenceChain chain = sequence_chain(scans.size(), round1, records);
+                if (!chain_breaks(chain)) return loops; // an unbroken chain needs no signatures
+                // The signatures depend on the scans alone: a resumed run finds the same candidates. Described on the
+                // --jobs threads (the bits do not depend on their number).
+                kissm_config describe = config;
+                describe.num_threads = opt.jobs;
+                const std::vector<double> signatures = scan_signatures(scans, describe);
+                return merged_loops(loops, similar_loops(chain, signatures, opt.sequence));
+            });
     }
     if (opt.pairs == "sessions") {
         const std::vector<size_t> starts = session_starts(scans);
@@ -258,7 +282,7 @@ size_t register_all(const AlignOptions &opt, const kissm_config &config, const s
         throw UsageError("'" + one_line(opt.results) +
                          "' exists and is not empty: --resume completes it, or remove it to start again");
     }
-    const std::vector<NextRound> rounds = later_rounds(opt, scans, *pairs);
+    const std::vector<NextRound> rounds = later_rounds(opt, config, scans, *pairs);
     size_t round = 0;
     if (opt.resume) {
         const std::vector<DoneRecord> records = read_all_records(opt.results, true);
@@ -299,7 +323,14 @@ int run_align_command(const AlignOptions &given) {
     const double seconds = elapsed_ms(start) / 1000.0;
 
     // The graph is built from every record, in pair order: the same poses after a resume and at any --jobs.
-    const Alignment a = solve_alignment(scans.size(), pairs, read_all_records(opt.results), opt.bound);
+    const std::vector<DoneRecord> records = read_all_records(opt.results);
+    std::vector<uint8_t> held_out;
+    if (takes_similar(opt)) {
+        const size_t round1 = sequence_candidates(scans.size(), opt.sequence).size();
+        const std::vector<ScanPair> first(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(round1));
+        held_out = held_out_pairs(sequence_chain(scans.size(), first, records), pairs, records, opt.sequence);
+    }
+    const Alignment a = solve_alignment(scans.size(), pairs, records, opt.bound, held_out);
     if (!opt.quiet) {
         for (const std::string &message : a.skipped) std::fprintf(stderr, "kissm: align: %s\n", message.c_str());
     }
@@ -375,6 +406,11 @@ void print_align_help(std::FILE *out) {
         "                          0 = none: the first round only)\n"
         "  --loop-radius R         sequence: candidates lie within R of each other (default 30 x the\n"
         "                          voxel), plus 2%% of the path between them (none with --priors)\n"
+        "  --similar-per-scan N    sequence without --priors: where the chain of consecutive registrations\n"
+        "                          breaks into pieces, each scan's N earlier scans of other pieces (at\n"
+        "                          least --loop-gap back) with the nearest signatures are candidates too,\n"
+        "                          and of the valid pairs between two pieces only the largest set that\n"
+        "                          agrees joins the graph (default 3; 0 = none)\n"
         "  --priors FILE           sequence: loop candidates from these world <- scan poses (GNSS, a SLAM\n"
         "                          run, an earlier --out) instead of the chained registrations: the\n"
         "                          poses table layout of --out (scan and T00 ... T23 columns); a scan\n"
@@ -400,7 +436,11 @@ void print_align_help(std::FILE *out) {
         "missing one starts a new piece), or the --priors' positions; then for each scan j, the scans\n"
         "i <= j - N of its piece within R (+ 2%% of the path from i to j when dead-reckoned), the\n"
         "--loops-per-scan nearest, are registered in a second round (pairs numbered after the first's)\n"
-        "and join the graph after the first round's edges.\n"
+        "and join the graph after the first round's edges. Without --priors, where the chain breaks, the\n"
+        "--similar-per-scan scans of other pieces with the nearest signatures (kissm_sequence_similar:\n"
+        "each scan described once more, on --jobs threads) join that round, and a valid pair between\n"
+        "two pieces outside the largest set that agrees (kissm_sequence_corroborated) is reported as a\n"
+        "rejected edge and left out of the graph.\n"
         "\n"
         "Registration: every option of `kissm register` but the output ones, as in `kissm batch`:\n"
         "--voxel or --preset, --refine (default gicp here: its information weighs the edges; with\n"

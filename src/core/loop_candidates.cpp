@@ -35,8 +35,10 @@ ScanPlaces dead_reckoned(const std::vector<const double *> &steps, std::size_t s
     d.positions.assign(3 * scans, 0.0);
     d.path.assign(scans, 0.0);
     d.piece.assign(scans, 0);
+    d.poses.assign(16 * scans, 0.0);
     double pose[16];
     set_identity(pose);
+    if (scans > 0) std::copy(pose, pose + 16, d.poses.begin());
     for (std::size_t k = 0; k + 1 < scans; ++k) {
         const double *step = k < steps.size() ? steps[k] : nullptr;
         if (step) {
@@ -49,6 +51,7 @@ ScanPlaces dead_reckoned(const std::vector<const double *> &steps, std::size_t s
             d.piece[k + 1] = d.piece[k] + 1;
         }
         for (std::size_t i = 0; i < 3; ++i) d.positions[3 * (k + 1) + i] = pose[4 * i + 3];
+        std::copy(pose, pose + 16, d.poses.begin() + static_cast<std::ptrdiff_t>(16 * (k + 1)));
     }
     return d;
 }
@@ -78,7 +81,6 @@ std::vector<ScanPair> loop_candidates(const ScanPlaces &where, double radius, st
     std::vector<ScanPair> out;
     if (gap == 0 || per_scan == 0) return out;
     std::vector<std::pair<double, std::size_t>> near;
-    std::vector<std::size_t> chosen;
     for (std::size_t j = gap; j < n; ++j) {
         if (!known[j]) continue;
         const double *pj = &where.positions[3 * j];
@@ -90,14 +92,19 @@ std::vector<ScanPair> loop_candidates(const ScanPlaces &where, double radius, st
             const double allowed = radius + drift * std::fabs(where.path[j] - where.path[i]);
             if (known[i] && where.piece[i] == where.piece[j] && distance <= allowed) near.push_back({distance, i});
         }
-        std::sort(near.begin(), near.end());
-        if (near.size() > per_scan) near.resize(per_scan);
-        chosen.clear();
-        for (const auto &c : near) chosen.push_back(c.second);
-        std::sort(chosen.begin(), chosen.end());
-        for (const std::size_t i : chosen) out.push_back({j, i});
+        append_nearest(near, per_scan, j, out);
     }
     return out;
+}
+
+void append_nearest(std::vector<std::pair<double, std::size_t>> &near, std::size_t per_scan, std::size_t j,
+                    std::vector<ScanPair> &out) {
+    if (near.size() > per_scan) {
+        std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(per_scan), near.end());
+        near.resize(per_scan);
+    }
+    std::sort(near.begin(), near.end(), [](const auto &a, const auto &b) { return a.second < b.second; });
+    for (const auto &c : near) out.push_back({j, c.second});
 }
 
 KISSM_DETAIL_END

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "detail_namespace.hpp"
@@ -23,9 +24,11 @@ struct ScanPair {
 };
 
 // Where each scan is: 3 coordinates per scan (NaN where unknown), the path length from the start, and the piece of
-// the sequence it belongs to (a break in the chain starts a new piece in a frame of its own).
+// the sequence it belongs to (a break in the chain starts a new piece in a frame of its own); dead reckoning also
+// keeps each scan's whole pose in its piece's frame (16 per scan, row-major; empty for priors).
 struct ScanPlaces {
     std::vector<double> positions;
+    std::vector<double> poses;
     std::vector<double> path;
     std::vector<std::int64_t> piece;
 };
@@ -44,5 +47,10 @@ ScanPlaces prior_places(const double *poses, std::size_t scans);
 // distance, then i), emitted by increasing i as pairs (source j, target i).
 std::vector<ScanPair> loop_candidates(const ScanPlaces &where, double radius, std::size_t gap, std::size_t per_scan,
                                       double drift);
+
+// Of `near` ((distance, i) for one scan j; each i once), the `per_scan` nearest (by distance, then i) appended to
+// `out` as pairs (source j, target i) by increasing i: the choice every candidate rule shares. Reorders `near`.
+void append_nearest(std::vector<std::pair<double, std::size_t>> &near, std::size_t per_scan, std::size_t j,
+                    std::vector<ScanPair> &out);
 
 KISSM_DETAIL_END

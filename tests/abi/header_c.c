@@ -127,6 +127,10 @@ struct kissm_header_test_api {
                                       int32_t *, double *, double *);
     int32_t (*sequence_loops)(uint64_t, const double *, const uint8_t *, const double *, double, uint64_t, uint64_t,
                               uint64_t *, uint64_t, uint64_t *);
+    int32_t (*sequence_similar)(uint64_t, const uint8_t *, const double *, uint64_t, uint64_t, uint64_t *, uint64_t,
+                                uint64_t *);
+    int32_t (*sequence_corroborated)(uint64_t, const double *, const uint8_t *, double, uint64_t, const uint64_t *,
+                                     const double *, uint8_t *);
     uint32_t (*abi_sizeof)(int32_t);
 };
 
@@ -168,6 +172,8 @@ const struct kissm_header_test_api kissm_header_test_api = {
     .alignment_poses = kissm_alignment_poses,
     .alignment_registration = kissm_alignment_registration,
     .sequence_loops = kissm_sequence_loops,
+    .sequence_similar = kissm_sequence_similar,
+    .sequence_corroborated = kissm_sequence_corroborated,
     .abi_sizeof = kissm_abi_sizeof,
 };
 

@@ -19,7 +19,7 @@
   X(kissm_config, KISSM_STRUCT_CONFIG, 304)                                                                            \
   X(kissm_points, KISSM_STRUCT_POINTS, 32)                                                                             \
   X(kissm_result, KISSM_STRUCT_RESULT, 1272)                                                                           \
-  X(kissm_align_options, KISSM_STRUCT_ALIGN_OPTIONS, 72)
+  X(kissm_align_options, KISSM_STRUCT_ALIGN_OPTIONS, 80)
 
 #define KISSM_LAYOUT_CONFIG(X)                                                                                         \
   X(kissm_config, struct_size, uint32_t, 0, 4)                                                                         \
@@ -137,7 +137,9 @@
   X(kissm_align_options, bound, double, 48, 8)                                                                         \
   X(kissm_align_options, sessions, const uint32_t *, 56, 8)                                                            \
   X(kissm_align_options, stride, int32_t, 64, 4)                                                                       \
-  X(kissm_align_options, reserved, int32_t, 68, 4)
+  X(kissm_align_options, reserved, int32_t, 68, 4)                                                                     \
+  X(kissm_align_options, similar_per_scan, int32_t, 72, 4)                                                             \
+  X(kissm_align_options, reserved2, int32_t, 76, 4)
 
 #define KISSM_LAYOUT_FIELDS(X)                                                                                         \
   KISSM_LAYOUT_CONFIG(X) KISSM_LAYOUT_POINTS(X) KISSM_LAYOUT_RESULT(X) KISSM_LAYOUT_ALIGN_OPTIONS(X)

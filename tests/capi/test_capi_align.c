@@ -98,6 +98,8 @@ static void test_defaults(void) {
     CHECK(o.sessions == NULL);
     CHECK_EQ_INT(o.stride, 10);
     CHECK_EQ_INT(o.reserved, 0);
+    CHECK_EQ_INT(o.similar_per_scan, 3);
+    CHECK_EQ_INT(o.reserved2, 0);
     CHECK_EQ_INT(kissm_abi_sizeof(KISSM_STRUCT_ALIGN_OPTIONS), sizeof o);
     CHECK_EQ_INT(kissm_align_options_init(&o, sizeof o - 8), KISSM_ERR_STRUCT_SIZE);
     CHECK_EQ_INT(kissm_align_options_init(NULL, sizeof o), KISSM_ERR_NULL_ARGUMENT);
@@ -334,6 +336,18 @@ static void test_bad_input(void) {
         o.reserved = 1;
         CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
         CHECK(strstr(kissm_last_error_message(), "options->reserved") != NULL);
+        o = options(KISSM_PAIRS_SEQUENCE);
+        o.similar_per_scan = -1;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->similar_per_scan is -1") != NULL);
+        o.similar_per_scan = 1000001;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->similar_per_scan") != NULL);
+        o = options(KISSM_PAIRS_SEQUENCE);
+        o.reserved2 = 7;
+        CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "options->reserved2") != NULL);
+        CHECK(a == NULL);
         o = options(4);
         CHECK_EQ_INT(kissm_align_features(g_matcher, f, SCANS, &o, &a), KISSM_ERR_INVALID_ARGUMENT);
         CHECK(a == NULL);
@@ -434,10 +448,145 @@ static void test_sequence_loops(void) {
     CHECK(strstr(kissm_last_error_message(), "step_valid[3]") != NULL);
 }
 
+static void test_sequence_similar(void) {
+    /* Six scans, signatures that differ in their first two numbers: (0,0) (1,0) (0,1) (1,0) (none) (0.1,0). */
+    double signatures[6 * KISSM_SIGNATURE_SIZE];
+    const double first[6][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 0}, {NAN, NAN}, {0.1, 0}};
+    uint8_t apart[5] = {0, 0, 0, 0, 0}, broken[5] = {1, 1, 0, 1, 1}, whole[5] = {1, 1, 1, 1, 1};
+    uint64_t pairs[40], count = 99;
+    int k;
+    memset(signatures, 0, sizeof signatures);
+    for (k = 0; k < 6; ++k) {
+        signatures[KISSM_SIGNATURE_SIZE * k] = first[k][0];
+        signatures[KISSM_SIGNATURE_SIZE * k + 1] = first[k][1];
+    }
+    /* Every step broken: each scan its own piece. The nearest at least 2 back; scan 4 has no signature, scan 5's
+     * nearest is 0 (0.01 away). */
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 2, 1, pairs, 20, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 3);
+    CHECK(pairs[0] == 2 && pairs[1] == 0 && pairs[2] == 3 && pairs[3] == 1 && pairs[4] == 5 && pairs[5] == 0);
+    /* Two per scan: 3 takes 1 (0 away) and 0; 5 takes 0, then 1 over 3 (both 0.81 away: the lower). */
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 2, 2, pairs, 20, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 5);
+    CHECK(pairs[2] == 3 && pairs[3] == 0 && pairs[4] == 3 && pairs[5] == 1 && pairs[8] == 5 && pairs[9] == 1);
+    /* Pieces 0-2 and 3-5: only pairs across. */
+    CHECK_EQ_INT(kissm_sequence_similar(6, broken, signatures, 2, 1, pairs, 20, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 2);
+    CHECK(pairs[0] == 3 && pairs[1] == 1 && pairs[2] == 5 && pairs[3] == 0);
+    /* One piece (NULL or every step valid): none. Counting only. */
+    CHECK_EQ_INT(kissm_sequence_similar(6, NULL, signatures, 1, 5, NULL, 0, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 0);
+    CHECK_EQ_INT(kissm_sequence_similar(6, whole, signatures, 1, 5, NULL, 0, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 0);
+    CHECK_EQ_INT(kissm_sequence_similar(1, NULL, signatures, 1, 5, pairs, 20, &count), KISSM_OK);
+    CHECK_EQ_INT(count, 0);
+
+    /* Bad input: exact codes, the argument named, nothing written but the count for a small capacity. */
+    pairs[0] = 77;
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 2, 1, pairs, 2, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "capacity") != NULL);
+    CHECK_EQ_INT(count, 3);
+    CHECK(pairs[0] == 77);
+    count = 99;
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, NULL, 2, 1, pairs, 20, &count), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "signatures") != NULL);
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 2, 1, pairs, 20, NULL), KISSM_ERR_NULL_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_similar(0, apart, signatures, 2, 1, pairs, 20, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "num_scans") != NULL);
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 0, 1, pairs, 20, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "gap") != NULL);
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 2, 2000000, pairs, 20, &count),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "per_scan") != NULL);
+    apart[2] = 2;
+    CHECK_EQ_INT(kissm_sequence_similar(6, apart, signatures, 2, 1, pairs, 20, &count), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "step_valid[2]") != NULL);
+    CHECK_EQ_INT(count, 99);
+}
+
+/* T_i_j for scans at x positions within their pieces, the later piece's frame `offset` metres along y in the
+ * earlier one's. */
+static void piece_link(const double *x, int i, int j, double offset, double out[16]) {
+    step_x(x[j] - x[i], out);
+    out[7] = offset;
+}
+
+static void test_sequence_corroborated(void) {
+    /* Ten scans along x, 1 m a step, the chain broken after scans 3 and 7: pieces 0-3, 4-7, 8-9. */
+    const double x[10] = {0, 1, 2, 3, 0, 1, 2, 3, 0, 1};
+    double steps[9 * 16], transforms[7 * 16];
+    uint8_t valid[9] = {1, 1, 1, 0, 1, 1, 1, 0, 1}, kept[7];
+    /* Three registrations put piece 4-7 50 m along y (right), two agree on 500 m (wrong), one joins piece 8-9
+     * alone, one lies within piece 0-3. */
+    const uint64_t pairs[14] = {4, 0, 5, 1, 6, 2, 7, 3, 5, 0, 8, 1, 2, 0};
+    const double offsets[7] = {50, 50, 50, 500, 500, 50, 0};
+    int k;
+    for (k = 0; k < 9; ++k) step_x(1.0, steps + 16 * k);
+    for (k = 0; k < 7; ++k) piece_link(x, (int)pairs[2 * k + 1], (int)pairs[2 * k], offsets[k], transforms + 16 * k);
+    memset(kept, 9, sizeof kept);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 7, pairs, transforms, kept), KISSM_OK);
+    CHECK(kept[0] == 1 && kept[1] == 1 && kept[2] == 1 && kept[3] == 0 && kept[4] == 0 && kept[5] == 0);
+    CHECK(kept[6] == 1);
+    /* Two registrations of one later scan do not corroborate each other. */
+    {
+        const uint64_t same[4] = {4, 0, 4, 1};
+        double two[32];
+        piece_link(x, 0, 4, 50, two);
+        piece_link(x, 1, 4, 50, two + 16);
+        CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 2, same, two, kept), KISSM_OK);
+        CHECK(kept[0] == 0 && kept[1] == 0);
+    }
+    /* A registration holding NaN agrees with none; nothing to judge is fine. */
+    transforms[16 * 1 + 3] = NAN;
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 7, pairs, transforms, kept), KISSM_OK);
+    CHECK(kept[0] == 1 && kept[1] == 0 && kept[2] == 1);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 0, NULL, NULL, NULL), KISSM_OK);
+    CHECK_EQ_INT(kissm_sequence_corroborated(1, NULL, NULL, 1.0, 0, NULL, NULL, NULL), KISSM_OK);
+
+    /* Bad input: nothing written. */
+    memset(kept, 9, sizeof kept);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, NULL, valid, 1.0, 7, pairs, transforms, kept),
+                 KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "steps") != NULL);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 7, NULL, transforms, kept),
+                 KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "pairs") != NULL);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 7, pairs, NULL, kept), KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "transforms") != NULL);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 7, pairs, transforms, NULL),
+                 KISSM_ERR_NULL_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "out_kept") != NULL);
+    CHECK_EQ_INT(kissm_sequence_corroborated(0, steps, valid, 1.0, 7, pairs, transforms, kept),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_corroborated(1, NULL, valid, 1.0, 0, NULL, NULL, NULL), KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "step_valid") != NULL);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 0.0, 7, pairs, transforms, kept),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "radius") != NULL);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, NAN, 7, pairs, transforms, kept),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 100000001, pairs, transforms, kept),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "num_pairs") != NULL);
+    {
+        const uint64_t outside[4] = {4, 0, 10, 1};
+        CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 2, outside, transforms, kept),
+                     KISSM_ERR_INVALID_ARGUMENT);
+        CHECK(strstr(kissm_last_error_message(), "pairs[1] is (10, 1)") != NULL);
+    }
+    valid[5] = 3;
+    CHECK_EQ_INT(kissm_sequence_corroborated(10, steps, valid, 1.0, 7, pairs, transforms, kept),
+                 KISSM_ERR_INVALID_ARGUMENT);
+    CHECK(strstr(kissm_last_error_message(), "step_valid[5]") != NULL);
+    for (k = 0; k < 7; ++k) CHECK_EQ_INT(kept[k], 9);
+}
+
 int main(void) {
     int k;
     RUN_TEST(test_defaults);
     RUN_TEST(test_sequence_loops);
+    RUN_TEST(test_sequence_similar);
+    RUN_TEST(test_sequence_corroborated);
     make_scans();
     RUN_TEST(test_all_pairs);
     RUN_TEST(test_sequence_and_list);

@@ -324,6 +324,11 @@ void test_align_usage() {
     expect_usage_error(with({"--pairs", "sessions", "--stride", "0"}), "--stride");
     expect_usage_error(with({"--pairs", "sessions", "--priors", out}), "--priors applies to --pairs sequence only");
     // Loop candidates' options: their ranges, --pairs sequence only, a window that would repeat them.
+    expect_usage_error(with({"--pairs", "sequence", "--similar-per-scan", "-1"}), "--similar-per-scan");
+    expect_usage_error(with({"--pairs", "sequence", "--similar-per-scan", "1000001"}), "--similar-per-scan");
+    expect_usage_error(with({"--similar-per-scan", "2"}), "--similar-per-scan applies to --pairs sequence only");
+    expect_usage_error(with({"--pairs", "sequence", "--priors", work("priors_bad.tsv"), "--similar-per-scan", "2"}),
+                       "--similar-per-scan applies without --priors only");
     expect_usage_error(with({"--pairs", "sequence", "--loop-gap", "0"}), "--loop-gap");
     expect_usage_error(with({"--pairs", "sequence", "--loop-gap", "x"}), "--loop-gap");
     expect_usage_error(with({"--pairs", "sequence", "--loop-radius", "-1"}), "--loop-radius");

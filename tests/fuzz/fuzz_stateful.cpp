@@ -21,6 +21,56 @@ void require(bool ok) {
     if (!ok) std::abort();
 }
 
+// kissm_sequence_similar and kissm_sequence_corroborated on the features and an alignment's registrations, with a
+// chain broken where `bits` say: similar pairs lie gap apart across pieces, in order; the flags are 0 or 1; both
+// repeat bit for bit.
+void fuzz_sequence_rules(const kissm_alignment *a, kissm_features *const features[3], std::uint8_t bits, uint64_t gap,
+                         uint64_t per_scan) {
+    double signatures[3 * KISSM_SIGNATURE_SIZE];
+    for (int k = 0; k < 3; ++k) {
+        double *row = signatures + KISSM_SIGNATURE_SIZE * k;
+        if (!features[k] || kissm_features_signature(features[k], row) != KISSM_OK)
+            for (int i = 0; i < KISSM_SIGNATURE_SIZE; ++i) row[i] = std::numeric_limits<double>::quiet_NaN();
+    }
+    const uint8_t step_valid[2] = {static_cast<uint8_t>(bits & 1u), static_cast<uint8_t>((bits >> 1) & 1u)};
+    const int piece[3] = {0, step_valid[0] ? 0 : 1, (step_valid[0] ? 0 : 1) + (step_valid[1] ? 0 : 1)};
+    uint64_t pairs[12], again[12], count = 0, count2 = 0;
+    int32_t st = kissm_sequence_similar(3, step_valid, signatures, gap, per_scan, pairs, 6, &count);
+    require(st == KISSM_OK || st == KISSM_ERR_OUT_OF_MEMORY);
+    if (st == KISSM_OK) {
+        require(count <= 3);
+        for (uint64_t k = 0; k < count; ++k) {
+            const uint64_t j = pairs[2 * k], i = pairs[2 * k + 1];
+            require(j < 3 && i + gap <= j && piece[i] != piece[j] && (k == 0 || pairs[2 * k - 2] <= j));
+        }
+        if (kissm_sequence_similar(3, step_valid, signatures, gap, per_scan, again, 6, &count2) == KISSM_OK)
+            require(count2 == count && std::memcmp(pairs, again, 2 * count * sizeof(uint64_t)) == 0);
+    }
+    double steps[32], transforms[16 * 8];
+    uint64_t links[16];
+    uint8_t kept[8], kept2[8];
+    uint64_t n = 0;
+    for (int k = 0; k < 2; ++k)
+        for (int i = 0; i < 16; ++i) steps[16 * k + i] = i % 5 == 0 ? 1.0 : 0.0;
+    for (uint64_t k = 0; k < kissm_alignment_num_registrations(a) && n < 8; ++k) {
+        kissm_result r;
+        require(kissm_result_init(&r, sizeof r) == KISSM_OK);
+        uint64_t s = 0, t = 0;
+        require(kissm_alignment_registration(a, k, &s, &t, &r, nullptr, nullptr, nullptr) == KISSM_OK);
+        if (!r.valid) continue;
+        links[2 * n] = s, links[2 * n + 1] = t;
+        std::memcpy(transforms + 16 * n, r.transform, sizeof r.transform);
+        ++n;
+    }
+    st = kissm_sequence_corroborated(3, steps, step_valid, 1.0, n, links, transforms, kept);
+    require(st == KISSM_OK || st == KISSM_ERR_OUT_OF_MEMORY);
+    if (st != KISSM_OK) return;
+    for (uint64_t k = 0; k < n; ++k)
+        require(kept[k] <= 1 && (piece[links[2 * k]] != piece[links[2 * k + 1]] || kept[k]));
+    if (kissm_sequence_corroborated(3, steps, step_valid, 1.0, n, links, transforms, kept2) == KISSM_OK)
+        require(std::memcmp(kept, kept2, n) == 0);
+}
+
 // kissm_align_features over the three feature slots with options decoded from the input; see the file comment.
 void fuzz_alignment(kissm_fuzz::Bytes &in, kissm_matcher *m, kissm_features *const features[3]) {
     static const double radii[] = {0.0, 1.0, 50.0, -1.0, std::numeric_limits<double>::quiet_NaN()};
@@ -39,8 +89,9 @@ void fuzz_alignment(kissm_fuzz::Bytes &in, kissm_matcher *m, kissm_features *con
     o.stride = (more >> 4) % 3;                // 0 is refused
     if (policy == KISSM_PAIRS_LIST) o.pair_list = list, o.num_pairs = 2;
     if (policy == KISSM_PAIRS_SESSIONS) o.sessions = pattern;
+    o.similar_per_scan = static_cast<int32_t>(more % 5u) - 1; // -1 is refused
     bool valid = policy < 4 && o.loop_gap >= 1 && std::isfinite(o.loop_radius) && o.loop_radius >= 0.0 &&
-                 o.bound > 0.0 && std::isfinite(o.bound) && o.stride >= 1;
+                 o.bound > 0.0 && std::isfinite(o.bound) && o.stride >= 1 && o.similar_per_scan >= 0;
     if (policy == KISSM_PAIRS_LIST)
         for (int k = 0; k < 2; ++k)
             valid = valid && list[2 * k] < 3 && list[2 * k + 1] < 3 && list[2 * k] != list[2 * k + 1];
@@ -71,6 +122,8 @@ void fuzz_alignment(kissm_fuzz::Bytes &in, kissm_matcher *m, kissm_features *con
         require(kissm_alignment_registration(a, k, &s, &t, nullptr, &edge, nullptr, nullptr) == KISSM_OK);
         require(s < 3 && t < 3 && s != t && features[s] && features[t] && edge >= -1 && edge <= 1);
     }
+    fuzz_sequence_rules(a, features, more, static_cast<uint64_t>(o.loop_gap),
+                        static_cast<uint64_t>(o.similar_per_scan));
     kissm_alignment *b = nullptr;
     const int32_t st2 = kissm_align_features(m, features, 3, &o, &b);
     require(st2 == KISSM_OK || st2 == KISSM_ERR_OUT_OF_MEMORY);

@@ -39,7 +39,7 @@ void edge_information(const DoneRecord &record, double information[36]) {
 }
 
 Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, const std::vector<DoneRecord> &records,
-                          double bound) {
+                          double bound, const std::vector<uint8_t> &held_out) {
     std::vector<const DoneRecord *> by_pair(pairs.size(), nullptr);
     for (const DoneRecord &record : records) {
         if (record.pair >= 1 && record.pair <= static_cast<int64_t>(pairs.size())) {
@@ -52,6 +52,7 @@ Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, cons
     const GraphPtr graph(raw);
 
     Alignment a;
+    std::vector<size_t> in_graph; // the edges the graph holds, in its order
     for (size_t k = 0; k < pairs.size(); ++k) {
         const DoneRecord *record = by_pair[k];
         if (!record) throw UsageError("the results have no record of pair " + std::to_string(k + 1));
@@ -76,12 +77,18 @@ Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, cons
         }
         std::copy(record->transform.begin(), record->transform.end(), edge.transform);
         edge_information(*record, edge.information);
+        if (k < held_out.size() && held_out[k]) {
+            edge.residual = std::numeric_limits<double>::quiet_NaN();
+            a.edges.push_back(edge);
+            continue;
+        }
         status = kissm_pose_graph_add_edge(graph.get(), edge.source, edge.target, edge.transform, edge.information,
                                            pairs[k].trusted ? 0 : 1, nullptr);
         if (status != KISSM_OK) {
             a.skipped.push_back(what + ": the pose graph refuses it: " + library_error(status));
             continue;
         }
+        in_graph.push_back(a.edges.size());
         a.edges.push_back(edge);
     }
 
@@ -91,15 +98,15 @@ Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, cons
     a.placed.assign(scans, 0);
     a.components.assign(scans, 0);
     status = kissm_pose_graph_poses(graph.get(), a.poses.data(), a.placed.data(), a.components.data());
-    std::vector<uint8_t> accepted(a.edges.size(), 0);
-    std::vector<double> residuals(a.edges.size(), std::numeric_limits<double>::quiet_NaN());
-    if (status == KISSM_OK && !a.edges.empty()) {
+    std::vector<uint8_t> accepted(in_graph.size(), 0);
+    std::vector<double> residuals(in_graph.size(), std::numeric_limits<double>::quiet_NaN());
+    if (status == KISSM_OK && !in_graph.empty()) {
         status = kissm_pose_graph_edges(graph.get(), accepted.data(), residuals.data());
     }
     if (status != KISSM_OK) throw UsageError("cannot read the pose graph's solution: " + library_error(status));
-    for (size_t e = 0; e < a.edges.size(); ++e) {
-        a.edges[e].accepted = accepted[e] != 0;
-        a.edges[e].residual = residuals[e];
+    for (size_t e = 0; e < in_graph.size(); ++e) {
+        a.edges[in_graph[e]].accepted = accepted[e] != 0;
+        a.edges[in_graph[e]].residual = residuals[e];
     }
     return a;
 }

@@ -40,9 +40,10 @@ void edge_information(const DoneRecord &record, double information[36]);
 
 // Builds the graph of `scans` nodes from the records (any order; each pair of `pairs` exactly once, as
 // scan_results(..., with_poses = true) read them), adds the valid ones in pair order as edges (trusted for a
-// trusted pair, robust otherwise) and optimises it with anchor 0 and `bound`. A UsageError when a pair has no record or
-// the library fails.
+// trusted pair, robust otherwise) and optimises it with anchor 0 and `bound`. A pair whose `held_out` flag is 1
+// (empty: none; held_out_pairs) is an edge reported as not accepted with a NaN residual, left out of the graph, as
+// Python reports it. A UsageError when a pair has no record or the library fails.
 Alignment solve_alignment(size_t scans, const std::vector<ScanPair> &pairs, const std::vector<DoneRecord> &records,
-                          double bound);
+                          double bound, const std::vector<uint8_t> &held_out = {});
 
 } // namespace kissm_cli

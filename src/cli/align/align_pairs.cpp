@@ -34,12 +34,6 @@ std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &o
 std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &round1,
                                      const std::vector<DoneRecord> &records, const SequenceOptions &opt) {
     if (scans < 2 || opt.loops_per_scan <= 0 || opt.loop_gap <= 0) return {};
-    std::vector<const DoneRecord *> by_pair(round1.size(), nullptr);
-    for (const DoneRecord &record : records) {
-        if (record.pair >= 1 && record.pair <= static_cast<int64_t>(round1.size())) {
-            by_pair[static_cast<size_t>(record.pair - 1)] = &record;
-        }
-    }
     const auto gap = static_cast<uint64_t>(opt.loop_gap), per_scan = static_cast<uint64_t>(opt.loops_per_scan);
     const auto candidates = [&](const double *steps, const uint8_t *valid, const double *priors) {
         uint64_t count = 0;
@@ -56,20 +50,34 @@ std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &
         return pairs;
     };
     if (!opt.priors.empty()) return candidates(nullptr, nullptr, opt.priors.data());
-    std::vector<double> steps(16 * (scans - 1), 0.0);
-    std::vector<uint8_t> valid(scans - 1, 0);
+    const SequenceChain chain = sequence_chain(scans, round1, records);
+    return candidates(chain.steps.data(), chain.valid.data(), nullptr);
+}
+
+SequenceChain sequence_chain(size_t scans, const std::vector<ScanPair> &round1,
+                             const std::vector<DoneRecord> &records) {
+    SequenceChain chain;
+    if (scans < 2) return chain;
+    std::vector<const DoneRecord *> by_pair(round1.size(), nullptr);
+    for (const DoneRecord &record : records) {
+        if (record.pair >= 1 && record.pair <= static_cast<int64_t>(round1.size())) {
+            by_pair[static_cast<size_t>(record.pair - 1)] = &record;
+        }
+    }
+    chain.steps.assign(16 * (scans - 1), 0.0);
+    chain.valid.assign(scans - 1, 0);
     for (size_t k = 0; k < round1.size(); ++k) {
         const ScanPair &pair = round1[k];
         const DoneRecord *record = by_pair[k];
         if (pair.source != pair.target + 1 || !record || record->error || !record->valid) continue;
-        double *step = &steps[16 * pair.target];
+        double *step = &chain.steps[16 * pair.target];
         if (record->transform.size() == 16)
             std::copy(record->transform.begin(), record->transform.end(), step);
         else
             std::fill(step, step + 16, std::numeric_limits<double>::quiet_NaN());
-        valid[pair.target] = 1;
+        chain.valid[pair.target] = 1;
     }
-    return candidates(steps.data(), valid.data(), nullptr);
+    return chain;
 }
 
 std::vector<size_t> session_starts(const std::vector<Scan> &scans) {

@@ -29,10 +29,11 @@ std::vector<ScanPair> all_pairs(size_t scans);
 // that round 1's consecutive registrations give (sequence_loops), numbered after round 1's pairs.
 struct SequenceOptions {
     int32_t window = 1;
-    int32_t loop_gap = 10;      // a loop candidate's scans are at least this many apart (>= 1)
-    int32_t loops_per_scan = 5; // at most this many candidates per later scan (0: none)
-    double loop_radius = 0.0;   // > 0 (the command makes it 30 x the voxel when not given)
-    std::vector<double> priors; // empty, or 16 per scan (read_priors): the positions loop candidates come from
+    int32_t loop_gap = 10;        // a loop candidate's scans are at least this many apart (>= 1)
+    int32_t loops_per_scan = 5;   // at most this many candidates per later scan (0: none)
+    double loop_radius = 0.0;     // > 0 (the command makes it 30 x the voxel when not given)
+    int32_t similar_per_scan = 3; // without priors, where the chain breaks: candidates by similarity (0: none)
+    std::vector<double> priors;   // empty, or 16 per scan (read_priors): the positions loop candidates come from
 };
 std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &opt);
 
@@ -43,6 +44,15 @@ std::vector<ScanPair> sequence_candidates(size_t scans, const SequenceOptions &o
 // Depends on the records only, so that a resumed run finds the same list. A UsageError if the library fails.
 std::vector<ScanPair> sequence_loops(size_t scans, const std::vector<ScanPair> &round1,
                                      const std::vector<DoneRecord> &records, const SequenceOptions &opt);
+
+// Round 1's valid consecutive registrations (the records of the pairs (k+1, k) among `round1`, as sequence_loops
+// reads them) as kissm_sequence_loops() takes a chain: 16 numbers per step and a flag (1 valid) per step; empty
+// for fewer than 2 scans.
+struct SequenceChain {
+    std::vector<double> steps;
+    std::vector<uint8_t> valid;
+};
+SequenceChain sequence_chain(size_t scans, const std::vector<ScanPair> &round1, const std::vector<DoneRecord> &records);
 
 // "sessions" (Python's kissm.multiway.align_sessions): the scans grouped by their session column, in order.
 // Round 1: each session's consecutive pairs (k+1, k), trusted. Round 2 (session_loops_and_grid): for each session

@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from ._errors import InvalidArgumentError
+from ._errors import InvalidArgumentError, check
+from ._ffi import ffi, lib
 from ._result import Result
 
 #: The radius of a loop candidate grows by this share of the dead-reckoned path between the two clouds. Odometry
@@ -34,8 +35,13 @@ def check_sequence_options(
         if priors is not None:
             raise InvalidArgumentError("align: priors are read by pairs='sequence' only")
         return None
-    if isinstance(similar_per_scan, bool) or not isinstance(similar_per_scan, int) or similar_per_scan < 0:
-        raise InvalidArgumentError(f"align: similar_per_scan is {similar_per_scan!r}; an integer of at least 0")
+    if (
+        isinstance(similar_per_scan, bool)
+        or not isinstance(similar_per_scan, int)
+        or not 0 <= similar_per_scan <= 1_000_000
+    ):
+        # The library's range (kissm_sequence_similar's per_scan, kissm_align_options.similar_per_scan).
+        raise InvalidArgumentError(f"align: similar_per_scan is {similar_per_scan!r}; an integer of 0 to 1,000,000")
     if loop_radius is not None and not (math.isfinite(loop_radius) and loop_radius > 0):
         raise InvalidArgumentError(f"align: loop_radius is {loop_radius}; a finite number above 0")
     if isinstance(loop_gap, bool) or not isinstance(loop_gap, int) or loop_gap < 1:
@@ -101,74 +107,82 @@ def loop_candidates(
     return out
 
 
-def similar_candidates(
-    signatures: np.ndarray, gap: int, per_scan: int, piece: np.ndarray | None = None
-) -> list[tuple[int, int]]:
-    """Pairs (i, j), i <= j - gap, whose signatures ((N, KISSM_SIGNATURE_SIZE), :meth:`kissm.Features.signature`;
-    a NaN row for a cloud without one) are the nearest, at most per_scan for each j (the nearest first, then the
-    lower i), ordered by j then i. With ``piece`` ((N,) int), only pairs of different pieces: where the chained
-    odometry cannot judge.
+def step_flags(steps: Mapping[int, Result | None], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The consecutive registrations (steps[k]: cloud k+1 into k) as the C API takes a chain: (N-1, 4, 4) transforms
+    and (N-1,) uint8 flags, 1 for a valid one (a missing or invalid one is 0 and its transform is not read)."""
+    transforms = np.zeros((max(n - 1, 0), 4, 4))
+    valid = np.zeros(max(n - 1, 0), dtype=np.uint8)
+    for k in range(n - 1):
+        result = steps.get(k)
+        if result is not None and result.valid:
+            transforms[k] = np.asarray(result.transform, dtype=np.float64)
+            valid[k] = 1
+    return transforms, valid
 
-    N^2 / 2 distances in all (a few seconds for ten thousand clouds). Each squared distance is summed column by
-    column, in order: the same bits on every machine and easy to reproduce in another language (numpy's
-    reductions and matrix products sum in orders of their own)."""
-    columns = np.ascontiguousarray(np.asarray(signatures, dtype=np.float64).T)
-    n = columns.shape[1]
-    out: list[tuple[int, int]] = []
-    if per_scan == 0:
-        return out
-    for j in range(gap, n):
-        end = j - gap + 1
-        distance = np.zeros(end)
-        for column in columns:
-            distance += np.square(column[:end] - column[j])
-        distance[~(distance < np.inf)] = np.inf  # NaN: a cloud without a signature is nobody's candidate
-        if piece is not None:
-            distance[piece[:end] == piece[j]] = np.inf
-        near = np.flatnonzero(distance < np.inf)
-        if per_scan < len(near):
-            # The per_scan smallest distances and any ties of the last, then the order by (distance, i).
-            kth = np.partition(distance[near], per_scan - 1)[per_scan - 1]
-            near = near[distance[near] <= kth]
-        chosen = near[np.lexsort((near, distance[near]))][:per_scan]
-        out.extend((int(i), j) for i in np.sort(chosen))
-    return out
+
+def similar_candidates(
+    signatures: np.ndarray, gap: int, per_scan: int, step_valid: np.ndarray
+) -> list[tuple[int, int]]:
+    """Pairs (i, j), i <= j - gap, of different pieces of the chain (``step_valid``: (N-1,) flags, a 0 starts a new
+    piece), whose signatures ((N, KISSM_SIGNATURE_SIZE), :meth:`kissm.Features.signature`; a NaN row for a cloud
+    without one) are the nearest, at most per_scan for each j (the nearest first, then the lower i), ordered by j
+    then i: where the chained odometry cannot judge. The library's rule (``kissm_sequence_similar``), so that C,
+    the CLI and Python choose the same pairs."""
+    rows = np.ascontiguousarray(signatures, dtype=np.float64)
+    n = len(rows)
+    if rows.shape != (n, int(lib.KISSM_SIGNATURE_SIZE)):
+        raise InvalidArgumentError(f"similar_candidates: signatures has shape {rows.shape}; (N, KISSM_SIGNATURE_SIZE)")
+    flags = np.ascontiguousarray(step_valid, dtype=np.uint8)
+    if flags.shape != (max(n - 1, 0),):
+        raise InvalidArgumentError(f"similar_candidates: step_valid has shape {flags.shape}; ({n - 1},)")
+    found = _pairs(
+        lambda out, capacity, count: lib.kissm_sequence_similar(
+            n, _uint8s(flags), ffi.from_buffer("double[]", rows), gap, per_scan, out, capacity, count
+        )
+    )
+    return [(int(target), int(source)) for source, target in found]
 
 
 def corroborated(
-    edges: list[tuple[int, int, np.ndarray]],
-    reckoned: tuple[np.ndarray, np.ndarray, np.ndarray],
-    radius: float,
-    drift: float,
+    edges: list[tuple[int, int, np.ndarray]], chain: tuple[np.ndarray, np.ndarray], radius: float
 ) -> list[bool]:
-    """For valid registrations (i, j, T) between clouds of different pieces (T: cloud j into cloud i), whether they
-    belong to the largest set that agrees between their two pieces. Registration a agrees with b (of another later
-    cloud) when a and the later piece's odometry put b's later cloud within radius + drift x (the paths between
-    their earlier clouds and between their later clouds) of where b puts it. The registration that most others agree
-    with (the first of equals) is kept with those it agrees with, if any: a revisit gives several registrations that
-    agree, while places that merely look alike give one, or a few that the revisit outnumbers. A pair found by
-    similarity alone has no position to check it, and a wrong one on a piece's loose end would be absorbed by the
-    graph at the cost of one consecutive edge (docs/multiway.md, "Loop candidates by similarity")."""
-    poses, path, piece = reckoned
-    out = [False] * len(edges)
-    groups: dict[tuple[int, int], list[int]] = {}
-    for k, (first, later, _) in enumerate(edges):
-        groups.setdefault((int(piece[first]), int(piece[later])), []).append(k)
-    for members in groups.values():
-        i = np.array([edges[k][0] for k in members])
-        j = np.array([edges[k][1] for k in members])
-        # Each registration's own placing of its later cloud j in the earlier piece's frame.
-        placed = np.array([poses[edges[k][0]] @ edges[k][2] for k in members])
-        agree = np.zeros((len(members), len(members)), dtype=bool)
-        for a in range(len(members)):
-            # Registration a's placing of every later cloud of the group: through the later piece's odometry.
-            relay = placed[a] @ np.linalg.inv(poses[j[a]])
-            predicted = poses[j][:, :3, 3] @ relay[:3, :3].T + relay[:3, 3]
-            error = np.linalg.norm(predicted - placed[:, :3, 3], axis=1)
-            allowed = radius + drift * (np.abs(path[i] - path[i[a]]) + np.abs(path[j] - path[j[a]]))
-            agree[a] = (j != j[a]) & (error <= allowed)
-        best = int(np.argmax(agree.sum(axis=1)))
-        if agree[best].any():
-            for a in np.flatnonzero(agree[best]).tolist() + [best]:
-                out[members[a]] = True
-    return out
+    """For valid registrations (i, j, T) of a sequence (T: cloud j into cloud i), whether the pose graph takes them:
+    every one within a piece of the chain (``chain``: :func:`step_flags`), and of those between two pieces, the
+    largest set that agrees on where the later piece lies (``kissm_sequence_corroborated``: a revisit gives several
+    registrations that agree, while places that merely look alike give one, or a few that the revisit outnumbers).
+    A pair found by similarity alone has no position to check it, and a wrong one on a piece's loose end would be
+    absorbed by the graph at the cost of one consecutive edge (docs/multiway.md, "Loop candidates by similarity")."""
+    transforms, valid = chain
+    n = len(valid) + 1
+    pairs = np.ascontiguousarray([[j, i] for i, j, _ in edges], dtype=np.uint64).reshape(len(edges), 2)
+    moves = np.ascontiguousarray([t for _, _, t in edges], dtype=np.float64).reshape(len(edges), 4, 4)
+    steps = np.ascontiguousarray(transforms, dtype=np.float64)
+    kept = np.zeros(len(edges), dtype=np.uint8)
+    check(
+        lib.kissm_sequence_corroborated(
+            n,
+            ffi.from_buffer("double[]", steps) if n > 1 else ffi.NULL,
+            _uint8s(valid),
+            radius,
+            len(edges),
+            ffi.from_buffer("uint64_t[]", pairs) if len(edges) else ffi.NULL,
+            ffi.from_buffer("double[]", moves) if len(edges) else ffi.NULL,
+            ffi.from_buffer("uint8_t[]", kept, require_writable=True) if len(edges) else ffi.NULL,
+        )
+    )
+    return [bool(k) for k in kept]
+
+
+def _uint8s(flags: np.ndarray) -> Any:
+    contiguous = np.ascontiguousarray(flags, dtype=np.uint8)
+    return ffi.from_buffer("uint8_t[]", contiguous) if len(contiguous) else ffi.NULL
+
+
+def _pairs(call: Any) -> np.ndarray:
+    """(count, 2) uint64 (source, target) pairs of a candidate call of the library: counted, then written."""
+    count = ffi.new("uint64_t *")
+    check(call(ffi.NULL, 0, count))
+    found = np.zeros((int(count[0]), 2), dtype=np.uint64)
+    if len(found):
+        check(call(ffi.from_buffer("uint64_t[]", found, require_writable=True), len(found), count))
+    return found

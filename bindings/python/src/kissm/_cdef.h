@@ -464,6 +464,10 @@ typedef struct kissm_align_options {
     int32_t stride;
 
     int32_t reserved;
+
+    int32_t similar_per_scan;
+
+    int32_t reserved2;
 } kissm_align_options;
 
 int32_t kissm_align_options_init(kissm_align_options *options, uint32_t struct_size);
@@ -490,6 +494,14 @@ int32_t kissm_alignment_registration(const kissm_alignment *alignment, uint64_t 
 int32_t kissm_sequence_loops(uint64_t num_scans, const double *steps, const uint8_t *step_valid,
     const double *priors, double radius, uint64_t gap, uint64_t per_scan,
     uint64_t *out_pairs, uint64_t capacity, uint64_t *out_count);
+
+int32_t kissm_sequence_similar(uint64_t num_scans, const uint8_t *step_valid, const double *signatures,
+    uint64_t gap, uint64_t per_scan, uint64_t *out_pairs, uint64_t capacity,
+    uint64_t *out_count);
+
+int32_t kissm_sequence_corroborated(uint64_t num_scans, const double *steps, const uint8_t *step_valid,
+    double radius, uint64_t num_pairs, const uint64_t *pairs,
+    const double *transforms, uint8_t *out_kept);
 
 #define KISSM_STRUCT_CONFIG 1
 #define KISSM_STRUCT_POINTS 2

@@ -31,6 +31,7 @@ from ._candidates import (
     loop_candidates,
     reckoned_poses,
     similar_candidates,
+    step_flags,
 )
 from ._config import Config, RefineMode
 from ._errors import InvalidArgumentError
@@ -225,16 +226,18 @@ def align(
         if prior_positions is not None:
             loops = loop_candidates(prior_positions, radius, loop_gap, loops_per_scan, drift=0.0)
         else:
-            poses, path, piece = reckoned = reckoned_poses(steps, len(keys))
+            poses, path, piece = reckoned_poses(steps, len(keys))
             loops = loop_candidates((poses[:, :3, 3], path, piece), radius, loop_gap, loops_per_scan, drift=DRIFT)
-            # Across the breaks of the chain, the clouds' similarity (docs/multiway.md, "Loop candidates by
-            # similarity").
-            similar = similar_candidates(_signatures(keys, usable), loop_gap, similar_per_scan, piece)
-            loops = sorted(set(loops).union(similar), key=lambda pair: (pair[1], pair[0]))
+            chain = step_flags(steps, len(keys))
+            if similar_per_scan > 0 and piece[-1] > 0:
+                # Across the breaks of the chain, the clouds' similarity, by the library's rule (docs/multiway.md,
+                # "Loop candidates by similarity"); an unbroken chain gets none.
+                similar = similar_candidates(_signatures(keys, usable), loop_gap, similar_per_scan, chain[1])
+                loops = sorted(set(loops).union(similar), key=lambda pair: (pair[1], pair[0]))
         wanted = [(keys[j], keys[i]) for i, j in loops if keys[i] in usable and keys[j] in usable]
         results += runner.register(wanted, usable)
-        if prior_positions is None:
-            held_out = _uncorroborated(results, position, reckoned, radius)
+        if prior_positions is None and similar_per_scan > 0 and piece[-1] > 0:
+            held_out = _uncorroborated(results, position, chain, radius)
     else:
         results = runner.register(chosen, by_key)
     edges = [(position[r.source], position[r.target], r.result, True) for r in results]
@@ -402,21 +405,19 @@ class _Runner:
 def _uncorroborated(
     results: list[batch.PairResult],
     position: Mapping[Any, int],
-    reckoned: tuple[np.ndarray, np.ndarray, np.ndarray],
+    chain: tuple[np.ndarray, np.ndarray],
     radius: float,
 ) -> set[int]:
     """The valid registrations between pieces of the chained odometry (pairs found by similarity) outside the
     largest set that agrees between their pieces (:func:`kissm._candidates.corroborated`): kept out of the graph."""
-    piece = reckoned[2]
-    across: list[int] = []
+    numbers: list[int] = []
     found: list[tuple[int, int, np.ndarray]] = []
     for k, r in enumerate(results):
-        source, target = position[r.source], position[r.target]
-        if r.result is not None and r.result.valid and piece[source] != piece[target]:
-            across.append(k)
-            found.append((target, source, np.asarray(r.result.transform, dtype=np.float64)))
-    agreed = corroborated(found, reckoned, radius, DRIFT)
-    return {k for k, ok in zip(across, agreed, strict=True) if not ok}
+        if r.result is not None and r.result.valid:
+            numbers.append(k)
+            found.append((position[r.target], position[r.source], np.asarray(r.result.transform, dtype=np.float64)))
+    kept = corroborated(found, chain, radius)
+    return {k for k, ok in zip(numbers, kept, strict=True) if not ok}
 
 
 def _solve(

@@ -1378,12 +1378,20 @@ pub struct kissm_align_options {
     pub stride: i32,
     /// 0.
     pub reserved: i32,
+    /** #KISSM_PAIRS_SEQUENCE without priors: where the chained registrations break into pieces, each scan's loop
+ candidates also include the similar_per_scan scans of other pieces, at least loop_gap back, whose signatures
+ (kissm_features_signature()) are the nearest, and of the valid registrations between two pieces only the
+ largest set that agrees joins the graph (kissm_sequence_similar(), kissm_sequence_corroborated()); 0 (none)
+ to 1,000,000. Read by #KISSM_PAIRS_SEQUENCE only. Default 3.*/
+    pub similar_per_scan: i32,
+    /// 0.
+    pub reserved2: i32,
 }
 #[allow(clippy::unnecessary_operation, clippy::identity_op)]
 const _: () = {
     [
         "Size of kissm_align_options",
-    ][::core::mem::size_of::<kissm_align_options>() - 72usize];
+    ][::core::mem::size_of::<kissm_align_options>() - 80usize];
     [
         "Alignment of kissm_align_options",
     ][::core::mem::align_of::<kissm_align_options>() - 8usize];
@@ -1423,6 +1431,12 @@ const _: () = {
     [
         "Offset of field: kissm_align_options::reserved",
     ][::core::mem::offset_of!(kissm_align_options, reserved) - 68usize];
+    [
+        "Offset of field: kissm_align_options::similar_per_scan",
+    ][::core::mem::offset_of!(kissm_align_options, similar_per_scan) - 72usize];
+    [
+        "Offset of field: kissm_align_options::reserved2",
+    ][::core::mem::offset_of!(kissm_align_options, reserved2) - 76usize];
 };
 impl Default for kissm_align_options {
     fn default() -> Self {
@@ -1530,11 +1544,12 @@ extern "C" {
  @param[out] out_target The target scan.
  @param[out] out_result The registration, as kissm_register_features() wrote it (struct_size set by
              kissm_result_init()).
- @param[out] out_edge -1 when the registration is not an edge (not valid), 0 for a rejected edge, 1 for an
-             accepted one.
+ @param[out] out_edge -1 when the registration is not an edge (not valid), 0 for a rejected edge (or one held out
+             of the graph: a registration between the pieces of a broken #KISSM_PAIRS_SEQUENCE chain that
+             kissm_sequence_corroborated() does not keep), 1 for an accepted one.
  @param[out] out_information The edge's 6x6 information as the graph weighed it; NaN when not an edge.
- @param[out] out_residual The edge's squared error xi^T I xi at the solution; NaN when not an edge or a scan of
-             it is not placed.
+ @param[out] out_residual The edge's squared error xi^T I xi at the solution; NaN when not an edge, held out, or a
+             scan of it is not placed.
  @retval KISSM_OK Done.
  @retval KISSM_ERR_NULL_ARGUMENT @p alignment is NULL.
  @retval KISSM_ERR_INVALID_ARGUMENT @p index is out of range (nothing written).
@@ -1590,6 +1605,78 @@ extern "C" {
         out_pairs: *mut u64,
         capacity: u64,
         out_count: *mut u64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Loop candidates by similarity, the rule of #KISSM_PAIRS_SEQUENCE where its chain breaks: the scans of a
+        sequence whose signatures are alike, between pieces of the chained registrations (where their positions
+        say nothing).
+
+ An invalid step (step_valid[k] = 0) starts a new piece of the sequence at scan k+1. For each scan j from @p gap
+ on, the scans i <= j - gap of other pieces whose signatures are the nearest (the squared differences summed
+ column by column, in order, from 0), the @p per_scan nearest (by distance, then i), are written as pairs (j, i)
+ by increasing i; then j + 1. Python's kissm.multiway.align and `kissm align` call it; so does
+ kissm_align_features().
+ @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ @param[in] step_valid NULL (every step valid: one piece, no candidates) or num_scans - 1 flags, 1 valid, 0 not.
+ @param[in] signatures num_scans x #KISSM_SIGNATURE_SIZE numbers, packed (kissm_features_signature()); a row
+            holding a non-finite number is a scan without a signature, nobody's candidate.
+ @param[in] gap 1 to 1,000,000.
+ @param[in] per_scan 0 to 1,000,000.
+ @param[out] out_pairs capacity (source, target) pairs, packed; may be NULL to count only.
+ @param[in] capacity The pairs @p out_pairs has room for.
+ @param[out] out_count The number of candidates.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p out_count or @p signatures is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT An argument is out of its range, @p step_valid holds a flag other than 0 and
+         1, or @p capacity is below the count (*out_count is set, nothing else written).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_sequence_similar(
+        num_scans: u64,
+        step_valid: *const u8,
+        signatures: *const f64,
+        gap: u64,
+        per_scan: u64,
+        out_pairs: *mut u64,
+        capacity: u64,
+        out_count: *mut u64,
+    ) -> i32;
+}
+extern "C" {
+    /** @brief Which registrations of a sequence join the pose graph when its chain breaks: every one within a piece of
+        the chained registrations, and of those between two pieces only the largest set that agrees on where the
+        later piece lies (a revisit gives several that agree; places that merely look alike give one, or fewer).
+
+ The registrations between the same two pieces (the target's, the source's) form a group; in it, a agrees with b
+ when b's source is another scan than a's, and a, carried through the source piece's chained poses, puts b's
+ source within @p radius + 2% of the paths between their targets and between their sources of where b puts it.
+ The registration most others agree with (the first of equals) is kept with those it agrees with, if any.
+ #KISSM_PAIRS_SEQUENCE's rule (and Python's and the CLI's); the chain as kissm_sequence_loops() makes it.
+ @param[in] num_scans 1 to #KISSM_POSE_GRAPH_MAX_NODES.
+ @param[in] steps num_scans - 1 4x4 row-major transforms, packed, step k T_k_(k+1) (NULL with num_scans = 1).
+ @param[in] step_valid NULL (every step valid) or num_scans - 1 flags, 1 valid, 0 not (its transform is not read).
+ @param[in] radius Finite, > 0 (the clouds' unit).
+ @param[in] num_pairs The registrations, 0 to 100,000,000.
+ @param[in] pairs num_pairs (source, target) scan positions, packed (NULL when num_pairs is 0).
+ @param[in] transforms num_pairs 4x4 row-major T_target_source, packed (kissm_result.transform); one holding a
+            non-finite number agrees with none.
+ @param[out] out_kept num_pairs flags: 1 when the graph takes the registration, 0 when it is kept out.
+ @retval KISSM_OK Done.
+ @retval KISSM_ERR_NULL_ARGUMENT @p out_kept (with num_pairs > 0), @p pairs or @p transforms (with num_pairs > 0),
+         or @p steps (with num_scans > 1) is NULL.
+ @retval KISSM_ERR_INVALID_ARGUMENT An argument is out of its range, a pair names a scan out of range,
+         @p step_valid holds a flag other than 0 and 1, or @p step_valid is given without @p steps (nothing
+         written).
+ @retval KISSM_ERR_OUT_OF_MEMORY, KISSM_ERR_INTERNAL See the file's conventions.*/
+    pub fn kissm_sequence_corroborated(
+        num_scans: u64,
+        steps: *const f64,
+        step_valid: *const u8,
+        radius: f64,
+        num_pairs: u64,
+        pairs: *const u64,
+        transforms: *const f64,
+        out_kept: *mut u8,
     ) -> i32;
 }
 extern "C" {

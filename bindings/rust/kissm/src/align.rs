@@ -24,7 +24,8 @@ pub enum Pairs<'a> {
     All,
     /// Scans in acquisition order (`KISSM_PAIRS_SEQUENCE`): each with the next, `(k + 1, k)`, then the loop
     /// candidates [`sequence_loops`] gives for those registrations (or for `priors`), so the work grows with the
-    /// scans, not their square. [`Pairs::sequence`] gives the defaults.
+    /// scans, not their square; without priors, where the chain breaks, also candidates by similarity
+    /// ([`AlignOptions::similar_per_scan`]). [`Pairs::sequence`] gives the defaults.
     Sequence {
         /// `None`, or one world-from-scan pose per scan (GNSS, a SLAM run), `priors[scan][row][col]`, whose
         /// positions choose the loop candidates instead of the chained registrations; a pose with a non-finite
@@ -95,11 +96,26 @@ pub struct AlignOptions<'a> {
     pub pairs: Pairs<'a>,
     /// The pose graph's bound on a robust edge's squared error (see [`PoseGraph::optimize`]): finite, > 0.
     pub bound: f64,
+    /// [`Pairs::Sequence`] without priors: where the chained registrations break into pieces, each scan's loop
+    /// candidates also include the `similar_per_scan` scans of other pieces, at least `loop_gap` back, whose
+    /// [`Features::signature`]s are the nearest, and of the valid registrations between two pieces only the
+    /// largest set that agrees joins the graph (Python's `align(pairs="sequence")`); 0 (none) to 1,000,000
+    /// ([`AlignOptions::DEFAULT_SIMILAR_PER_SCAN`] by default). Read by [`Pairs::Sequence`] only.
+    pub similar_per_scan: usize,
+}
+
+impl AlignOptions<'static> {
+    /// The default `similar_per_scan` (`kissm_align_options_init`'s, Python's).
+    pub const DEFAULT_SIMILAR_PER_SCAN: usize = 3;
 }
 
 impl Default for AlignOptions<'_> {
     fn default() -> Self {
-        AlignOptions { pairs: Pairs::All, bound: PoseGraph::DEFAULT_BOUND }
+        AlignOptions {
+            pairs: Pairs::All,
+            bound: PoseGraph::DEFAULT_BOUND,
+            similar_per_scan: AlignOptions::DEFAULT_SIMILAR_PER_SCAN,
+        }
     }
 }
 
@@ -108,7 +124,8 @@ impl Default for AlignOptions<'_> {
 pub enum EdgeState {
     /// The registration is not valid, so it is no edge.
     NotAnEdge,
-    /// A robust edge the optimisation rejected (or one outside scan 0's component).
+    /// A robust edge the optimisation rejected (or one outside scan 0's component, or a registration between the
+    /// pieces of a broken [`Pairs::Sequence`] chain that the others do not corroborate, held out of the graph).
     Rejected,
     /// An edge the optimisation accepted.
     Accepted,
@@ -306,6 +323,7 @@ impl Matcher {
             sys::kissm_align_options_init(&mut raw_options, mem::size_of::<sys::kissm_align_options>() as u32)
         })?;
         raw_options.bound = options.bound;
+        raw_options.similar_per_scan = loop_setting(options.similar_per_scan, "similar_per_scan", "0 to 1000000")?;
         // The arrays the options point to; they live until the end of this function.
         let mut pair_list: Vec<u64> = Vec::new();
         let mut priors_flat: Vec<f64> = Vec::new();

@@ -287,7 +287,7 @@ fn bad_input_fails_with_the_argument_named() {
     let features = all_features(scans);
     let mut matcher = Matcher::new(&config(2)).unwrap();
     let mut run = |features: &[Option<&Features>], pairs: Pairs<'_>, bound: f64| {
-        matcher.align_features(features, &AlignOptions { pairs, bound })
+        matcher.align_features(features, &AlignOptions { pairs, bound, ..AlignOptions::default() })
     };
     let bound = PoseGraph::DEFAULT_BOUND;
     let invalid = ErrorKind::InvalidArgument;
@@ -321,6 +321,10 @@ fn bad_input_fails_with_the_argument_named() {
     assert_error(run(&mixed, Pairs::All, bound), ErrorKind::FeaturesMismatch, "features[1]");
     // The matcher is still usable.
     assert!(run(&features[..2], Pairs::All, bound).is_ok());
+    let similar =
+        |similar_per_scan| AlignOptions { pairs: Pairs::sequence(), similar_per_scan, ..AlignOptions::default() };
+    assert_error(matcher.align_features(&features, &similar(1_000_001)), invalid, "options->similar_per_scan");
+    assert_error(matcher.align_features(&features, &similar(usize::MAX)), invalid, "similar_per_scan");
 }
 
 #[test]
@@ -335,6 +339,8 @@ fn defaults_are_the_libraries() {
     assert_eq!(raw.loops_per_scan as usize, Pairs::DEFAULT_LOOPS_PER_SCAN);
     assert_eq!(raw.loop_radius, 0.0);
     assert_eq!(raw.bound, AlignOptions::default().bound);
+    assert_eq!(raw.similar_per_scan as usize, AlignOptions::DEFAULT_SIMILAR_PER_SCAN);
+    assert_eq!(AlignOptions::default().similar_per_scan, 3);
     assert_eq!(AlignOptions::default().pairs, Pairs::All);
     assert_eq!(Pairs::sequence(), Pairs::Sequence { priors: None, loop_radius: None, loop_gap: 10, loops_per_scan: 5 });
 }
