@@ -29,6 +29,7 @@
 #include "commands.hpp"
 #include "json_writer.hpp"
 #include "pair_command.hpp"
+#include "report.hpp"
 
 namespace kissm_cli {
 namespace {
@@ -117,9 +118,6 @@ bool parse_align_options(const std::vector<std::string> &args, AlignOptions *out
         throw UsageError("align expects 1 scans file, got " + std::to_string(opt.pair.files.size()) + see);
     }
     require_voxel("align", opt.pair);
-    if (opt.pair.voxel_auto) // every pair must share one voxel; per-pair suggestions would differ
-        throw UsageError("align: --voxel auto is not supported yet; give --voxel V (kissm_suggest_voxel_size of all "
-                         "the scans is the automatic choice for a set)");
     if (opt.out.empty()) throw UsageError("align needs --out FILE, the poses (one line per scan)" + see);
     if (opt.have_window && opt.pairs != "sequence") throw UsageError("--window applies to --pairs sequence only");
     const bool sessions = opt.pairs == "sessions";
@@ -304,12 +302,30 @@ size_t register_all(const AlignOptions &opt, const kissm_config &config, const s
     return ran;
 }
 
+// --voxel auto: one voxel for every scan together (kissm_suggest_voxel_size of them all), as kissm.multiway.align
+// resolves "auto": every pair, the loop radius and a resumed run need the same voxel, which per-pair suggestions
+// would not give. Every scan is read once for it.
+double scans_auto_voxel(const std::vector<Scan> &scans) {
+    std::vector<CloudPtr> clouds;
+    std::vector<kissm_points> points;
+    clouds.reserve(scans.size());
+    for (const Scan &scan : scans) {
+        clouds.push_back(read_cloud("scan", scan.file, scan.format));
+        points.push_back(points_of(clouds.back().get(), "scan"));
+    }
+    double voxel = 0.0;
+    const int32_t status = kissm_suggest_voxel_size(points.data(), points.size(), &voxel);
+    if (status != KISSM_OK) throw UsageError("--voxel auto: " + library_error(status));
+    return voxel;
+}
+
 int run_align_command(const AlignOptions &given) {
     AlignOptions opt = given;
     // One matcher thread per job unless --threads says otherwise: the jobs are the parallelism.
     if (!opt.pair.have_threads) opt.pair.threads = 1;
-    const kissm_config config = pair_config(PairCommand::Register, opt.pair);
+    kissm_config config = pair_config(PairCommand::Register, opt.pair);
     const std::vector<Scan> scans = read_scans_file(opt.pair.files[0], opt.pair.source_format);
+    if (opt.pair.voxel_auto) config.voxel_size = scans_auto_voxel(scans);
     if ((opt.pairs == "sequence" || opt.pairs == "sessions") && !opt.have_loop_radius)
         opt.sequence.loop_radius = 30.0 * config.voxel_size;
     if (opt.pairs == "sessions" &&
@@ -443,7 +459,8 @@ void print_align_help(std::FILE *out) {
         "rejected edge and left out of the graph.\n"
         "\n"
         "Registration: every option of `kissm register` but the output ones, as in `kissm batch`:\n"
-        "--voxel or --preset, --refine (default gicp here: its information weighs the edges; with\n"
+        "--voxel or --preset (--voxel auto: one voxel for all the scans, suggested from them together),\n"
+        "--refine (default gicp here: its information weighs the edges; with\n"
         "none, an edge's information comes from its rotation uncertainty and noise bound), the validity\n"
         "settings, --suppression, --rotation-dof, --up, ... ('kissm register --help'); --format applies\n"
         "to the scans without a format (--format-src and --format-tgt do not apply).\n"

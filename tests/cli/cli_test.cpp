@@ -320,7 +320,6 @@ void test_errors() {
         CHECK(json_parse(coarse.out).at("reason_code").number == KISSM_REASON_TOO_FEW_VOXELS);
         CHECK(!contains(run("register " + ab + " --voxel 0.3").err, "hint"));
     }
-    expect_usage_error("align " + quote(a) + " --voxel auto --out " + quote(work("poses.tsv")), "--voxel auto");
     for (const char *bad : {"0", "-1", "-0.5", "nan", "NaN", "inf", "-inf", "abc", "0.3x", "1e999", "''", "' 0.3'"}) {
         expect_usage_error("register " + ab + " --voxel " + bad, "--voxel");
     }

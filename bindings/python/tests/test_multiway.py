@@ -451,6 +451,29 @@ def test_the_cli_gives_the_same_bytes_for_a_broken_chain(cli: Path, tmp_path: Pa
     assert usage.returncode == 2 and "--similar-per-scan" in usage.stderr
 
 
+def test_the_cli_takes_voxel_auto_as_python_does(cli: Path, tmp_path: Path) -> None:
+    """`kissm align --voxel auto` uses one voxel for every scan, the suggestion of them together, as
+    kissm.multiway.align(..., "auto") does: the same KITTI bytes, every scan placed right."""
+    clouds, truth = synthetic_set()
+    clouds, truth = clouds[:3], truth[:3]  # the three views of one scene, not the unrelated cloud
+    files = []
+    for k, cloud in enumerate(clouds):
+        files.append(tmp_path / f"c{k}.npy")
+        np.save(files[-1], cloud)
+    (tmp_path / "scans.tsv").write_text("scan\tfile\n" + "".join(f"c{k}\t{f.name}\n" for k, f in enumerate(files)))
+    python = kissm.multiway.align({f"c{k}": kissm.batch.CloudFile(str(f)) for k, f in enumerate(files)}, "auto")
+    python.write_kitti(tmp_path / "python.kitti")
+    assert python.placed.all()
+    for k in range(len(clouds)):
+        expected = np.linalg.inv(truth[0]) @ truth[k]
+        error = np.linalg.inv(expected) @ python.poses[k]
+        assert angle_deg(error[:3, :3]) < 2.0, k
+    command = [str(cli), "align", str(tmp_path / "scans.tsv"), "--voxel", "auto", "--out", str(tmp_path / "cli.tsv")]
+    done = subprocess.run([*command, "--kitti", str(tmp_path / "cli.kitti"), "-q"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "cli.kitti").read_bytes() == (tmp_path / "python.kitti").read_bytes()
+
+
 def test_bad_arguments() -> None:
     clouds, _ = synthetic_set()
     with pytest.raises(kissm.InvalidArgumentError, match="pairs"):
