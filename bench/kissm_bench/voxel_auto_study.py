@@ -7,11 +7,13 @@ section 7 thresholds), wrong poses reported valid (the worst bug kissm can ship)
 voxel's.
 
 Candidate rules (each a per-cloud suggestion; a pair or a set takes the smallest of its clouds' suggestions, which
-does not depend on their order):
+does not depend on their order, or with the suffix ``@median`` their lower median):
   * ``readme``: the data README's voxel for the kind (the reference, not a rule);
   * ``xM``: the README voxel times M (how wide the band of working voxels is);
   * ``countK``: the voxel whose grid holds K occupied voxels (found by bisection on the logarithm of the voxel);
   * ``spacingK``: K times the median nearest-neighbour spacing;
+  * ``slopeK``: ``count`` of K (2 / s)^2 voxels, s the count's growth exponent (surfaces near 2, scan lines less);
+  * ``compactK``: ``count3000``, or ``countK`` for a compact cloud (dense coverage of its principal spread);
   * ``auto``: the library's own rule (``voxel_size="auto"``, ``kissm.suggest_voxel_size``).
 
 Besides the pairs and the sets, pairs of unrelated scans (no overlap, scenes of very different sizes): every valid
@@ -74,6 +76,25 @@ def slope_rule(k: int) -> Rule:
     return rule
 
 
+def coverage(points: np.ndarray, voxel: float) -> float:
+    """Occupied voxels per unit of the voxel grid's principal spread (sigma_1 sigma_2 of the occupied voxels, in
+    voxels): near 12 for a plane, 17-24 for an object scan or an indoor fragment, 5-11 for a LiDAR scan, sparse
+    away from its sensor."""
+    keys = np.unique(np.floor((points - points.min(axis=0)) / voxel).astype(np.int64), axis=0).astype(np.float64)
+    w = np.linalg.eigvalsh(np.cov(keys.T))
+    return len(keys) / math.sqrt(max(w[2] * w[1], 1e-300))
+
+
+def compact_rule(k: int) -> Rule:
+    """count_rule(3000), or count_rule(k) for a compact cloud (coverage at the 3000-voxel rung of 14 or more)."""
+
+    def rule(points: np.ndarray) -> float:
+        v = count_rule(3000)(points)
+        return count_rule(k)(points) if coverage(points, v) >= 14.0 else v
+
+    return rule
+
+
 def spacing_rule(k: float) -> Rule:
     def rule(points: np.ndarray) -> float:
         from scipy.spatial import cKDTree  # type: ignore[import-untyped]  # only for this rule
@@ -95,14 +116,17 @@ def pair_voxel(rule: str, clouds: Sequence[np.ndarray], readme: float) -> float:
         return readme * float(rule[1:])
     if rule == "auto":  # the library's own pair or set rule
         return float(kissm.suggest_voxel_size(*clouds))
+    rule, _, combine = rule.partition("@")  # "@median": a set takes its clouds' lower median, not their smallest
     per_cloud = RULES[rule.rstrip("0123456789.")](float(rule.lstrip("abcdefghijklmnopqrstuvwxyz")))
-    return min(per_cloud(c) for c in clouds)
+    voxels = sorted(per_cloud(c) for c in clouds)
+    return voxels[(len(voxels) - 1) // 2] if combine == "median" else voxels[0]
 
 
 RULES: dict[str, Callable[[float], Rule]] = {
     "count": lambda k: count_rule(int(k)),
     "slope": lambda k: slope_rule(int(k)),
     "spacing": spacing_rule,
+    "compact": lambda k: compact_rule(int(k)),
 }
 
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "lowest_bit.hpp"
+
 // SSE2 is part of every x86-64 target (see pair_features.cpp for why not 32-bit x86).
 #if (defined(__x86_64__) || defined(_M_X64)) && (defined(__GNUC__) || defined(__clang__))
 #  define KISSM_KDTREE_SSE2 1
@@ -20,16 +22,6 @@ namespace {
 // The largest float below FLT_MAX: until k points are found a candidate must be strictly closer than
 // FLT_MAX, as in nanoflann, so "at most this" is the one comparison used throughout.
 constexpr float kNotFull = 0x1.fffffcp+127f;
-
-inline std::size_t lowest_bit(std::uint64_t m) {
-#if defined(__GNUC__) || defined(__clang__)
-    return static_cast<std::size_t>(__builtin_ctzll(m));
-#else
-    std::size_t i = 0;
-    for (; !(m & 1u); m >>= 1) ++i;
-    return i;
-#endif
-}
 
 // Squared distances from q to a leaf's points, block by block, and a bit mask of the slots whose distance
 // is <= limit (bit i for slot i of the leaf), so that the caller visits only those: a whole leaf is usually

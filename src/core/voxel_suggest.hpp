@@ -15,13 +15,23 @@ KISSM_DETAIL_BEGIN
 // most this many occupied voxels (a cloud of fewer than 4x as many finite points aims at a quarter of them).
 constexpr std::uint64_t kSuggestTargetVoxels = 3000;
 
+// A compact cloud (a surface folded about its own centre: an object scan, an indoor fragment) aims at fewer:
+// it registers with two thirds of the voxels a LiDAR scan needs (docs/design/voxel_auto.md, table 3).
+constexpr std::uint64_t kSuggestCompactVoxels = 2000;
+
+// Compact: at the kSuggestTargetVoxels rung, occupied voxels per unit of sigma_1 * sigma_2 (the two largest
+// principal spreads of the occupied voxels, in voxels) at least this. A plane gives about 12, the object scans
+// and indoor fragments of the shared data 17-24, its LiDAR scans (sparse away from the sensor) 5-11.
+constexpr double kCompactCoverage = 14.0;
+
 // Rungs per octave of the voxel ladder: suggestions are 2^(k / kSuggestRungsPerOctave) metres (k an integer),
 // so a cloud moved, turned slightly or given in another point order lands on the same rung.
 constexpr int kSuggestRungsPerOctave = 8;
 
-// The voxel size for the clouds (1 or more) together: each cloud's own rung, then the smallest of them (the
-// finest detail any cloud needs; a min does not depend on the clouds' order, so a pair's suggestion is the same
-// with source and target swapped), raised if needed so every cloud's extent stays within the voxel grid's range.
+// The voxel size for the clouds (1 or more) together: each cloud's own rung, then their lower median (for a
+// pair the smaller, the finer detail either needs; for a set, the rung a typical scan wants rather than its
+// finest scan's; neither depends on the clouds' order, so a pair's suggestion is the same with source and target
+// swapped), raised if needed so every cloud's extent stays within the voxel grid's range.
 // Non-finite points are ignored. Single-threaded and order-free: the same bits whatever the thread count.
 // Throws Failure(EmptyInput) for a cloud without finite points, Failure(TooFewPoints) for one with fewer than 4
 // or whose finite points all coincide (no length to measure). `names` name the clouds in messages.

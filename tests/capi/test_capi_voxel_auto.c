@@ -5,6 +5,7 @@
  * with it is the registration at that voxel, bit for bit. C99. */
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "harness.h"
@@ -44,14 +45,96 @@ static void test_suggestion_rule(void) {
     CHECK(v == (vs < vt ? vs : vt));
     CHECK(v == suggest(&g_pair.target, &g_pair.source));
     CHECK_MSG(fabs(k - floor(k + 0.5)) < 1e-9, "voxel %.17g is not a rung 2^(k/8)", v);
-    /* a set: the smallest own suggestion of its clouds */
+    /* a set: the lower median of its clouds' own suggestions (clouds scaled by 1, 2, 4 and 8 suggest v, 2v, 4v
+     * and 8v exactly: see the invariance test), in any order */
     {
-        kissm_points p[3];
+        scn_cloud scaled[4];
+        kissm_points p[4];
         double set = -1.0;
-        p[0] = scn_points(&g_pair.target), p[1] = scn_points(&g_pair.source), p[2] = scn_points(&g_pair.target);
+        size_t c, i;
+        for (c = 0; c < 4; ++c) {
+            scn_cloud_init(&scaled[c]);
+            scn_cloud_copy(&scaled[c], &g_pair.source);
+            for (i = 0; i < 3 * scaled[c].count; ++i) scaled[c].xyz[i] *= (double)(1u << c);
+        }
+        p[0] = scn_points(&scaled[2]), p[1] = scn_points(&scaled[0]), p[2] = scn_points(&scaled[1]);
         CHECK_EQ_INT(kissm_suggest_voxel_size(p, 3, &set), KISSM_OK);
-        CHECK(set == v);
+        CHECK_MSG(set == 2.0 * vs, "%.17g vs 2 x %.17g", set, vs);
+        p[3] = scn_points(&scaled[3]);
+        CHECK_EQ_INT(kissm_suggest_voxel_size(p, 4, &set), KISSM_OK);
+        CHECK(set == 2.0 * vs); /* four: the second smallest */
+        CHECK_EQ_INT(kissm_suggest_voxel_size(&p[1], 2, &set), KISSM_OK);
+        CHECK(set == vs); /* a pair: the smaller */
+        for (c = 0; c < 4; ++c) scn_cloud_free(&scaled[c]);
     }
+}
+
+/* Occupied voxels of side v, anchored at the cloud's minimum, counted as the library counts them. */
+static int cmp_u64(const void *a, const void *b) {
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static size_t occupied(const scn_cloud *c, double v) {
+    double lo[3], hi[3];
+    uint64_t cells[3], *keys = (uint64_t *)malloc(c->count * sizeof *keys);
+    size_t i, n = 0;
+    int a;
+    CHECK(keys != NULL);
+    if (keys == NULL) return 0;
+    for (a = 0; a < 3; ++a) lo[a] = hi[a] = c->xyz[a];
+    for (i = 0; i < c->count; ++i)
+        for (a = 0; a < 3; ++a) {
+            if (c->xyz[3 * i + a] < lo[a]) lo[a] = c->xyz[3 * i + a];
+            if (c->xyz[3 * i + a] > hi[a]) hi[a] = c->xyz[3 * i + a];
+        }
+    for (a = 0; a < 3; ++a) cells[a] = (uint64_t)((hi[a] - lo[a]) * (1.0 / v)) + 1;
+    for (i = 0; i < c->count; ++i) {
+        uint64_t k[3];
+        for (a = 0; a < 3; ++a) {
+            k[a] = (uint64_t)((c->xyz[3 * i + a] - lo[a]) * (1.0 / v));
+            if (k[a] > cells[a] - 1) k[a] = cells[a] - 1;
+        }
+        keys[i] = (k[0] * cells[1] + k[1]) * cells[2] + k[2];
+    }
+    qsort(keys, c->count, sizeof *keys, cmp_u64);
+    for (i = 0; i < c->count; ++i) n += i == 0 || keys[i] != keys[i - 1];
+    free(keys);
+    return n;
+}
+
+/* The count each kind of cloud aims at: 2000 occupied voxels for a compact one (a closed surface, as an object
+ * scan), 3000 for one sparse away from its centre (rings on the ground about a sensor, as a LiDAR scan). The
+ * suggestion is the finest rung within the count: the next finer rung holds more. */
+static void test_compact_and_wide_counts(void) {
+    scn_cloud ball, rings;
+    const double golden = 2.399963229728653; /* radians: points spread evenly over the sphere */
+    const double finer = pow(2.0, -1.0 / 8.0);
+    double v;
+    size_t i;
+    scn_cloud_init(&ball);
+    for (i = 0; i < 60000; ++i) {
+        const double z = 1.0 - 2.0 * ((double)i + 0.5) / 60000.0, r = sqrt(1.0 - z * z);
+        scn_cloud_push(&ball, 0.2 * r * cos(golden * (double)i), 0.2 * r * sin(golden * (double)i), 0.2 * z);
+    }
+    v = suggest(&ball, NULL);
+    CHECK_MSG(occupied(&ball, v) <= 2000 && occupied(&ball, v * finer) > 2000, "ball: %zu voxels at %.17g, %zu finer",
+              occupied(&ball, v), v, occupied(&ball, v * finer));
+    scn_cloud_init(&rings);
+    for (i = 0; i < 64; ++i) { /* rings 2 to 65 m out, 1,500 points each, on the ground and a wall at 40 m */
+        const double radius = 2.0 + (double)i;
+        size_t j;
+        for (j = 0; j < 1500; ++j) {
+            const double t = 6.283185307179586 * (double)j / 1500.0;
+            scn_cloud_push(&rings, radius * cos(t), radius * sin(t), -1.7);
+            if (i % 8 == 0) scn_cloud_push(&rings, 40.0 * cos(t), 40.0 * sin(t), -1.7 + 0.05 * (double)i);
+        }
+    }
+    v = suggest(&rings, NULL);
+    CHECK_MSG(occupied(&rings, v) <= 3000 && occupied(&rings, v * finer) > 3000,
+              "rings: %zu voxels at %.17g, %zu finer", occupied(&rings, v), v, occupied(&rings, v * finer));
+    scn_cloud_free(&ball);
+    scn_cloud_free(&rings);
 }
 
 /* Order-free, frame-free to the grid's anchor, and exactly scaled with the clouds (the ladder's rungs double with
@@ -134,6 +217,7 @@ int main(void) {
     scn_make_pair(&g_pair, 1, 25.0, 0.01);
     RUN_TEST(test_suggestion_rule);
     RUN_TEST(test_suggestion_invariance);
+    RUN_TEST(test_compact_and_wide_counts);
     RUN_TEST(test_register_auto);
     RUN_TEST(test_features_auto);
     scn_pair_free(&g_pair);

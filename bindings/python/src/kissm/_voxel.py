@@ -13,9 +13,10 @@ def suggest_voxel_size(*clouds: PointsLike) -> float:
     cloud, a pair (in either order) or a set of scans to be described alike.
 
     Each cloud's own voxel is the smallest of 2^(k/8) (k an integer, in the clouds' unit) whose grid holds at most
-    3000 occupied voxels (a quarter of its points when it has fewer than 12000); the suggestion is the smallest of
-    the clouds' own. It depends on the points alone (not their order, not the thread count); non-finite points are
-    ignored. docs/design/voxel_auto.md has the rule's evidence.
+    3000 occupied voxels, or 2000 for a compact cloud (an object scan, an indoor fragment); a quarter of its points
+    when it has fewer than 4 times as many. The suggestion is the clouds' own lower median (the smaller of a pair).
+    It depends on the points alone (not their order, not the thread count); non-finite points are ignored.
+    docs/design/voxel_auto.md has the rule's evidence.
 
     Raises:
         TypeError, ValueError: no cloud, a cloud that is not an (N, 3) array of real numbers, or one without 4

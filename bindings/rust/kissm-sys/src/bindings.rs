@@ -954,8 +954,10 @@ extern "C" {
         in either order) or a set of scans.
 
  Each cloud's own voxel is the smallest of 2^(k/8) metres (k an integer) at which its grid holds at most 3000
- occupied voxels (a quarter of its points when it has fewer than 12000); the suggestion is the smallest of the
- clouds' own, raised if needed to keep every cloud within the voxel grid's range. It depends on the points
+ occupied voxels, or 2000 for a compact cloud (an object scan or an indoor fragment: one whose 3000 voxels cover
+ the area of their two largest principal spreads densely); a quarter of its points when it has fewer than 4 times
+ as many. The suggestion is the clouds' own lower median (the smaller of a pair), raised if needed to keep every
+ cloud within the voxel grid's range. It depends on the points
  alone, not on their order nor the clouds' order, and not on any thread count. Non-finite points are ignored.
  The rule and its evidence: docs/design/voxel_auto.md. kissm_config.voxel_size = 0 applies it in every call.
  @param[in] clouds @p num_clouds clouds; read during the call only.

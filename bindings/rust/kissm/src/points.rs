@@ -371,8 +371,9 @@ pub fn read_points_with_format(path: impl AsRef<Path>, format: Format) -> Result
 /// The voxel size an automatic voxel size ([`ConfigBuilder::voxel_size_auto`](crate::ConfigBuilder::voxel_size_auto))
 /// uses for these clouds together (`kissm_suggest_voxel_size`): one cloud, a pair (in either order) or a set of
 /// scans to be described alike. Each cloud's own voxel is the smallest of 2^(k/8) (k an integer, in the clouds'
-/// unit) whose grid holds at most 3000 occupied voxels (a quarter of its points below 12000); the suggestion is
-/// the smallest of the clouds' own. It depends on the points alone; non-finite points are ignored.
+/// unit) whose grid holds at most 3000 occupied voxels, or 2000 for a compact cloud (an object scan, an indoor
+/// fragment); a quarter of its points when it has fewer than 4 times as many. The suggestion is the clouds' own
+/// lower median (the smaller of a pair). It depends on the points alone; non-finite points are ignored.
 ///
 /// ```
 /// let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
