@@ -31,6 +31,26 @@ double pick_radius(std::uint8_t b) {
     return std::ldexp(1.0 + (b % 16) / 16.0, static_cast<int>(b / 16) - 6);
 }
 
+// The two-call protocol the candidate functions share: a counting call (no buffer), then a filling one. Both refuse
+// alike, touching nothing; a buffer too small is refused with the count; otherwise both agree on the count. True when
+// the filled pairs are there to check.
+bool calls_agree(int32_t first, int32_t second, std::uint64_t counted, std::uint64_t count, std::uint64_t bound,
+                 std::uint64_t capacity, const std::vector<std::uint64_t> &pairs) {
+    if (first != KISSM_OK) {
+        require(second == first && counted == kSentinel && count == kSentinel);
+        for (const std::uint64_t x : pairs) require(x == kSentinel);
+        return false;
+    }
+    require(counted <= bound);
+    if (counted > capacity) {
+        require(second == KISSM_ERR_INVALID_ARGUMENT && count == counted);
+        for (const std::uint64_t x : pairs) require(x == kSentinel);
+        return false;
+    }
+    require(second == KISSM_OK && count == counted);
+    return true;
+}
+
 // kissm_sequence_loops' checks (see the file comment).
 void check_loops(std::uint64_t n, const double *s, const std::uint8_t *v, const double *p, double radius,
                  std::uint64_t gap, std::uint64_t per_scan, std::uint64_t capacity) {
@@ -39,18 +59,7 @@ void check_loops(std::uint64_t n, const double *s, const std::uint8_t *v, const 
     std::vector<std::uint64_t> pairs(2 * capacity + 2, kSentinel);
     std::uint64_t count = kSentinel;
     const int32_t second = kissm_sequence_loops(n, s, v, p, radius, gap, per_scan, pairs.data(), capacity, &count);
-    if (first != KISSM_OK) {
-        require(second == first && counted == kSentinel && count == kSentinel);
-        for (const std::uint64_t x : pairs) require(x == kSentinel);
-        return;
-    }
-    require(counted <= n * per_scan);
-    if (counted > capacity) {
-        require(second == KISSM_ERR_INVALID_ARGUMENT && count == counted);
-        for (const std::uint64_t x : pairs) require(x == kSentinel);
-        return;
-    }
-    require(second == KISSM_OK && count == counted);
+    if (!calls_agree(first, second, counted, count, n * per_scan, capacity, pairs)) return;
     for (std::size_t k = 2 * count; k < pairs.size(); ++k) require(pairs[k] == kSentinel);
     std::uint64_t last_j = 0, last_i = 0, run = 0;
     for (std::uint64_t k = 0; k < count; ++k) {
@@ -107,19 +116,9 @@ void check_similar(kissm_fuzz::Bytes &in, std::uint64_t n, const std::uint8_t *v
     const int32_t first = kissm_sequence_similar(n, v, signatures.data(), gap, per_scan, nullptr, 0, &counted);
     const int32_t second =
         kissm_sequence_similar(n, v, signatures.data(), gap, per_scan, pairs.data(), capacity, &count);
-    if (first != KISSM_OK) {
-        require(first == KISSM_ERR_INVALID_ARGUMENT && second == first && counted == kSentinel && count == kSentinel);
-        require(n == 0 || gap == 0 || !flags_in_range(n, v));
-        for (const std::uint64_t x : pairs) require(x == kSentinel);
-        return;
-    }
-    require(counted <= n * per_scan);
-    if (counted > capacity) {
-        require(second == KISSM_ERR_INVALID_ARGUMENT && count == counted);
-        for (const std::uint64_t x : pairs) require(x == kSentinel);
-        return;
-    }
-    require(second == KISSM_OK && count == counted);
+    if (first != KISSM_OK)
+        require(first == KISSM_ERR_INVALID_ARGUMENT && (n == 0 || gap == 0 || !flags_in_range(n, v)));
+    if (!calls_agree(first, second, counted, count, n * per_scan, capacity, pairs)) return;
     const std::vector<std::uint64_t> piece = pieces_of(n, v);
     std::uint64_t last_j = 0, last_i = 0, run = 0;
     for (std::uint64_t k = 0; k < count; ++k) {

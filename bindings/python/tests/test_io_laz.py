@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from laspy_records import write_laspy
 
 import kissm
 import kissm._read
@@ -30,26 +31,12 @@ laspy: Any = pytest.importorskip(
 pytest.importorskip("lazrs", reason="lazrs is not installed (it is in the test extra: pip install .[test])")
 
 
-def write_pair(
-    folder: Path,
-    xyz: np.ndarray,
-    fmt: int,
-    version: str,
-    offset: np.ndarray,
-    scale: float = 1e-3,
-    withheld: np.ndarray | None = None,
-) -> tuple[Path, Path]:
-    """``xyz`` written by laspy twice, as LAS and as LAZ (lazrs), with the same header and records."""
-    header = laspy.LasHeader(point_format=fmt, version=version)
-    header.scales = np.array([scale] * 3)
-    header.offsets = offset
-    las = laspy.LasData(header)
-    las.x, las.y, las.z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
-    if withheld is not None:
-        las.withheld = withheld
-    plain, compressed = folder / f"f{fmt}_v{version}.las", folder / f"f{fmt}_v{version}.laz"
-    las.write(str(plain))
-    las.write(str(compressed), laz_backend=laspy.LazBackend.Lazrs)
+def write_pair(folder: Path, *records: Any, **options: Any) -> tuple[Path, Path]:
+    """``write_laspy``'s records (its arguments after the path) written by laspy twice, as LAS and as LAZ (lazrs)."""
+    fmt, version = records[1], records[2]
+    plain = folder / f"f{fmt}_v{version}.las"
+    compressed = plain.with_suffix(".laz")
+    write_laspy(plain, *records, **options).write(str(compressed), laz_backend=laspy.LazBackend.Lazrs)
     return plain, compressed
 
 

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from laspy_records import write_laspy
 
 import kissm
 import kissm._read
@@ -121,34 +122,12 @@ def _lidar_pair(real_pairs: dict[str, RealPair]) -> RealPair:
     return lidar[0]
 
 
-def _write_laspy(
-    path: Path,
-    xyz: np.ndarray,
-    fmt: int,
-    version: str,
-    offset: np.ndarray,
-    scale: float = 1e-3,
-    withheld: np.ndarray | None = None,
-) -> Any:
-    """Writes `xyz` with laspy (quantised to `scale` around `offset`) and returns laspy's reading of the file."""
-    laspy = _laspy()
-    header = laspy.LasHeader(point_format=fmt, version=version)
-    header.scales = np.array([scale] * 3)
-    header.offsets = offset
-    las = laspy.LasData(header)
-    las.x, las.y, las.z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
-    if withheld is not None:
-        las.withheld = withheld
-    las.write(str(path))
-    return laspy.read(str(path))
-
-
 @pytest.mark.parametrize(("fmt", "version"), COMBOS)
 def test_laspy_files(real_pairs: dict[str, RealPair], tmp_path: Path, fmt: int, version: str) -> None:
     pair = _lidar_pair(real_pairs)
     source = read_cached(pair.source, pair.source_format)
     path = tmp_path / f"f{fmt}_v{version}.las"
-    back = _write_laspy(path, source, fmt, version, np.floor(source.min(axis=0)))
+    back = write_laspy(path, source, fmt, version, np.floor(source.min(axis=0)))
     got = kissm.read_points(path)
     # laspy's own scaled values (X * scale + offset in float64), bit for bit, and the source within the scale.
     assert np.array_equal(got, np.stack([np.asarray(back.x), np.asarray(back.y), np.asarray(back.z)], axis=1))
@@ -163,7 +142,7 @@ def test_laspy_withheld(real_pairs: dict[str, RealPair], tmp_path: Path, fmt: in
     withheld = np.zeros(len(source), dtype=bool)
     withheld[::7] = True
     path = tmp_path / "withheld.las"
-    _write_laspy(path, source, fmt, version, np.floor(source.min(axis=0)), withheld=withheld)
+    write_laspy(path, source, fmt, version, np.floor(source.min(axis=0)), withheld=withheld)
     got, left_out = kissm.read_points(path, return_withheld=True)
     assert left_out == int(withheld.sum())
     assert got.shape == (int((~withheld).sum()), 3)
@@ -183,8 +162,8 @@ def test_laspy_georeferenced_registers_as_unshifted(real_pairs: dict[str, RealPa
     shift = np.array([1e6, 1e6, 1e6])
     clouds = {}
     for name, cloud in (("source", source), ("target", target)):
-        _write_laspy(tmp_path / f"{name}.las", cloud, 3, "1.2", base)
-        _write_laspy(tmp_path / f"{name}_geo.las", cloud + shift, 3, "1.2", base + shift)
+        write_laspy(tmp_path / f"{name}.las", cloud, 3, "1.2", base)
+        write_laspy(tmp_path / f"{name}_geo.las", cloud + shift, 3, "1.2", base + shift)
         clouds[name] = kissm.read_points(tmp_path / f"{name}.las")
         clouds[name + "_geo"] = kissm.read_points(tmp_path / f"{name}_geo.las")
         assert np.max(np.abs(clouds[name + "_geo"] - shift - clouds[name])) <= 2.5e-10
@@ -233,7 +212,7 @@ def test_cli_out_aligned_las_keeps_target_frame(cli: Path, demo_clouds: tuple[Pa
     shift = np.array([500_000.0, 4_500_000.0, 100.0])
     offset = np.floor(target.min(axis=0)) + shift
     target_las = tmp_path / "target.las"
-    _write_laspy(target_las, target + shift, 3, "1.2", offset)
+    write_laspy(target_las, target + shift, 3, "1.2", offset)
     out = tmp_path / "aligned.las"
     T, written = _register_out_aligned(cli, source_ply, target_las, out)
     assert written.header.version.major == 1 and written.header.version.minor == 2
@@ -294,7 +273,7 @@ def test_cli_names_withheld_points(cli: Path, demo_clouds: tuple[Path, Path], tm
     withheld = np.zeros(len(target), dtype=bool)
     withheld[::100] = True
     target_las = tmp_path / "target.las"
-    _write_laspy(target_las, target, 1, "1.2", np.floor(target.min(axis=0)), withheld=withheld)
+    write_laspy(target_las, target, 1, "1.2", np.floor(target.min(axis=0)), withheld=withheld)
     run = subprocess.run(
         [str(cli), "register", str(source_ply), str(target_las), "--voxel", "0.3", "--json"],
         capture_output=True,
