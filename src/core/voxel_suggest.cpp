@@ -178,6 +178,13 @@ int lowest_rung(double extent) {
     return k;
 }
 
+// The lowest rung at least twice the extent: its grid holds one occupied voxel.
+int top_rung(double extent) {
+    int k = lowest_rung(extent);
+    while (rung(k) < 2.0 * extent) ++k;
+    return k;
+}
+
 // The smallest rung whose grid holds at most the target count, as found by walking down from a voxel twice the
 // extent (one occupied voxel) an octave at a time while the grid holds at most the target, then bisecting the
 // octave that crossed it. Along that walk each grid's cells are unions of the next finer one's (the rungs an
@@ -187,8 +194,7 @@ int lowest_rung(double extent) {
 int count_rung(const Finite &f, std::uint64_t target_voxels, int guess) {
     const std::uint64_t target = std::min<std::uint64_t>(target_voxels, f.points.size() / 4);
     const int floor_rung = lowest_rung(f.extent());
-    int top = floor_rung; // one occupied voxel: within any target
-    while (rung(top) < 2.0 * f.extent()) ++top;
+    const int top = top_rung(f.extent()); // one occupied voxel: within any target
     const auto within = [&](int j) { return occupied(f, rung(top - j * kSuggestRungsPerOctave)) <= target; };
     // The walk's octaves top - 8 j, j = 1..last, lie above the floor; below them the walk ends at the floor.
     const int last = (top - floor_rung - 1) / kSuggestRungsPerOctave;
@@ -225,8 +231,7 @@ int count_rung(const Finite &f, std::uint64_t target_voxels, int guess) {
 // is compact at that rung. The first walk starts 6 octaves below the top (where a surface of 3,000 voxels lies), the
 // compact one half an octave above the first's answer (a surface's count halves over about 4 rungs).
 int cloud_rung(const Finite &f) {
-    int top = lowest_rung(f.extent());
-    while (rung(top) < 2.0 * f.extent()) ++top;
+    const int top = top_rung(f.extent());
     const int wide = count_rung(f, kSuggestTargetVoxels, top - 6 * kSuggestRungsPerOctave);
     if (coverage(f, rung(wide)) < kCompactCoverage) return wide;
     return count_rung(f, kSuggestCompactVoxels, wide + kSuggestRungsPerOctave / 2);
