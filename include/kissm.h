@@ -339,7 +339,8 @@ typedef struct kissm_config {
 
     /** tau_num: neighbours needed for a normal and a descriptor; 3..100000. Default 3. */
     int32_t min_normal_neighbors;
-    /** Cap on mutual matches kept (best ratio first); 3..100000. Default 5000. */
+    /** Cap on mutual matches kept (best ratio first); 3..100000, or 0 for automatic: one per 20 keypoints of the
+     * smaller cloud, at least 5000 and at most 100000 (5000 for every cloud of up to 100,000 keypoints). Default 0. */
     int32_t max_correspondences;
     /** Without refinement, valid needs at least this many final inliers (refine_min_inliers applies with it);
      * 3..100000. Default 15. */

@@ -172,7 +172,11 @@ kissm_config validated_config(const kissm_config *given) {
         if (!std::isfinite(c.viewpoint[i]))
             fail(ErrorKind::InvalidArgument, "config.viewpoint[" + std::to_string(i) + "] is not finite");
     KISSM_REQUIRE_IN_LIMITS(min_normal_neighbors);
-    KISSM_REQUIRE_IN_LIMITS(max_correspondences);
+    if (c.max_correspondences != 0 && !limits::max_correspondences.contains(c.max_correspondences))
+        fail(ErrorKind::InvalidArgument, "config.max_correspondences is " + std::to_string(c.max_correspondences) +
+                                             "; it must be in [" + std::to_string(limits::max_correspondences.lo) +
+                                             ", " + std::to_string(limits::max_correspondences.hi) +
+                                             "], or 0 for a cap that grows with the keypoints (automatic)");
     KISSM_REQUIRE_IN_LIMITS(min_inliers);
     require_int(c.nonfinite_policy, 0, max_setting_code<NonFinitePolicy>(), "nonfinite_policy");
     require_int(c.viewpoint_mode, 0, max_setting_code<ViewpointMode>(), "viewpoint_mode");

@@ -319,7 +319,7 @@ bool take_pair_option(PairCommand command, ArgCursor &cur, bool with_outputs, Pa
     } else if (is_register && name == "--min-inliers") {
         opt.min_inliers = parse_int32(name, cur.value(), 3, 1 << 30);
     } else if (is_register && name == "--max-correspondences") {
-        opt.max_correspondences = parse_int32(name, cur.value(), 3, 1 << 30);
+        opt.max_correspondences = parse_int32(name, cur.value(), 0, 1 << 30); // 0: automatic
     } else if (is_register && name == "--max-rotation-uncertainty") {
         opt.max_rotation_uncertainty = parse_double(name, cur.value());
         opt.have_max_rotation_uncertainty = true;

@@ -1,11 +1,19 @@
 // SPDX-License-Identifier: MIT
 #include "matching.hpp"
 
+#include "setting_limits.hpp"
+
 #include <algorithm>
 #include <limits>
 #include <utility>
 
 KISSM_DETAIL_BEGIN
+
+std::size_t correspondence_cap(int max_correspondences, std::size_t smaller_keypoints) {
+    if (max_correspondences > 0) return static_cast<std::size_t>(max_correspondences);
+    const auto ceiling = static_cast<std::size_t>(limits::max_correspondences.hi);
+    return std::min(ceiling, std::max(kAutoCapFloor, smaller_keypoints / kAutoKeypointsPerMatch));
+}
 
 std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, const IndexedDescriptors &target,
                                               const MatchParams &params, RunContext &ctx) {
@@ -75,7 +83,7 @@ std::vector<Correspondence> match_descriptors(const IndexedDescriptors &source, 
         out.push_back(c);
     }
 
-    const std::size_t cap = static_cast<std::size_t>(params.max_correspondences);
+    const std::size_t cap = correspondence_cap(params.max_correspondences, nq);
     if (out.size() > cap) {
         std::stable_sort(out.begin(), out.end(), [](const Correspondence &a, const Correspondence &b) {
             if (a.score != b.score) return a.score < b.score;

@@ -35,7 +35,7 @@ struct Params {
     double noise_bound_max = 0.0; // 0 = no cap
     std::array<double, 3> viewpoint{{0.0, 0.0, 0.0}};
     int min_normal_neighbors = 3;
-    int max_correspondences = 5000;
+    int max_correspondences = 0; // 0 = automatic: grows with the keypoints (matching.hpp)
     int min_inliers = 15;
     NonFinitePolicy nonfinite = NonFinitePolicy::Reject;
     ViewpointMode viewpoint_mode = ViewpointMode::Local; // no frame dependence (docs/design/frames.md)

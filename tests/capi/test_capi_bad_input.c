@@ -701,7 +701,7 @@ static const field_case k_bad_fields[] = {
     {F_MIN_NORMAL_NEIGHBORS, 0, "min_normal_neighbors"},
     {F_MIN_NORMAL_NEIGHBORS, -3, "min_normal_neighbors"},
     {F_MAX_CORRESPONDENCES, 2, "max_correspondences"},
-    {F_MAX_CORRESPONDENCES, 0, "max_correspondences"},
+    {F_MAX_CORRESPONDENCES, 1, "max_correspondences"},
     {F_MAX_CORRESPONDENCES, -5000, "max_correspondences"},
     {F_MIN_INLIERS, 2, "min_inliers"},
     {F_MIN_INLIERS, 0, "min_inliers"},

@@ -51,7 +51,7 @@ static void check_defaults(const kissm_config *c, uint32_t expected_size) {
     CHECK(c->noise_bound_max == 0.0);
     CHECK(c->viewpoint[0] == 0.0 && c->viewpoint[1] == 0.0 && c->viewpoint[2] == 0.0);
     CHECK_EQ_INT(c->min_normal_neighbors, 3);
-    CHECK_EQ_INT(c->max_correspondences, 5000);
+    CHECK_EQ_INT(c->max_correspondences, 0);
     CHECK_EQ_INT(c->min_inliers, 15);
     CHECK_EQ_INT(c->nonfinite_policy, KISSM_NONFINITE_REJECT);
     CHECK_EQ_INT(c->viewpoint_mode, KISSM_VIEWPOINT_LOCAL);

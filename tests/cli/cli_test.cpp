@@ -333,6 +333,8 @@ void test_errors() {
     expect_usage_error("register " + ab + " --voxel 0.3 --threads 1.5", "--threads");
     expect_usage_error("register " + ab + " --voxel 0.3 --min-inliers 2", "--min-inliers");
     expect_usage_error("register " + ab + " --voxel 0.3 --max-correspondences x", "--max-correspondences");
+    expect_usage_error("register " + ab + " --voxel 0.3 --max-correspondences -1", "--max-correspondences");
+    expect_usage_error("register " + ab + " --voxel 0.3 --max-correspondences 2", "--max-correspondences");
     expect_usage_error("register " + ab + " --voxel 0.3 --format-src bogus", "bogus");
     expect_usage_error("register " + ab + " --voxel 0.3 --format-tgt", "--format-tgt");
     expect_usage_error("register " + ab + " --voxel 0.3 --json=yes", "--json");

@@ -121,8 +121,35 @@ static void test_index_is_a_function_of_its_cloud() {
               .empty());
 }
 
+static void test_automatic_cap() {
+    // An explicit cap is the cap; automatic (0) is one match per 20 keypoints of the smaller cloud within
+    // [5000, 100000]: every cloud of up to 100,000 keypoints keeps the fixed 5000.
+    CHECK_EQ_INT(correspondence_cap(1234, 10), 1234);
+    CHECK_EQ_INT(correspondence_cap(3, 5000000), 3);
+    CHECK_EQ_INT(correspondence_cap(0, 0), 5000);
+    CHECK_EQ_INT(correspondence_cap(0, 100019), 5000);
+    CHECK_EQ_INT(correspondence_cap(0, 100020), 5001);
+    CHECK_EQ_INT(correspondence_cap(0, 307616), 15380);
+    CHECK_EQ_INT(correspondence_cap(0, 2000000), 100000);
+    CHECK_EQ_INT(correspondence_cap(0, 3076906), 100000);
+
+    // On small clouds automatic matching is the 5000 cap's, bit for bit; with more mutual matches than the
+    // floor it keeps exactly the floor's most distinctive ones.
+    TestRng rng(77);
+    const Descriptors src = random_descriptors(rng, 6000);
+    Descriptors tgt = src;
+    for (float &v : tgt.values) v += static_cast<float>(rng.uniform(-0.05, 0.05));
+    RunContext two(2, nullptr, Hooks());
+    const auto fixed = match(src, tgt, MatchParams{1.0, 5000}, two);
+    const auto automatic = match(src, tgt, MatchParams{1.0, 0}, two);
+    CHECK_EQ_INT(fixed.size(), 5000);
+    REQUIRE(automatic.size() == fixed.size());
+    CHECK(std::memcmp(automatic.data(), fixed.data(), fixed.size() * sizeof(Correspondence)) == 0);
+}
+
 int main() {
     RUN_TEST(test_mutual_matches_found_and_threads_agree);
+    RUN_TEST(test_automatic_cap);
     RUN_TEST(test_identical_candidates_are_ambiguous);
     RUN_TEST(test_index_is_a_function_of_its_cloud);
     return TEST_SUMMARY();

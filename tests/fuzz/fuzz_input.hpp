@@ -77,7 +77,7 @@ inline kissm_config make_config(Bytes &in) {
     c.min_inliers = 3 + (flags >> 4);
     c.normal_radius_gain = 1.0 + (gains & 7) * 0.5;
     c.fpfh_radius_gain = c.normal_radius_gain + 1.5 + ((gains >> 3) & 7) * 0.5;
-    c.max_correspondences = 3 + (gains >> 6) * 300;
+    c.max_correspondences = (gains >> 6) == 3 ? 0 : 3 + (gains >> 6) * 300; // 0: automatic
     // The ground-vehicle options: suppression, yaw only, the up direction (one zero: refused) and sensor height.
     const std::uint8_t ground = in.u8();
     c.suppression = (ground & 1) ? KISSM_SUPPRESS_GROUND : KISSM_SUPPRESS_NONE;

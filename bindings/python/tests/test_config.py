@@ -186,6 +186,23 @@ def test_voxel_size_auto() -> None:
         kissm.Config(voxel_size="Auto")
 
 
+def test_max_correspondences_automatic(pair) -> None:
+    """0, the default, is the automatic cap: 5000 for clouds this small, so the same result, bit for bit."""
+    assert kissm.Config().max_correspondences == 0
+    assert kissm.Config(max_correspondences=0)._to_c().max_correspondences == 0
+    automatic = kissm.Matcher(voxel_size=pair.voxel_size, num_threads=2).register(pair.source, pair.target)
+    fixed = kissm.Matcher(voxel_size=pair.voxel_size, num_threads=2, max_correspondences=5000).register(
+        pair.source, pair.target
+    )
+    assert automatic.valid and automatic.num_initial_correspondences <= 5000
+    assert automatic.transform.tobytes() == fixed.transform.tobytes()
+    assert automatic.num_initial_correspondences == fixed.num_initial_correspondences
+    few = kissm.Matcher(voxel_size=pair.voxel_size, num_threads=2, max_correspondences=50).register(
+        pair.source, pair.target
+    )
+    assert few.num_initial_correspondences == 50
+
+
 def test_out_of_int32_range_is_a_valueerror() -> None:
     with pytest.raises(ValueError, match="num_threads"):
         kissm.Config(num_threads=2**40)

@@ -184,7 +184,8 @@ class Config:
     min_normal_neighbors: int = _DEFAULTS["min_normal_neighbors"]
     """Neighbours needed for a normal and a descriptor; 3..100000."""
     max_correspondences: int = _DEFAULTS["max_correspondences"]
-    """Cap on the mutual matches kept, best ratio first; 3..100000."""
+    """Cap on the mutual matches kept, best ratio first; 3..100000, or 0 (the default) for automatic: one per 20
+    keypoints of the smaller cloud, at least 5000 and at most 100000 (so 5000 for clouds of up to 100,000 keypoints)."""
     min_inliers: int = _DEFAULTS["min_inliers"]
     """Final inliers needed for ``Result.valid`` without refinement (``refine_min_inliers`` with it); 3..100000."""
     nonfinite_policy: NonFinitePolicy = _DEFAULTS["nonfinite_policy"]

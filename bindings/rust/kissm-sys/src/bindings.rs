@@ -182,7 +182,8 @@ pub struct kissm_config {
     pub viewpoint: [f64; 3usize],
     /// tau_num: neighbours needed for a normal and a descriptor; 3..100000. Default 3.
     pub min_normal_neighbors: i32,
-    /// Cap on mutual matches kept (best ratio first); 3..100000. Default 5000.
+    /** Cap on mutual matches kept (best ratio first); 3..100000, or 0 for automatic: one per 20 keypoints of the
+ smaller cloud, at least 5000 and at most 100000 (5000 for every cloud of up to 100,000 keypoints). Default 0.*/
     pub max_correspondences: i32,
     /** Without refinement, valid needs at least this many final inliers (refine_min_inliers applies with it);
  3..100000. Default 15.*/

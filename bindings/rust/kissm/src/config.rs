@@ -343,7 +343,7 @@ impl Config {
     config_getters! {
         /// Neighbours needed for a normal and a descriptor.
         min_normal_neighbors: count,
-        /// Cap on the mutual matches kept, best ratio first.
+        /// Cap on the mutual matches kept, best ratio first; 0: automatic (grows with the keypoints).
         max_correspondences: count,
         /// Final inliers needed for a valid pose without refinement
         /// ([`refine_min_inliers`](Config::refine_min_inliers) with it).
@@ -578,7 +578,9 @@ impl ConfigBuilder {
     builder_setters! {
         /// Neighbours needed for a normal and a descriptor, 3..=100000 (default 3).
         min_normal_neighbors: count,
-        /// Cap on the mutual matches kept (best ratio first), 3..=100000 (default 5000).
+        /// Cap on the mutual matches kept (best ratio first), 3..=100000, or 0 (the default) for automatic: one per
+        /// 20 keypoints of the smaller cloud, at least 5000 and at most 100000 (5000 for clouds of up to 100,000
+        /// keypoints).
         max_correspondences: count,
         /// Final inliers a valid pose needs without refinement, 3..=100000 (default 15); with refinement
         /// [`refine_min_inliers`](ConfigBuilder::refine_min_inliers) applies instead.

@@ -51,7 +51,7 @@ fn config_defaults_are_the_documented_ones() {
     assert_eq!(c.viewpoint(), Viewpoint::Local);
     assert_eq!(c.viewpoint(), Viewpoint::default());
     assert_eq!(c.min_normal_neighbors(), 3);
-    assert_eq!(c.max_correspondences(), 5000);
+    assert_eq!(c.max_correspondences(), 0);
     assert_eq!(c.min_inliers(), 15);
     assert_eq!(c.nonfinite_policy(), NonFinitePolicy::Reject);
     // The former spelling still names the same type.
@@ -347,6 +347,8 @@ fn invalid_config_values_are_errors_not_panics() {
     invalid(b().viewpoint(Viewpoint::Fixed([0.0, f64::INFINITY, 0.0])), "viewpoint");
     invalid(b().min_normal_neighbors(2), "min_normal_neighbors");
     invalid(b().max_correspondences(usize::MAX), "max_correspondences");
+    invalid(b().max_correspondences(2), "max_correspondences");
+    assert_eq!(b().max_correspondences(0).build().unwrap().max_correspondences(), 0); // automatic
     invalid(b().min_inliers(2), "min_inliers");
     invalid(b().refine_max_iterations(0), "refine_max_iterations");
     invalid(b().refine_max_iterations(1001), "refine_max_iterations");
