@@ -5,12 +5,60 @@
 #include <algorithm>
 #include <utility>
 
+#include "simd_level.hpp"
+
 KISSM_DETAIL_BEGIN
 
 namespace {
 
 constexpr int kProjDim = DescriptorProjection::kDim;
 using DescVec = Eigen::Matrix<double, kDescriptorDim, 1>;
+
+constexpr int kPad = 36; // covariance columns (and rows) padded with zeros to whole 4 x 4 tiles
+constexpr std::size_t kChunk = 64;
+
+// The covariance's lower triangle as 4 x 4 tiles (i0, j0), summed over rows in row order.
+struct TileSums {
+    const float *const *rows;
+    std::size_t num_rows;
+    const double *mean;
+    const std::pair<int, int> *tiles;
+    double *tri; // kPad x kPad
+};
+
+// Tiles [t0, t1) of `job`: rows by chunks of kChunk centred into xs (kChunk x kPad, its padding zero), then each
+// tile's 16 accumulators (kept in registers) add x_j * x_i row by row. Both widths' clones (simd_level.hpp) do the
+// same multiplications and additions in the same order, so the same bits.
+KISSM_ALWAYS_INLINE void sum_tiles_body(const TileSums &job, std::size_t t0, std::size_t t1, double *xs) {
+    for (std::size_t r0 = 0; r0 < job.num_rows; r0 += kChunk) {
+        const std::size_t nr = std::min(kChunk, job.num_rows - r0);
+        for (std::size_t r = 0; r < nr; ++r)
+            for (int c = 0; c < kDescriptorDim; ++c)
+                xs[r * kPad + c] = static_cast<double>(job.rows[r0 + r][c]) - job.mean[c];
+        for (std::size_t t = t0; t < t1; ++t) {
+            const int i0 = job.tiles[t].first, j0 = job.tiles[t].second;
+            double acc[4][4];
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j) acc[i][j] = job.tri[(i0 + i) * kPad + j0 + j];
+            for (std::size_t r = 0; r < nr; ++r) {
+                const double *xr = &xs[r * kPad];
+                for (int i = 0; i < 4; ++i)
+                    for (int j = 0; j < 4; ++j) acc[i][j] += xr[j0 + j] * xr[i0 + i];
+            }
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j) job.tri[(i0 + i) * kPad + j0 + j] = acc[i][j];
+        }
+    }
+}
+
+void sum_tiles_sse2(const TileSums &job, std::size_t t0, std::size_t t1, double *xs) {
+    sum_tiles_body(job, t0, t1, xs);
+}
+#if KISSM_HAVE_AVX2_KERNELS
+KISSM_TARGET_AVX2 void sum_tiles_avx2(const TileSums &job, std::size_t t0, std::size_t t1, double *xs) {
+    sum_tiles_body(job, t0, t1, xs);
+}
+#endif
 
 // Principal axes of the descriptors, from a fixed subsample (cost independent of cloud size; a function of
 // the data alone, so the same for every thread count).
@@ -26,35 +74,22 @@ DescriptorProjection principal_axes(const Descriptors &d, RunContext &ctx) {
     mean /= static_cast<double>(rows.size());
     // Only the lower triangle: the eigen solver reads nothing else. Every element is still the sum over
     // rows, in row order, of x_j * x_i, so the axes are bit for bit those of per-row outer products. The
-    // rows go by chunks through 4 x 4 tiles of accumulators that the compiler keeps in SSE2 registers;
-    // threads share out tiles (disjoint elements, each summed whole by one thread), never rows.
-    constexpr int kPad = 36; // columns (and rows) padded with zeros to whole tiles
-    constexpr std::size_t kChunk = 64;
+    // rows go by chunks through 4 x 4 tiles of accumulators that the compiler keeps in vector registers (an
+    // AVX2 clone where the CPU has it: docs/design/performance.md, "Descriptor index build"); threads share out
+    // tiles (disjoint elements, each summed whole by one thread), never rows.
     std::vector<std::pair<int, int>> tiles;
     for (int i0 = 0; i0 < kDescriptorDim; i0 += 4)
         for (int j0 = 0; j0 <= i0; j0 += 4) tiles.emplace_back(i0, j0);
     std::vector<double> tri(kPad * kPad, 0.0);
+#if KISSM_HAVE_AVX2_KERNELS
+    const auto sum_tiles = use_avx2() ? sum_tiles_avx2 : sum_tiles_sse2;
+#else
+    const auto sum_tiles = sum_tiles_sse2;
+#endif
+    const TileSums job{rows.data(), rows.size(), mean.data(), tiles.data(), tri.data()};
     ctx.parallel_for(tiles.size(), (tiles.size() + 1) / 2, [&](std::size_t t0, std::size_t t1) {
         std::vector<double> xs(kChunk * kPad, 0.0);
-        for (std::size_t r0 = 0; r0 < rows.size(); r0 += kChunk) {
-            const std::size_t nr = std::min(kChunk, rows.size() - r0);
-            for (std::size_t r = 0; r < nr; ++r)
-                for (int c = 0; c < kDescriptorDim; ++c)
-                    xs[r * kPad + c] = static_cast<double>(rows[r0 + r][c]) - mean[c];
-            for (std::size_t t = t0; t < t1; ++t) {
-                const int i0 = tiles[t].first, j0 = tiles[t].second;
-                double acc[4][4];
-                for (int i = 0; i < 4; ++i)
-                    for (int j = 0; j < 4; ++j) acc[i][j] = tri[(i0 + i) * kPad + j0 + j];
-                for (std::size_t r = 0; r < nr; ++r) {
-                    const double *xr = &xs[r * kPad];
-                    for (int i = 0; i < 4; ++i)
-                        for (int j = 0; j < 4; ++j) acc[i][j] += xr[j0 + j] * xr[i0 + i];
-                }
-                for (int i = 0; i < 4; ++i)
-                    for (int j = 0; j < 4; ++j) tri[(i0 + i) * kPad + j0 + j] = acc[i][j];
-            }
-        }
+        sum_tiles(job, t0, t1, xs.data());
     });
     Eigen::Matrix<double, kDescriptorDim, kDescriptorDim> cov =
         Eigen::Matrix<double, kDescriptorDim, kDescriptorDim>::Zero();
