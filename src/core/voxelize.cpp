@@ -39,14 +39,6 @@ public:
         if (cap > slots_.size()) rehash(cap);
     }
 
-    void add(std::uint64_t key, const std::int64_t q[3]) {
-        Entry one;
-        one.key = key;
-        for (int a = 0; a < 3; ++a) one.sum[a] = static_cast<std::uint64_t>(q[a]);
-        one.count = 1;
-        add(one);
-    }
-
     void add(const Entry &o) {
         grow_for_one_more();
         Entry &e = find(o.key);
@@ -58,15 +50,10 @@ public:
     std::size_t size() const { return used_; }
 
     template <class F>
-    void for_each_slot(F &&f) const {
-        for (std::size_t i = 0; i < slots_.size(); ++i)
-            if (slots_[i].key != kEmpty) f(i, slots_[i]);
-    }
-    template <class F>
     void for_each(F &&f) const {
-        for_each_slot([&f](std::size_t, const Entry &e) { f(e); });
+        for (const Entry &e : slots_)
+            if (e.key != kEmpty) f(e);
     }
-    const Entry &entry(std::size_t slot) const { return slots_[slot]; }
 
     void release() {
         std::vector<Entry>().swap(slots_);
@@ -99,22 +86,34 @@ private:
     std::size_t used_ = 0;
 };
 
-// A merged table and its occupied slots in key order.
-struct SortedTable {
-    VoxelTable table;
-    std::vector<std::uint32_t> slots;
-};
+// The occupied entries of a table, in slot order.
+std::vector<VoxelTable::Entry> occupied(const VoxelTable &table) {
+    std::vector<VoxelTable::Entry> out;
+    out.reserve(table.size());
+    table.for_each([&out](const VoxelTable::Entry &e) { out.push_back(e); });
+    return out;
+}
 
-// Sorts the table's occupied slots by key; keys minus `base` are sorted (fewer radix passes).
-SortedTable in_key_order(VoxelTable &&table, std::uint64_t base) {
-    std::vector<KeyIndex> order;
-    order.reserve(table.size());
-    table.for_each_slot([&](std::size_t slot, const VoxelTable::Entry &x) {
-        order.push_back({x.key - base, static_cast<std::uint32_t>(slot)});
-    });
+// Entries (a voxel may come several times, from several chunks) as one entry per voxel in key order: sorted by
+// key (minus `base`: fewer radix passes), equal keys summed. Integer sums, so the order they are added in does not
+// matter. Sorting the few entries of the chunks replaced adding them into a hash table and sorting its slots
+// (docs/design/performance.md, "Voxel merge").
+std::vector<VoxelTable::Entry> merged_in_key_order(const std::vector<VoxelTable::Entry> &entries, std::uint64_t base) {
+    std::vector<KeyIndex> order(entries.size());
+    for (std::size_t i = 0; i < entries.size(); ++i) order[i] = {entries[i].key - base, static_cast<std::uint32_t>(i)};
     radix_sort_by_key(order);
-    SortedTable out{std::move(table), std::vector<std::uint32_t>(order.size())};
-    for (std::size_t v = 0; v < order.size(); ++v) out.slots[v] = order[v].index;
+    std::vector<VoxelTable::Entry> out;
+    out.reserve(entries.size());
+    for (const KeyIndex &k : order) {
+        const VoxelTable::Entry &e = entries[k.index];
+        if (out.empty() || out.back().key != e.key) {
+            out.push_back(e);
+            continue;
+        }
+        VoxelTable::Entry &o = out.back();
+        for (int a = 0; a < 3; ++a) o.sum[a] += e.sum[a];
+        o.count += e.count;
+    }
     return out;
 }
 
@@ -178,75 +177,89 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
         VoxelTable table; // built locally, stored once: neighbouring tables' counters share cache lines
         table.reserve(std::min<std::size_t>(e - b, 4096));
         const bool skip = input.skip_nonfinite;
+        // Consecutive points of a scan often share a voxel: a run of them is summed here and enters the table
+        // once (integer sums, so the same entry as point by point; docs/design/performance.md, "Voxel merge").
+        VoxelTable::Entry run;
         input.for_each_point(b, e, [&](std::size_t, const Vec3d &p) {
             if (skip && !InputCloud::finite(p)) return;
             std::int64_t q[3];
             const std::uint64_t key = grid.key(p, q);
-            table.add(key, q);
+            if (key != run.key) {
+                if (run.count != 0) table.add(run);
+                run.key = key;
+                run.sum[0] = run.sum[1] = run.sum[2] = 0;
+                run.count = 0;
+            }
+            for (int a = 0; a < 3; ++a) run.sum[a] += static_cast<std::uint64_t>(q[a]);
+            ++run.count;
         });
+        if (run.count != 0) table.add(run);
         return table;
     });
     const std::size_t num_chunks = partial.size();
-    // Merge by key range: keys are x-major, so a range is a slab of the scene. Each range is merged on its
-    // own, in parallel, in a table small enough to stay in cache, then sorted; ranges follow each other in
-    // key order, so the output is in key order (the table's slot order depends on its growth history, the
-    // key order does not). One table for the whole cloud was merged serially, by random probes far out of
-    // cache, and that merge grew faster than the point count (docs/design/performance.md, "What the profiles
-    // showed"). About 8K entries per range (a function of the data alone), at
-    // most 256 ranges; a small cloud is one range, merged straight from the chunks' tables.
-    std::size_t all_entries = 0;
-    for (const VoxelTable &t : partial) all_entries += t.size();
-    const std::size_t kRanges = std::min<std::size_t>(256, all_entries / 8192 + 1);
-    std::vector<SortedTable> merged(kRanges);
-    if (kRanges == 1) {
-        VoxelTable &all = partial[0];
-        for (std::size_t c = 1; c < num_chunks; ++c) {
-            partial[c].for_each([&all](const VoxelTable::Entry &x) { all.add(x); });
+    // Each chunk's entries compacted (its table goes), then merged by key range: keys are x-major, so a range is
+    // a slab of the scene. Each range is merged on its own, in parallel, from the chunks' entries in it; ranges
+    // follow each other in key order, so the output is in key order. One table for the whole cloud was merged
+    // serially, by random probes far out of cache, and that merge grew faster than the point count
+    // (docs/design/performance.md, "What the profiles showed"). About 8K entries per range (a function of the data
+    // alone), at most 256 ranges; a small cloud is one range.
+    std::vector<std::vector<VoxelTable::Entry>> lists(num_chunks);
+    ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) {
+            lists[c] = occupied(partial[c]);
             partial[c].release();
         }
-        merged[0] = in_key_order(std::move(all), 0);
+    });
+    std::size_t all_entries = 0;
+    for (const auto &list : lists) all_entries += list.size();
+    const std::size_t kRanges = std::min<std::size_t>(256, all_entries / 8192 + 1);
+    std::vector<std::vector<VoxelTable::Entry>> merged(kRanges);
+    if (kRanges == 1) {
+        std::vector<VoxelTable::Entry> all;
+        all.reserve(all_entries);
+        for (auto &list : lists) {
+            all.insert(all.end(), list.begin(), list.end());
+            std::vector<VoxelTable::Entry>().swap(list);
+        }
+        merged[0] = merged_in_key_order(all, 0);
     } else {
         const std::uint64_t width = cells[0] * cells[1] * cells[2] / kRanges + 1; // keys < 2^63 (extent check)
         // Per chunk: its entries grouped by range, and where each range starts among them.
-        std::vector<std::vector<VoxelTable::Entry>> by_range(num_chunks);
         std::vector<std::vector<std::size_t>> range_begin(num_chunks);
         ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
             for (std::size_t c = b; c < e; ++c) {
                 std::vector<std::size_t> begin(kRanges + 1, 0);
-                partial[c].for_each([&](const VoxelTable::Entry &x) { ++begin[x.key / width + 1]; });
+                for (const VoxelTable::Entry &x : lists[c]) ++begin[x.key / width + 1];
                 for (std::size_t r = 0; r < kRanges; ++r) begin[r + 1] += begin[r];
                 std::vector<std::size_t> next(begin.begin(), begin.end() - 1);
-                std::vector<VoxelTable::Entry> grouped(partial[c].size());
-                partial[c].for_each([&](const VoxelTable::Entry &x) { grouped[next[x.key / width]++] = x; });
-                partial[c].release();
+                std::vector<VoxelTable::Entry> grouped(lists[c].size());
+                for (const VoxelTable::Entry &x : lists[c]) grouped[next[x.key / width]++] = x;
                 range_begin[c] = std::move(begin);
-                by_range[c] = std::move(grouped);
+                lists[c] = std::move(grouped);
             }
         });
         ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
+            std::vector<VoxelTable::Entry> entries;
             for (std::size_t r = b; r < e; ++r) {
-                std::size_t entries = 0;
-                for (std::size_t c = 0; c < num_chunks; ++c) entries += range_begin[c][r + 1] - range_begin[c][r];
-                if (entries == 0) continue;
-                VoxelTable table;
-                table.reserve(entries);
+                entries.clear();
                 for (std::size_t c = 0; c < num_chunks; ++c)
-                    for (std::size_t k = range_begin[c][r]; k < range_begin[c][r + 1]; ++k) table.add(by_range[c][k]);
-                merged[r] = in_key_order(std::move(table), r * width); // keys relative to the range's first key
+                    entries.insert(entries.end(), lists[c].begin() + static_cast<std::ptrdiff_t>(range_begin[c][r]),
+                                   lists[c].begin() + static_cast<std::ptrdiff_t>(range_begin[c][r + 1]));
+                if (!entries.empty()) merged[r] = merged_in_key_order(entries, r * width);
             }
         });
     }
 
     std::vector<std::size_t> first_voxel(kRanges + 1, 0);
-    for (std::size_t r = 0; r < kRanges; ++r) first_voxel[r + 1] = first_voxel[r] + merged[r].slots.size();
+    for (std::size_t r = 0; r < kRanges; ++r) first_voxel[r + 1] = first_voxel[r] + merged[r].size();
     out.points.resize(first_voxel[kRanges]);
     if (keys != nullptr) keys->resize(first_voxel[kRanges]);
     const Vec3d corner = input.min - out.origin;
     ctx.parallel_for(kRanges, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t r = b; r < e; ++r) {
-            const SortedTable &m = merged[r];
-            for (std::size_t v = 0; v < m.slots.size(); ++v) {
-                const VoxelTable::Entry &s = m.table.entry(m.slots[v]);
+            const std::vector<VoxelTable::Entry> &m = merged[r];
+            for (std::size_t v = 0; v < m.size(); ++v) {
+                const VoxelTable::Entry &s = m[v];
                 const std::uint64_t key = s.key;
                 const std::uint64_t c[3] = {key / (cells[1] * cells[2]), (key / cells[2]) % cells[1], key % cells[2]};
                 const double count = static_cast<double>(s.count);
