@@ -24,7 +24,9 @@ std::uint64_t cells_for(double extent, double voxel_size) {
 constexpr double kFixedScale = 1073741824.0; // 2^30
 
 // Open-addressing map from voxel key to its point count and offset sums. One pass over the points and no
-// per-point sort: clouds have many points per voxel (e.g. 14 on average in a 70K-point scan at 0.3 m).
+// per-point sort: clouds have many points per voxel (e.g. 14 on average in a 70K-point scan at 0.3 m). The slots
+// hold a key and where its entry is; the entries lie packed in the order they came: the slots probed are 16
+// bytes rather than 40, fewer to clear, and the entries are the table's contents with nothing to compact.
 class VoxelTable {
 public:
     struct Entry {
@@ -37,38 +39,44 @@ public:
         std::size_t cap = 16;
         while (cap < 2 * voxels) cap *= 2;
         if (cap > slots_.size()) rehash(cap);
+        entries_.reserve(voxels);
     }
 
     void add(const Entry &o) {
         grow_for_one_more();
-        Entry &e = find(o.key);
-        if (e.key == kEmpty) e.key = o.key, ++used_;
+        Slot &slot = find(o.key);
+        if (slot.key == kEmpty) {
+            slot = Slot{o.key, static_cast<std::uint32_t>(entries_.size())};
+            entries_.push_back(o);
+            return;
+        }
+        Entry &e = entries_[slot.entry];
         for (int a = 0; a < 3; ++a) e.sum[a] += o.sum[a];
         e.count += o.count;
     }
 
-    std::size_t size() const { return used_; }
+    std::size_t size() const { return entries_.size(); }
 
-    template <class F>
-    void for_each(F &&f) const {
-        for (const Entry &e : slots_)
-            if (e.key != kEmpty) f(e);
-    }
-
-    void release() {
-        std::vector<Entry>().swap(slots_);
-        used_ = 0;
+    // The entries, one per key, in the order their keys first came; the table is left empty.
+    std::vector<Entry> take_entries() {
+        std::vector<Slot>().swap(slots_);
+        return std::move(entries_);
     }
 
 private:
     static constexpr std::uint64_t kEmpty = ~std::uint64_t(0); // keys use at most 63 bits
 
+    struct Slot {
+        std::uint64_t key = kEmpty;
+        std::uint32_t entry = 0;
+    };
+
     // Load factor at most 1/2: probe runs stay short.
     void grow_for_one_more() {
-        if (2 * (used_ + 1) > slots_.size()) rehash(slots_.empty() ? 1024 : 2 * slots_.size());
+        if (2 * (entries_.size() + 1) > slots_.size()) rehash(slots_.empty() ? 1024 : 2 * slots_.size());
     }
 
-    Entry &find(std::uint64_t key) {
+    Slot &find(std::uint64_t key) {
         const std::size_t mask = slots_.size() - 1;
         std::size_t i = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 32) & mask;
         while (slots_[i].key != kEmpty && slots_[i].key != key) i = (i + 1) & mask;
@@ -76,23 +84,15 @@ private:
     }
 
     void rehash(std::size_t capacity) {
-        std::vector<Entry> old(capacity);
+        std::vector<Slot> old(capacity);
         old.swap(slots_);
-        for (const Entry &o : old)
+        for (const Slot &o : old)
             if (o.key != kEmpty) find(o.key) = o;
     }
 
-    std::vector<Entry> slots_;
-    std::size_t used_ = 0;
+    std::vector<Slot> slots_;
+    std::vector<Entry> entries_;
 };
-
-// The occupied entries of a table, in slot order.
-std::vector<VoxelTable::Entry> occupied(const VoxelTable &table) {
-    std::vector<VoxelTable::Entry> out;
-    out.reserve(table.size());
-    table.for_each([&out](const VoxelTable::Entry &e) { out.push_back(e); });
-    return out;
-}
 
 // Entries (a voxel may come several times, from several chunks) as one entry per voxel in key order: sorted by
 // key (minus `base`: fewer radix passes), equal keys summed. Integer sums, so the order they are added in does not
@@ -206,8 +206,7 @@ VoxelCloud voxelize(const InputCloud &input, double voxel_size, const std::strin
     std::vector<std::vector<VoxelTable::Entry>> lists(num_chunks);
     ctx.parallel_for(num_chunks, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t c = b; c < e; ++c) {
-            lists[c] = occupied(partial[c]);
-            partial[c].release();
+            lists[c] = partial[c].take_entries();
         }
     });
     std::size_t all_entries = 0;
