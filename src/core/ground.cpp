@@ -185,26 +185,34 @@ BinFit fit_bin(std::vector<Eigen::Vector3d> &q, double guard_height, const Groun
     const std::size_t n = q.size();
     std::fill(near_fit, near_fit + n, std::uint8_t(0));
     if (n < kMinPoints) return fit;
-    std::vector<std::uint32_t> by_height(n);
-    for (std::size_t i = 0; i < n; ++i) by_height[i] = static_cast<std::uint32_t>(i);
     // Ties by position in the bin, which is ascending point index: a total order, so the same on every run.
-    std::sort(by_height.begin(), by_height.end(), [&q](std::uint32_t a, std::uint32_t b) {
+    const auto lower = [&q](std::uint32_t a, std::uint32_t b) {
         return q[a].z() < q[b].z() || (q[a].z() == q[b].z() && a < b);
-    });
+    };
     // Returns from under the ground (reflections off wet roads or glass) would drag the seeds down: points
     // more than the guard below the expected ground are left out of them (they still end up ground, under
     // the plane). Only when they are few: many points there are a real surface, a dip or a ramp down that
     // the global ground height does not know.
-    std::size_t first = 0;
-    while (first < n && q[by_height[first]].z() < guard_height) ++first;
-    if (first * kNoiseShare > n) first = 0;
+    std::size_t below_guard = 0;
+    for (std::size_t i = 0; i < n; ++i) below_guard += q[i].z() < guard_height;
+    const bool guarded = below_guard > 0 && below_guard * kNoiseShare <= n;
+    std::vector<std::uint32_t> candidates;
+    candidates.reserve(n);
+    for (std::size_t i = 0; i < n; ++i)
+        if (!guarded || !(q[i].z() < guard_height)) candidates.push_back(static_cast<std::uint32_t>(i));
+    // The seeds' height from the lowest candidates, summed from the lowest up; then every candidate below it plus
+    // the seed distance, from the lowest up. Only those are sorted: a whole bin's sort by height was a twentieth
+    // of kissm_ground_mask (docs/design/performance.md, "Ground").
+    const std::size_t lowest = std::min(kLowestPoints, candidates.size());
+    std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(lowest), candidates.end(),
+                      lower);
     double low = 0.0;
-    const std::size_t lowest = std::min(kLowestPoints, n - first);
-    for (std::size_t k = first; k < first + lowest; ++k) low += q[by_height[k]].z();
+    for (std::size_t k = 0; k < lowest; ++k) low += q[candidates[k]].z();
     low /= static_cast<double>(lowest);
     std::vector<std::uint32_t> ground;
-    for (std::size_t k = first; k < n && q[by_height[k]].z() < low + params.seed_distance; ++k)
-        ground.push_back(by_height[k]);
+    for (std::uint32_t i : candidates)
+        if (q[i].z() < low + params.seed_distance) ground.push_back(i);
+    std::sort(ground.begin(), ground.end(), lower);
     Eigen::Vector3d mean, normal;
     double smallest = 0.0, middle = 0.0;
     for (int it = 0; it < kIterations; ++it) {
